@@ -1,0 +1,23 @@
+/* boards/sim/board_config.h: the board the tests run on. Deliberately small
+ * so that budget refusals are reachable with small jobs. */
+#ifndef BOARD_CONFIG_H
+#define BOARD_CONFIG_H
+
+#define BOARD_NAME "sim"
+
+#define NF_MAX_CP 40000L
+#define NF_MAX_DEGREE 5
+#define NF_ARENA_BYTES (64L * 1024L * 1024L)
+#define NF_DESIGN_DEGREE 3
+
+/* Solver jobs use unless they ask (nf_solver_t). */
+#define BOARD_SOLVER NF_SOLVER_AUTO
+/* Journal of measured points: a file on the host, no flash address. */
+#define BOARD_JOURNAL_ORIGIN 0
+#define BOARD_JOURNAL_BYTES (1L * 1024L * 1024L)
+/* Transports: Modbus RTU on a serial port, and TCP. */
+#define BOARD_HAS_MODBUS_RTU 1
+#define BOARD_UART_BAUD 115200
+#define BOARD_HAS_TCP 1
+
+#endif

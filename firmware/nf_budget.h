@@ -1,0 +1,58 @@
+/* nf_budget.h: the public byte formula. Every byte the fitter uses comes
+ * from the arena, and the arena a job needs is a function of the control
+ * net (Nu, Nv, p, q) and the solver alone, never of the number of points.
+ *
+ *   K      = (p+1) + q(2p+1)              stripe slots per control point:
+ *                                          the upper half of the 2q+1 stripes
+ *                                          of width 2p+1 (Eq. 11), diagonal kept
+ *   N      = Nu Nv
+ *   base   = 8 N (K + 6)                  stripes S, right-hand side R^T Q + beta P0 (3N),
+ *                                          solution P (3N)
+ *   gs     = base + 8 (6N)                residual and rank-probe vectors
+ *   pcg    = base + 8 (16N)               r, z, d, Ad (3N each), inverse diagonal and
+ *                                          probe (N each)
+ *   chol   = base + 8 (N (q Nu + p + 1) + 3N)   upper band of half bandwidth q Nu + p
+ *   bytes  = solver term + NF_ARENA_SLACK  alignment of at most 16 blocks
+ */
+#ifndef NF_BUDGET_H
+#define NF_BUDGET_H
+
+#include "nf_arena.h"
+#include "nf_config.h"
+
+typedef enum nf_solver {
+    NF_SOLVER_AUTO = 0, /* Cholesky when the band is small, else PCG */
+    NF_SOLVER_GS = 1,   /* Gauss-Seidel on the stripes (the paper's Section 3.2) */
+    NF_SOLVER_CHOL = 2, /* banded Cholesky, half bandwidth q Nu + p */
+    NF_SOLVER_PCG = 3   /* conjugate gradients, symmetric Gauss-Seidel preconditioner */
+} nf_solver_t;
+
+#define NF_STRIPE_SLOTS(p, q) ((p) + 1 + (q) * (2 * (p) + 1))
+#define NF_ARENA_SLACK (16L * NF_ARENA_ALIGN)
+#define NF_BYTES_BASE(n, p, q) (8L * (long)(n) * (NF_STRIPE_SLOTS(p, q) + 6L))
+#define NF_BYTES_GS(n, p, q) (NF_BYTES_BASE(n, p, q) + 8L * 6L * (long)(n) + NF_ARENA_SLACK)
+#define NF_BYTES_PCG(n, p, q) (NF_BYTES_BASE(n, p, q) + 8L * 16L * (long)(n) + NF_ARENA_SLACK)
+#define NF_BYTES_CHOL(nu, nv, p, q)                                                                \
+    (NF_BYTES_BASE((long)(nu) * (nv), p, q) +                                                      \
+     8L * (long)(nu) * (nv) * ((long)(q) * (nu) + (p) + 1 + 3) + NF_ARENA_SLACK)
+
+/* The board's arena must hold the largest net it advertises, at its design
+ * degree, with the iterative solvers (Cholesky is refused when it would not fit). */
+_Static_assert(NF_ARENA_BYTES >= NF_BYTES_PCG(NF_MAX_CP, NF_DESIGN_DEGREE, NF_DESIGN_DEGREE),
+               "board arena smaller than the byte formula at NF_MAX_CP");
+_Static_assert(NF_BYTES_GS(1, 1, 1) <= NF_BYTES_PCG(1, 1, 1), "PCG is the larger iterative term");
+
+/* Bytes a fit of this net needs with this solver (AUTO: the one nf_solver_pick
+ * chooses), or -1 when the sizes overflow. */
+long nf_fit_bytes(int nu, int nv, int p, int q, nf_solver_t solver);
+
+/* The solver AUTO resolves to: Cholesky when its band fits the board and its
+ * cost N (q Nu + p)^2 stays small, otherwise PCG. */
+nf_solver_t nf_solver_pick(int nu, int nv, int p, int q);
+
+/* Largest square net (Nu = Nv) of degree p = q a board of this arena can fit. */
+long nf_budget_max_square(long arena_bytes, int p, nf_solver_t solver);
+
+const char *nf_solver_name(nf_solver_t s);
+
+#endif

@@ -1,0 +1,79 @@
+/* nf_fit.h: one fitting job. Measured points stream in one row of R at a
+ * time (Section 3.1); the job assembles the generalised normal equations
+ *   [R^T R + alpha (B - I)^T (B - I) + beta I] P = R^T Q + beta P0   (Eq. 7)
+ * in stripe storage and solves them. Knots, weights and P0 come from the
+ * base surface. Nothing per point is kept: memory is nf_fit_bytes(). */
+#ifndef NF_FIT_H
+#define NF_FIT_H
+
+#include "nf_accum.h"
+#include "nf_arena.h"
+#include "nf_budget.h"
+#include "nf_stripe.h"
+#include "nf_surf.h"
+
+typedef struct nf_fit_params {
+    double alpha;       /* Greville criterion weight (paper default 0.1) */
+    double beta;        /* stay-near-nominal weight (paper default 0.001) */
+    nf_solver_t solver; /* sizes the budget; nf_fit_solve may pick again */
+} nf_fit_params_t;
+
+#define NF_ALPHA_DEFAULT 0.1
+#define NF_BETA_DEFAULT 0.001
+
+typedef struct nf_solve_opts {
+    double tol;   /* relative residual ||b - A P|| / ||b|| to stop at, per coordinate */
+    int max_iter; /* iteration limit of the iterative solvers */
+    int probe;    /* 1: check that the data determine the net (iterative solvers) */
+} nf_solve_opts_t;
+
+#define NF_SOLVE_OPTS_DEFAULT                                                                      \
+    {                                                                                              \
+        1e-12, 20000, 1                                                                            \
+    }
+
+typedef struct nf_solve_stats {
+    nf_solver_t solver;  /* the solver that ran */
+    int iterations;      /* sweeps or CG steps (0 for Cholesky) */
+    double rel_residual; /* max over x, y, z of ||b - A P|| / ||b|| */
+} nf_solve_stats_t;
+
+typedef struct nf_fit {
+    const nf_surf_t *base;
+    nf_fit_params_t prm;
+    nf_stripe_t A;
+    double *rhs; /* 3N: R^T Q, then + beta P0 at finish */
+    double *P;   /* 3N: solution, starts at P0 */
+    nf_arena_t *arena;
+    long n;          /* control points */
+    long npoints;    /* points accumulated */
+    double sumw;     /* sum of point weights */
+    int finished;    /* alpha and beta terms added */
+    long bad_index;  /* control point named by NF_ENODATA / NF_ESINGULAR, else -1 */
+    long need_bytes; /* bytes the job needs (set by nf_fit_init even on refusal) */
+    double dom[4];   /* u0 u1 v0 v1 */
+    double dtol[2];  /* rounding allowance at the domain ends */
+    nf_accum_t acc;  /* hot-loop state: fixed size, see nf_accum.h */
+} nf_fit_t;
+
+/* Check the base surface and the budget, then take the job's storage from
+ * the arena. NF_EBUDGET if the job exceeds the board (need_bytes says how
+ * many it needed), NF_EARENA if this arena is too small. */
+int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, nf_arena_t *a);
+
+/* Accumulate one measured point with parameters (u, v) and weight wgt > 0.
+ * NF_EDOMAIN outside the knot domain, NF_ENONFINITE for NaN/Inf. */
+int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt);
+
+/* Accumulate n points given as rows of 5 doubles (u v x y z). On error,
+ * *bad is the index of the offending row. */
+int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad);
+
+/* Add the alpha and beta terms (Eq. 7). Refuses (NF_ENODATA, bad_index set)
+ * when alpha = beta = 0 and a control point has no data under it. */
+int nf_fit_finish(nf_fit_t *f);
+
+/* Solve Eq. 7 into f->P. NF_ESINGULAR / NF_ENOCONV leave no answer. */
+int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st);
+
+#endif

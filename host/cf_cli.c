@@ -1,0 +1,110 @@
+/* cf_cli.c: shared helpers of the cellfit subcommands. */
+#include "cf_cli.h"
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+int cli_error(const char *cmd, int code, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "cellfit %s: ", cmd);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return code;
+}
+
+int cli_double(const char *s, double *out)
+{
+    char *end;
+    if (!s || !*s)
+        return -1;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (*end || errno == ERANGE || !isfinite(v))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+int cli_int(const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    if (!s || !*s)
+        return -1;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (*end || errno == ERANGE || v < lo || v > hi)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+int cli_solver(const char *s, nf_solver_t *out)
+{
+    static const nf_solver_t all[] = {NF_SOLVER_AUTO, NF_SOLVER_GS, NF_SOLVER_CHOL, NF_SOLVER_PCG};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+        if (s && !strcmp(s, nf_solver_name(all[i]))) {
+            *out = all[i];
+            return 0;
+        }
+    return -1;
+}
+
+double cli_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void cli_json_begin(cli_json_t *j, FILE *f)
+{
+    j->f = f;
+    j->n = 0;
+    fputc('{', f);
+}
+
+static void key(cli_json_t *j, const char *k)
+{
+    fprintf(j->f, "%s\"%s\": ", j->n++ ? ", " : "", k);
+}
+
+void cli_json_num(cli_json_t *j, const char *k, double v)
+{
+    key(j, k);
+    if (isfinite(v))
+        fprintf(j->f, "%.17g", v);
+    else
+        fputs("null", j->f);
+}
+
+void cli_json_int(cli_json_t *j, const char *k, long v)
+{
+    key(j, k);
+    fprintf(j->f, "%ld", v);
+}
+
+void cli_json_str(cli_json_t *j, const char *k, const char *v)
+{
+    key(j, k);
+    fputc('"', j->f);
+    for (const unsigned char *p = (const unsigned char *)v; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            fprintf(j->f, "\\%c", *p);
+        else if (*p < 0x20)
+            fprintf(j->f, "\\u%04x", *p);
+        else
+            fputc(*p, j->f);
+    }
+    fputc('"', j->f);
+}
+
+void cli_json_end(cli_json_t *j)
+{
+    fputs("}\n", j->f);
+}

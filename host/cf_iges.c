@@ -1,0 +1,1250 @@
+/* cf_iges.c: IGES 5.3 entity 128 (rational B-spline surface), read and write.
+ * The reader makes one pass: Start (skipped), Global (delimiters), Directory
+ * (every entry, a few integers each), Parameter (only the lines of the wanted
+ * 128 and of its transformation matrices), Terminate (counts checked).
+ * Nothing is allocated from a count in the file before the values behind it
+ * have been read, so a lying header cannot make it allocate much. */
+#include "cf_iges.h"
+#include "cf_err.h"
+#include "cf_surf.h"
+#include "nf_basis.h"
+#include "nf_err.h"
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define IG_INBUF 65536
+#define IG_PCOLS 64 /* data columns of a P line */
+#define IG_GCOLS 72 /* data columns of an S or G line */
+#define IG_MAX_GLINES 10000L
+#define IG_MAX_CHAIN 8 /* transformation matrices followed per entity */
+#define IG_MAX_SEQ 9999999L
+
+/* ---------------------------------------------------------------- input */
+
+typedef struct ig_in {
+    FILE *f;
+    unsigned char buf[IG_INBUF];
+    size_t len, pos;
+    int eof, ioerr;
+    long line; /* physical line of the next byte */
+} ig_in_t;
+
+/* One 80-column record: columns 1..80 blank-padded, section letter, sequence. */
+typedef struct ig_rec {
+    char t[81];
+    char sect;
+    long seq; /* -1 when the sequence columns are blank */
+    long line;
+} ig_rec_t;
+
+typedef struct ig_de {
+    int type, form;
+    long pptr, pcount, matrix;
+    long line; /* physical line of its first D record */
+} ig_de_t;
+
+/* Parameter data of one entity we want: columns 1-64 of its P lines. */
+typedef struct ig_par {
+    long de, pptr, pcount;
+    int type;
+    char *data;
+    size_t len, cap;
+    long *lines; /* physical line of each collected P record */
+    long got, lcap;
+} ig_par_t;
+
+typedef struct ig_rd {
+    ig_in_t *in;
+    const char *path;
+    char *msg;
+    size_t ml;
+    char pd, rd; /* parameter and record delimiters */
+    char *g;
+    size_t glen;
+    ig_de_t *de;
+    long nde, decap;
+    long count[4]; /* S G D P lines */
+    char d1[81];   /* first line of a D entry waiting for its second */
+    long d1line;
+    long target;  /* index into de of the wanted 128, -1 none */
+    int notfound; /* CF_ENOTFOUND with msg already written */
+    ig_par_t want[1 + IG_MAX_CHAIN];
+    int nwant;
+} ig_rd_t;
+
+static int ig_getc(ig_in_t *in)
+{
+    if (in->pos == in->len) {
+        if (in->eof)
+            return EOF;
+        in->len = fread(in->buf, 1, sizeof in->buf, in->f);
+        in->pos = 0;
+        if (in->len == 0) {
+            in->eof = 1;
+            in->ioerr = ferror(in->f) != 0;
+            return EOF;
+        }
+    }
+    return in->buf[in->pos++];
+}
+
+static int ig_fail(ig_rd_t *c, int err, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+/* "path: " + message. */
+static int ig_fail(ig_rd_t *c, int err, const char *fmt, ...)
+{
+    char tmp[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    return cf_fail(c->msg, c->ml, err, "%s: %s", c->path, tmp);
+}
+
+static int is_blank(int ch)
+{
+    return ch == ' ' || ch == '\t';
+}
+
+/* Sequence columns 74-80: digits, possibly padded either side; -1 if blank. */
+static int ig_seq(const char *t, long *seq)
+{
+    long v = 0;
+    int i = 73, any = 0;
+    while (i < 80 && t[i] == ' ')
+        i++;
+    for (; i < 80 && t[i] >= '0' && t[i] <= '9'; i++, any = 1)
+        v = v * 10 + (t[i] - '0');
+    while (i < 80 && t[i] == ' ')
+        i++;
+    if (i < 80)
+        return -1;
+    *seq = any ? v : -1;
+    return 0;
+}
+
+/* Next non-blank record. Lines end at LF, CRLF or CR; a line without an end
+ * longer than 80 columns is split into 80-column records when column 73 holds
+ * a section letter (files written as fixed records without newlines).
+ * Returns 1 with a record, 0 at the end of the file, or an error. */
+static int ig_record(ig_rd_t *c, ig_rec_t *r)
+{
+    ig_in_t *in = c->in;
+    for (;;) {
+        int n = 0, blank = 1, ch;
+        r->line = in->line;
+        for (;;) {
+            ch = ig_getc(in);
+            if (ch == EOF)
+                break;
+            if (ch == 0x1A) { /* DOS end-of-file mark: nothing after it counts */
+                in->eof = 1;
+                in->pos = in->len;
+                ch = EOF;
+                break;
+            }
+            if (ch == '\n') {
+                in->line++;
+                break;
+            }
+            if (ch == '\r') {
+                int nx = ig_getc(in);
+                if (nx != '\n' && nx != EOF)
+                    in->pos--;
+                in->line++;
+                break;
+            }
+            if ((ch < 0x20 && ch != '\t') || ch == 0x7F)
+                return ig_fail(c, CF_EPARSE,
+                               "line %ld: binary data (byte 0x%02x): not an ASCII IGES file",
+                               in->line, ch);
+            if (n == 80) {
+                in->pos--; /* the 81st byte starts the next record */
+                if (!strchr("SGDPT", r->t[72]))
+                    return ig_fail(c, CF_EPARSE, "line %ld: longer than 80 columns", r->line);
+                break;
+            }
+            r->t[n++] = (char)ch;
+            if (!is_blank(ch))
+                blank = 0;
+        }
+        if (in->ioerr)
+            return ig_fail(c, CF_EIO, "read error: %s", strerror(errno));
+        if (blank) {
+            if (ch == EOF)
+                return 0;
+            continue;
+        }
+        if (n < 73)
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld: only %d columns; an IGES line has its section letter in "
+                           "column 73 (truncated or not an IGES file?)",
+                           r->line, n);
+        memset(r->t + n, ' ', (size_t)(80 - n));
+        r->t[80] = '\0';
+        r->sect = r->t[72];
+        if (!strchr("SGDPT", r->sect))
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld: column 73 holds '%c', not a section letter (S G D P T)",
+                           r->line, r->sect);
+        if (ig_seq(r->t, &r->seq))
+            return ig_fail(c, CF_EPARSE, "line %ld: sequence number '%.7s' is not a number",
+                           r->line, r->t + 73);
+        return 1;
+    }
+}
+
+/* Integer in an 8-column D field (blank is 0). */
+static int ig_field8(const char *t, int i, long *v)
+{
+    const char *p = t + 8 * i, *e = p + 8;
+    long x = 0;
+    int neg = 0, any = 0;
+    while (p < e && *p == ' ')
+        p++;
+    if (p < e && (*p == '-' || *p == '+'))
+        neg = *p++ == '-';
+    for (; p < e && *p >= '0' && *p <= '9'; p++, any = 1)
+        x = x * 10 + (*p - '0');
+    while (p < e && *p == ' ')
+        p++;
+    if (p < e || (neg && !any))
+        return -1;
+    *v = neg ? -x : x;
+    return 0;
+}
+
+static int ig_global(ig_rd_t *c, long line)
+{
+    const char *g = c->g;
+    size_t n = c->glen, i = 0;
+    if (!g)
+        return ig_fail(c, CF_EPARSE, "line %ld: no Global (G) section before the Directory", line);
+    while (i < n && g[i] == ' ')
+        i++;
+    /* Field 1 is "1Hx" or defaulted (empty, so the text starts with ','). */
+    if (i < n && g[i] == ',') {
+        c->pd = ',';
+        i++;
+    } else if (i + 3 < n && g[i] == '1' && (g[i + 1] == 'H' || g[i + 1] == 'h')) {
+        c->pd = g[i + 2];
+        i += 3;
+        while (i < n && g[i] == ' ')
+            i++;
+        if (i >= n || g[i] != c->pd)
+            return ig_fail(c, CF_EPARSE,
+                           "Global section: parameter delimiter '%c' does not follow 1H%c", c->pd,
+                           c->pd);
+        i++;
+    } else {
+        return ig_fail(c, CF_EPARSE,
+                       "Global section does not start with the parameter delimiter (1H, or ,)");
+    }
+    while (i < n && g[i] == ' ')
+        i++;
+    if (i < n && g[i] == c->pd) {
+        c->rd = ';';
+    } else if (i + 3 < n && g[i] == '1' && (g[i + 1] == 'H' || g[i + 1] == 'h')) {
+        c->rd = g[i + 2];
+        i += 3;
+        while (i < n && g[i] == ' ')
+            i++;
+        if (i >= n || (g[i] != c->pd && g[i] != c->rd))
+            return ig_fail(c, CF_EPARSE,
+                           "Global section: no delimiter after the record delimiter 1H%c", c->rd);
+    } else {
+        return ig_fail(c, CF_EPARSE,
+                       "Global section: second field is not the record delimiter (1H; or empty)");
+    }
+    /* Characters that can occur in numbers cannot delimit them. */
+    const char *bad = " 0123456789+-.EeDdHh";
+    if (c->pd == c->rd || strchr(bad, c->pd) || strchr(bad, c->rd) || !c->pd || !c->rd)
+        return ig_fail(c, CF_EPARSE, "Global section: unusable delimiters '%c' and '%c'", c->pd,
+                       c->rd);
+    return CF_OK;
+}
+
+static int ig_add_want(ig_rd_t *c, long idx)
+{
+    const ig_de_t *d = &c->de[idx];
+    long de = 2 * idx + 1;
+    if (d->pptr < 1 || d->pcount < 1 || d->pptr > IG_MAX_SEQ || d->pcount > IG_MAX_SEQ)
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld (DE %ld): parameter data pointer %ld and line count %ld are "
+                       "not usable",
+                       d->line, de, d->pptr, d->pcount);
+    ig_par_t *w = &c->want[c->nwant++];
+    memset(w, 0, sizeof *w);
+    w->de = de;
+    w->pptr = d->pptr;
+    w->pcount = d->pcount;
+    w->type = d->type;
+    return CF_OK;
+}
+
+/* At the start of the P section: find the wanted 128 and its matrices. */
+static int ig_pick(ig_rd_t *c, int entity_de, long line)
+{
+    if (c->nde == 0)
+        return ig_fail(c, CF_EPARSE, "line %ld: no Directory Entry (D) section", line);
+    if (c->d1line)
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld: Directory Entry at line %ld has only one of its two lines", line,
+                       c->d1line);
+    c->target = -1;
+    if (entity_de == 0) {
+        for (long k = 0; k < c->nde && c->target < 0; k++)
+            if (c->de[k].type == 128)
+                c->target = k;
+        if (c->target < 0) {
+            c->notfound = ig_fail(c, CF_ENOTFOUND,
+                                  "no rational B-spline surface (entity 128) among the %ld "
+                                  "Directory Entries",
+                                  c->nde);
+            return CF_OK;
+        }
+    } else {
+        if (entity_de % 2 == 0 || entity_de > 2 * c->nde - 1) {
+            c->notfound =
+                ig_fail(c, CF_ENOTFOUND, "no Directory Entry %d: DE numbers are odd, 1 to %ld here",
+                        entity_de, 2 * c->nde - 1);
+            return CF_OK;
+        }
+        c->target = (entity_de - 1) / 2;
+        const ig_de_t *d = &c->de[c->target];
+        if (d->type != 128) {
+            c->notfound = ig_fail(c, CF_ENOTFOUND,
+                                  "line %ld (DE %d): entity %d form %d, not a rational B-spline "
+                                  "surface (128)",
+                                  d->line, entity_de, d->type, d->form);
+            c->target = -1;
+            return CF_OK;
+        }
+    }
+    int rc = ig_add_want(c, c->target);
+    long k = c->target;
+    while (!rc && c->de[k].matrix != 0) {
+        long m = c->de[k].matrix;
+        if (m < 0 || m % 2 == 0 || m > 2 * c->nde - 1)
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld (DE %ld): transformation matrix pointer %ld is not a "
+                           "Directory Entry of this file",
+                           c->de[k].line, 2 * k + 1, m);
+        if (c->nwant > IG_MAX_CHAIN)
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld (DE %ld): more than %d chained transformation matrices "
+                           "(a cycle?)",
+                           c->de[k].line, 2 * k + 1, IG_MAX_CHAIN);
+        long j = (m - 1) / 2;
+        if (c->de[j].type != 124)
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld (DE %ld): transformation matrix pointer %ld leads to entity "
+                           "%d, not 124",
+                           c->de[k].line, 2 * k + 1, m, c->de[j].type);
+        rc = ig_add_want(c, j);
+        k = j;
+    }
+    return rc;
+}
+
+static int ig_dline(ig_rd_t *c, const ig_rec_t *r)
+{
+    long k = ++c->count[2];
+    if (r->seq >= 0 && r->seq != k)
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld: D sequence number %ld, expected %ld (lines missing or out of "
+                       "order)",
+                       r->line, r->seq, k);
+    if (k % 2 == 1) {
+        memcpy(c->d1, r->t, sizeof c->d1);
+        c->d1line = r->line;
+        return CF_OK;
+    }
+    long type, pptr, matrix, type2, pcount, form;
+    if (ig_field8(c->d1, 0, &type) || ig_field8(c->d1, 1, &pptr) || ig_field8(c->d1, 6, &matrix))
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld (DE %ld): entity type, parameter pointer or matrix field is "
+                       "not an integer",
+                       c->d1line, k - 1);
+    if (ig_field8(r->t, 0, &type2) || ig_field8(r->t, 3, &pcount) || ig_field8(r->t, 4, &form))
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld (DE %ld): entity type, parameter line count or form field is "
+                       "not an integer",
+                       r->line, k - 1);
+    if (type != type2)
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld (DE %ld): entity type %ld on the first line, %ld on the second",
+                       r->line, k - 1, type, type2);
+    if (type < 0 || type > 99999 || form < -99 || form > 999)
+        return ig_fail(c, CF_EPARSE, "line %ld (DE %ld): entity type %ld form %ld", c->d1line,
+                       k - 1, type, form);
+    if (c->nde == c->decap) {
+        long cap = c->decap ? 2 * c->decap : 256;
+        ig_de_t *nd = realloc(c->de, sizeof *nd * (size_t)cap);
+        if (!nd)
+            return ig_fail(c, CF_ENOMEM, "out of memory for %ld Directory Entries", cap);
+        c->de = nd;
+        c->decap = cap;
+    }
+    ig_de_t *d = &c->de[c->nde++];
+    d->type = (int)type;
+    d->form = (int)form;
+    d->pptr = pptr;
+    d->pcount = pcount;
+    d->matrix = matrix;
+    d->line = c->d1line;
+    c->d1line = 0;
+    return CF_OK;
+}
+
+static int ig_pline(ig_rd_t *c, const ig_rec_t *r)
+{
+    long k = ++c->count[3];
+    if (r->seq >= 0 && r->seq != k)
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld: P sequence number %ld, expected %ld (lines missing or out of "
+                       "order)",
+                       r->line, r->seq, k);
+    for (int i = 0; i < c->nwant; i++) {
+        ig_par_t *w = &c->want[i];
+        if (k < w->pptr || k >= w->pptr + w->pcount)
+            continue;
+        if (w->len + IG_PCOLS > w->cap) {
+            size_t cap = w->cap ? 2 * w->cap : 16 * IG_PCOLS;
+            char *nd = realloc(w->data, cap);
+            if (!nd)
+                return ig_fail(c, CF_ENOMEM, "out of memory for parameter data");
+            w->data = nd;
+            w->cap = cap;
+        }
+        if (w->got == w->lcap) {
+            long cap = w->lcap ? 2 * w->lcap : 16;
+            long *nl = realloc(w->lines, sizeof *nl * (size_t)cap);
+            if (!nl)
+                return ig_fail(c, CF_ENOMEM, "out of memory for parameter data");
+            w->lines = nl;
+            w->lcap = cap;
+        }
+        memcpy(w->data + w->len, r->t, IG_PCOLS);
+        w->len += IG_PCOLS;
+        w->lines[w->got++] = r->line;
+    }
+    return CF_OK;
+}
+
+static int ig_tline(ig_rd_t *c, const ig_rec_t *r)
+{
+    static const char name[4] = {'S', 'G', 'D', 'P'};
+    for (int i = 0; i < 4; i++) {
+        long v;
+        char f[9];
+        memcpy(f, r->t + 8 * i, 8);
+        f[8] = '\0';
+        if (f[0] != name[i])
+            return ig_fail(c, CF_EPARSE, "line %ld: Terminate section field %d is '%s'", r->line,
+                           i + 1, f);
+        f[0] = ' ';
+        if (ig_field8(f, 0, &v))
+            return ig_fail(c, CF_EPARSE, "line %ld: Terminate section field %d is '%c%s'", r->line,
+                           i + 1, name[i], f + 1);
+        if (v != c->count[i])
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld: Terminate section counts %ld %c lines, the file has %ld "
+                           "(truncated or damaged)",
+                           r->line, v, name[i], c->count[i]);
+    }
+    return CF_OK;
+}
+
+/* Refuse what is not plain ASCII IGES before reading records. */
+static int ig_sniff(ig_rd_t *c)
+{
+    ig_in_t *in = c->in;
+    in->len = fread(in->buf, 1, sizeof in->buf, in->f);
+    if (in->len == 0) {
+        if (ferror(in->f))
+            return ig_fail(c, CF_EIO, "read error: %s", strerror(errno));
+        return ig_fail(c, CF_EPARSE, "line 1: empty file");
+    }
+    const unsigned char *b = in->buf;
+    if (in->len >= 2 && b[0] == 0x1F && b[1] == 0x8B)
+        return ig_fail(c, CF_EUNSUPPORTED, "gzip-compressed file: gunzip it first");
+    if (in->len >= 4 && !memcmp(b, "PK\003\004", 4))
+        return ig_fail(c, CF_EUNSUPPORTED, "zip archive: extract the .igs first");
+    if (in->len >= 3 && b[0] == 0xEF && b[1] == 0xBB && b[2] == 0xBF)
+        in->pos = 3; /* UTF-8 byte order mark from some Windows editors */
+    if (in->len >= in->pos + 73 && !memchr(b + in->pos, '\n', 72) &&
+        !memchr(b + in->pos, '\r', 72)) {
+        unsigned char f = b[in->pos + 72];
+        if (f == 'B')
+            return ig_fail(c, CF_EUNSUPPORTED,
+                           "binary IGES (flag 'B' in column 73 of the first record): only the "
+                           "fixed 80-column ASCII form is supported");
+        if (f == 'C')
+            return ig_fail(c, CF_EUNSUPPORTED,
+                           "compressed ASCII IGES (flag 'C' in column 73 of the first record): "
+                           "only the fixed 80-column ASCII form is supported");
+    }
+    return CF_OK;
+}
+
+/* Read all records; leaves the wanted parameter data in c->want. */
+static int ig_scan(ig_rd_t *c, int entity_de)
+{
+    static const char order[] = "SGDPT";
+    int sect = 0, seen_t = 0;
+    long last_line = 1;
+    ig_rec_t r;
+    int rc;
+    while ((rc = ig_record(c, &r)) == 1) {
+        last_line = r.line;
+        rc = CF_OK;
+        int s = (int)(strchr(order, r.sect) - order);
+        if (s < sect)
+            return ig_fail(c, CF_EPARSE, "line %ld: %c line after the %c section", r.line, r.sect,
+                           order[sect]);
+        if (s > sect || (s == 0 && c->count[0] == 0)) {
+            /* Entering section s: what the earlier ones left must be complete. */
+            if (s >= 2 && sect < 2 && (rc = ig_global(c, r.line)))
+                return rc;
+            if (s >= 3 && sect < 3 && (rc = ig_pick(c, entity_de, r.line)))
+                return rc;
+            if (s == 4 && sect < 3)
+                return ig_fail(c, CF_EPARSE, "line %ld: no Parameter Data (P) section", r.line);
+            sect = s;
+        }
+        switch (r.sect) {
+        case 'S': c->count[0]++; break;
+        case 'G':
+            if (++c->count[1] > IG_MAX_GLINES)
+                return ig_fail(c, CF_EPARSE, "line %ld: Global section over %ld lines", r.line,
+                               IG_MAX_GLINES);
+            {
+                char *ng = realloc(c->g, c->glen + IG_GCOLS);
+                if (!ng)
+                    return ig_fail(c, CF_ENOMEM, "out of memory");
+                c->g = ng;
+                memcpy(c->g + c->glen, r.t, IG_GCOLS);
+                c->glen += IG_GCOLS;
+            }
+            break;
+        case 'D': rc = ig_dline(c, &r); break;
+        case 'P': rc = ig_pline(c, &r); break;
+        default:
+            rc = ig_tline(c, &r);
+            seen_t = 1;
+            break;
+        }
+        if (rc)
+            return rc;
+        if (seen_t)
+            break; /* whatever follows the Terminate line is not IGES data */
+    }
+    if (rc < 0)
+        return rc;
+    if (!seen_t)
+        return ig_fail(c, CF_EPARSE,
+                       "line %ld: file ends in the %c section without a Terminate (T) line "
+                       "(truncated?)",
+                       last_line, order[sect]);
+    for (int i = 0; i < c->nwant; i++) {
+        const ig_par_t *w = &c->want[i];
+        if (w->got < w->pcount)
+            return ig_fail(c, CF_EPARSE,
+                           "line %ld (DE %ld): parameter data on P lines %ld to %ld, but the P "
+                           "section has %ld lines",
+                           c->de[(w->de - 1) / 2].line, w->de, w->pptr, w->pptr + w->pcount - 1,
+                           c->count[3]);
+    }
+    return CF_OK;
+}
+
+/* ------------------------------------------------------ parameter data */
+
+typedef struct ig_fld {
+    const char *s; /* trimmed text */
+    size_t n;
+    size_t at; /* offset in the data, for line numbers */
+} ig_fld_t;
+
+/* Next field from *pos: 1 when the parameter delimiter ends it, 2 when the
+ * record delimiter does, 0 when the data runs out first, -1 when a Hollerith
+ * string claims more characters than there are. */
+static int ig_next(const ig_rd_t *c, const ig_par_t *p, size_t *pos, ig_fld_t *f)
+{
+    const char *d = p->data;
+    size_t i = *pos, n = p->len;
+    while (i < n && is_blank(d[i]))
+        i++;
+    size_t start = i, j = i;
+    while (j < n && j - i < 9 && d[j] >= '0' && d[j] <= '9')
+        j++;
+    if (j > i && j < n && (d[j] == 'H' || d[j] == 'h')) {
+        size_t len = (size_t)strtol(d + i, NULL, 10);
+        if (len > n - j - 1)
+            return -1;
+        i = j + 1 + len;
+    }
+    while (i < n && d[i] != c->pd && d[i] != c->rd)
+        i++;
+    if (i >= n)
+        return 0;
+    size_t end = i;
+    while (end > start && is_blank(d[end - 1]))
+        end--;
+    f->s = d + start;
+    f->n = end - start;
+    f->at = start < i ? start : i;
+    *pos = i + 1;
+    return d[i] == c->rd ? 2 : 1;
+}
+
+/* "path: line L (P record R): ..." for a field at offset at of p. */
+static int ig_pfail(ig_rd_t *c, const ig_par_t *p, size_t at, int err, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+static int ig_pfail(ig_rd_t *c, const ig_par_t *p, size_t at, int err, const char *fmt, ...)
+{
+    char tmp[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    long k = (long)(at / IG_PCOLS);
+    if (k >= p->got)
+        k = p->got - 1;
+    return cf_fail(c->msg, c->ml, err, "%s: line %ld (P record %ld, DE %ld): %s", c->path,
+                   p->lines[k], p->pptr + k, p->de, tmp);
+}
+
+enum { IG_NUM_OK, IG_NUM_EMPTY, IG_NUM_BAD, IG_NUM_RANGE };
+
+/* IGES real: [+-] digits [. digits] [E|D [+-] digits]; Fortran D exponents. */
+static int ig_real(const ig_fld_t *f, double *v)
+{
+    char b[72];
+    size_t i = 0, n = f->n, digits = 0;
+    if (n == 0)
+        return IG_NUM_EMPTY;
+    if (n >= sizeof b)
+        return IG_NUM_BAD;
+    memcpy(b, f->s, n);
+    b[n] = '\0';
+    if (b[i] == '+' || b[i] == '-')
+        i++;
+    for (; b[i] >= '0' && b[i] <= '9'; i++)
+        digits++;
+    if (b[i] == '.')
+        for (i++; b[i] >= '0' && b[i] <= '9'; i++)
+            digits++;
+    if (!digits)
+        return IG_NUM_BAD;
+    if (b[i] == 'E' || b[i] == 'e' || b[i] == 'D' || b[i] == 'd') {
+        b[i++] = 'E';
+        if (b[i] == '+' || b[i] == '-')
+            i++;
+        if (!(b[i] >= '0' && b[i] <= '9'))
+            return IG_NUM_BAD;
+        while (b[i] >= '0' && b[i] <= '9')
+            i++;
+    }
+    if (i != n)
+        return IG_NUM_BAD;
+    char *end;
+    *v = strtod(b, &end);
+    if (end != b + n)
+        return IG_NUM_BAD;
+    if (!isfinite(*v))
+        return IG_NUM_RANGE;
+    return IG_NUM_OK;
+}
+
+static int ig_int(const ig_fld_t *f, long *v)
+{
+    size_t i = 0;
+    long x = 0;
+    int neg = 0;
+    if (f->n == 0)
+        return IG_NUM_EMPTY;
+    if (f->s[0] == '+' || f->s[0] == '-')
+        neg = f->s[i++] == '-';
+    if (i == f->n || f->n - i > 9)
+        return IG_NUM_BAD;
+    for (; i < f->n; i++) {
+        if (f->s[i] < '0' || f->s[i] > '9')
+            return IG_NUM_BAD;
+        x = x * 10 + (f->s[i] - '0');
+    }
+    *v = neg ? -x : x;
+    return IG_NUM_OK;
+}
+
+static const char *ig_numwhy(int r)
+{
+    return r == IG_NUM_EMPTY ? "is empty" : r == IG_NUM_RANGE ? "is out of range" : "is garbled";
+}
+
+/* Parameter values of one record, read in order. */
+typedef struct ig_it {
+    ig_rd_t *c;
+    const ig_par_t *p;
+    size_t pos;
+    long nf; /* fields in the record */
+} ig_it_t;
+
+static int ig_count(ig_rd_t *c, const ig_par_t *p, long *nf)
+{
+    size_t pos = 0;
+    ig_fld_t f;
+    long n = 0;
+    for (;;) {
+        int r = ig_next(c, p, &pos, &f);
+        if (r < 0)
+            return ig_pfail(c, p, pos, CF_EPARSE,
+                            "a Hollerith string runs past the end of the entity's data");
+        if (r == 0)
+            return ig_pfail(c, p, p->len - 1, CF_EPARSE,
+                            "no record delimiter '%c' within the %ld P lines of the entity", c->rd,
+                            p->pcount);
+        n++;
+        if (r == 2)
+            break;
+    }
+    *nf = n;
+    return CF_OK;
+}
+
+enum { IG_KU, IG_KV, IG_W, IG_XYZ, IG_RANGE, IG_MAT };
+
+/* Name of value idx of a kind, as the IGES specification writes it. */
+static void ig_label(char *b, size_t bl, int kind, long idx, const nf_surf_t *s)
+{
+    static const char *range[4] = {"U(0)", "U(1)", "V(0)", "V(1)"};
+    switch (kind) {
+    case IG_KU: snprintf(b, bl, "u knot S(%ld)", idx - s->p); break;
+    case IG_KV: snprintf(b, bl, "v knot T(%ld)", idx - s->q); break;
+    case IG_W: snprintf(b, bl, "weight W(%ld,%ld)", idx % s->nu, idx / s->nu); break;
+    case IG_XYZ:
+        snprintf(b, bl, "%c(%ld,%ld)", "XYZ"[idx % 3], idx / 3 % s->nu, idx / 3 / s->nu);
+        break;
+    case IG_RANGE: snprintf(b, bl, "parameter range %s", range[idx & 3]); break;
+    default: snprintf(b, bl, "matrix value %ld", idx + 1); break;
+    }
+}
+
+static int ig_get_real(ig_it_t *it, int kind, long idx, const nf_surf_t *s, double *v)
+{
+    ig_fld_t f;
+    ig_next(it->c, it->p, &it->pos, &f); /* counted before: cannot fail */
+    int r = ig_real(&f, v);
+    if (r != IG_NUM_OK) {
+        char what[64];
+        ig_label(what, sizeof what, kind, idx, s);
+        return ig_pfail(it->c, it->p, f.at, CF_EPARSE, "%s '%.*s' %s, not a number", what,
+                        (int)(f.n > 40 ? 40 : f.n), f.s, ig_numwhy(r));
+    }
+    return CF_OK;
+}
+
+static int ig_get_int(ig_it_t *it, const char *what, long *v, size_t *at)
+{
+    ig_fld_t f;
+    ig_next(it->c, it->p, &it->pos, &f);
+    *at = f.at;
+    int r = ig_int(&f, v);
+    if (r != IG_NUM_OK)
+        return ig_pfail(it->c, it->p, f.at, CF_EPARSE, "%s '%.*s' %s, not an integer", what,
+                        (int)(f.n > 40 ? 40 : f.n), f.s, ig_numwhy(r));
+    return CF_OK;
+}
+
+/* Entity 124: x' = R x + T, parameters R11 R12 R13 T1 R21 ... T3. */
+static int ig_matrix(ig_rd_t *c, const ig_par_t *p, double m[12])
+{
+    long nf, type;
+    size_t at;
+    int rc = ig_count(c, p, &nf);
+    if (rc)
+        return rc;
+    ig_it_t it = {c, p, 0, nf};
+    if ((rc = ig_get_int(&it, "entity type", &type, &at)))
+        return rc;
+    if (type != 124)
+        return ig_pfail(c, p, at, CF_EPARSE, "parameter data of entity %ld, D entry says 124",
+                        type);
+    if (nf < 13)
+        return ig_pfail(c, p, at, CF_EPARSE, "%ld parameters, a transformation matrix needs 13",
+                        nf);
+    for (int i = 0; i < 12; i++)
+        if ((rc = ig_get_real(&it, IG_MAT, i, NULL, &m[i])))
+            return rc;
+    return CF_OK;
+}
+
+/* Where a knot vector breaks nf_knots_check's rules: index and reason. */
+static int ig_knot_diag(int n, int p, const double *U, const char **why)
+{
+    const int m = n + p + 1;
+    for (int i = 0; i < m; i++)
+        if (U[i + 1] < U[i]) {
+            *why = "knot vector decreases";
+            return i + 1;
+        }
+    for (int i = 1; i <= p; i++) {
+        if (U[i] != U[0]) {
+            *why = "knot vector not clamped at its start (first degree+1 knots differ)";
+            return i;
+        }
+        if (U[m - i] != U[m]) {
+            *why = "knot vector not clamped at its end (last degree+1 knots differ)";
+            return m - i;
+        }
+    }
+    if (!(U[p] < U[n + 1])) {
+        *why = "knot vector has an empty parameter range";
+        return n + 1;
+    }
+    int mult = 1;
+    for (int i = p + 1; i <= n; i++) {
+        mult = (U[i] == U[i - 1] && i - 1 > p) ? mult + 1 : 1;
+        if (U[i] == U[p] || U[i] == U[n + 1]) {
+            *why = "end knot repeated more than degree+1 times";
+            return i;
+        }
+        if (mult > p) {
+            *why = "interior knot repeated more than degree times";
+            return i;
+        }
+    }
+    *why = "knot vector invalid";
+    return 0;
+}
+
+/* Offsets of every field, so a check failing later can name its line. */
+static size_t ig_field_at(ig_rd_t *c, const ig_par_t *p, long idx)
+{
+    size_t pos = 0;
+    ig_fld_t f = {NULL, 0, 0};
+    for (long k = 0; k <= idx; k++)
+        if (ig_next(c, p, &pos, &f) <= 0)
+            break;
+    return f.at;
+}
+
+/* x' = R x + T for every control point; NURBS are affine invariant. */
+static void ig_transform(nf_surf_t *s, const double m[12])
+{
+    long n = (long)s->nu * s->nv;
+    for (long i = 0; i < n; i++) {
+        double *P = s->cp + 3 * i, x = P[0], y = P[1], z = P[2];
+        for (int r = 0; r < 3; r++)
+            P[r] = m[4 * r] * x + m[4 * r + 1] * y + m[4 * r + 2] * z + m[4 * r + 3];
+    }
+}
+
+/* The 128 in p, with the nm matrices in m applied in order, checked. */
+static int ig_surface(ig_rd_t *c, const ig_par_t *p, const double (*m)[12], int nm, nf_surf_t *s)
+{
+    long nf, h[10];
+    size_t at[10];
+    static const char *hname[10] = {"entity type", "K1",    "K2",    "M1",    "M2",
+                                    "PROP1",       "PROP2", "PROP3", "PROP4", "PROP5"};
+    int rc = ig_count(c, p, &nf);
+    if (rc)
+        return rc;
+    if (nf < 10)
+        return ig_pfail(c, p, 0, CF_EPARSE,
+                        "%ld parameters; a rational B-spline surface needs at least 10", nf);
+    ig_it_t it = {c, p, 0, nf};
+    for (int i = 0; i < 10; i++)
+        if ((rc = ig_get_int(&it, hname[i], &h[i], &at[i])))
+            return rc;
+    long K1 = h[1], K2 = h[2], M1 = h[3], M2 = h[4];
+    if (h[0] != 128)
+        return ig_pfail(c, p, at[0], CF_EPARSE, "parameter data of entity %ld, D entry says 128",
+                        h[0]);
+    for (int i = 1; i <= 4; i++)
+        if (h[i] < 0)
+            return ig_pfail(c, p, at[i], CF_EPARSE, "%s = %ld is negative", hname[i], h[i]);
+    if (M1 < 1 || M1 > NF_MAX_DEGREE || M2 < 1 || M2 > NF_MAX_DEGREE)
+        return ig_pfail(c, p, at[M1 < 1 || M1 > NF_MAX_DEGREE ? 3 : 4], NF_EDEGREE,
+                        "degrees M1 = %ld, M2 = %ld; this build (board %s) takes 1 to %d", M1, M2,
+                        BOARD_NAME, NF_MAX_DEGREE);
+    if (K1 < M1 || K2 < M2)
+        return ig_pfail(c, p, at[K1 < M1 ? 1 : 2], NF_ESIZE,
+                        "K1 = %ld, K2 = %ld give a %ld x %ld control net, too small for degrees "
+                        "%ld x %ld",
+                        K1, K2, K1 + 1, K2 + 1, M1, M2);
+    long long ncp = (long long)(K1 + 1) * (K2 + 1);
+    long long need = 10 + (K1 + M1 + 2) + (K2 + M2 + 2) + 4 * ncp;
+    if (nf < need)
+        return ig_pfail(c, p, at[1], CF_EPARSE,
+                        "%ld parameters, but K1 = %ld, K2 = %ld, M1 = %ld, M2 = %ld need %lld "
+                        "(truncated data or wrong counts)",
+                        nf, K1, K2, M1, M2, need);
+    if (ncp > NF_MAX_CP)
+        return ig_pfail(c, p, at[1], NF_EBUDGET,
+                        "%ld x %ld control points; this build (board %s) takes at most %ld", K1 + 1,
+                        K2 + 1, BOARD_NAME, (long)NF_MAX_CP);
+    int nu = (int)K1 + 1, nv = (int)K2 + 1, pu = (int)M1, pv = (int)M2;
+    if (cf_surf_alloc(s, pu, pv, nu, nv))
+        return ig_fail(c, CF_ENOMEM, "out of memory for a %d x %d surface", nu, nv);
+    const long nk_u = nu + pu + 1, nk_v = nv + pv + 1, n = (long)nu * nv;
+    for (long i = 0; i < nk_u && !rc; i++)
+        rc = ig_get_real(&it, IG_KU, i, s, &s->U[i]);
+    for (long i = 0; i < nk_v && !rc; i++)
+        rc = ig_get_real(&it, IG_KV, i, s, &s->V[i]);
+    for (long i = 0; i < n && !rc; i++)
+        rc = ig_get_real(&it, IG_W, i, s, &s->w[i]);
+    for (long i = 0; i < 3 * n && !rc; i++)
+        rc = ig_get_real(&it, IG_XYZ, i, s, &s->cp[i]);
+    /* Optional U0 U1 V0 V1: only checked to be numbers; pointers may follow. */
+    if (!rc && nf >= need + 4) {
+        double dom;
+        for (int i = 0; i < 4 && !rc; i++)
+            rc = ig_get_real(&it, IG_RANGE, i, s, &dom);
+    }
+    if (rc)
+        return rc;
+    for (int i = 0; i < nm; i++)
+        ig_transform(s, m[i]);
+    rc = nf_surf_check(s);
+    if (rc == NF_EKNOTS) {
+        const char *why;
+        int iu = ig_knot_diag(nu - 1, pu, s->U, &why);
+        if (nf_knots_check(nu - 1, pu, s->U))
+            return ig_pfail(c, p, ig_field_at(c, p, 10 + iu), rc, "%s at S(%d) = %.17g (u)", why,
+                            iu - pu, s->U[iu]);
+        int iv = ig_knot_diag(nv - 1, pv, s->V, &why);
+        return ig_pfail(c, p, ig_field_at(c, p, 10 + nk_u + iv), rc, "%s at T(%d) = %.17g (v)", why,
+                        iv - pv, s->V[iv]);
+    }
+    if (rc == NF_EWEIGHT) {
+        long i = 0;
+        while (i < n - 1 && s->w[i] > 0.0)
+            i++;
+        return ig_pfail(c, p, ig_field_at(c, p, 10 + nk_u + nk_v + i), rc,
+                        "weight W(%ld,%ld) = %.17g is not positive", i % nu, i / nu, s->w[i]);
+    }
+    if (rc == NF_ENONFINITE)
+        return ig_pfail(c, p, 0, rc,
+                        "a control point is not finite after the %d "
+                        "transformation matrices",
+                        nm);
+    if (rc)
+        return ig_pfail(c, p, 0, rc, "invalid surface: %s", nf_strerror(rc));
+    return CF_OK;
+}
+
+static void ig_rd_free(ig_rd_t *c)
+{
+    if (c->in && c->in->f)
+        fclose(c->in->f);
+    free(c->in);
+    free(c->g);
+    free(c->de);
+    for (int i = 0; i < c->nwant; i++) {
+        free(c->want[i].data);
+        free(c->want[i].lines);
+    }
+}
+
+int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, size_t msglen)
+{
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!path || !out || entity_de < 0)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_read: bad arguments");
+    ig_rd_t c;
+    memset(&c, 0, sizeof c);
+    c.path = path;
+    c.msg = msg;
+    c.ml = msglen;
+    c.pd = ',';
+    c.rd = ';';
+    c.target = -1;
+    c.in = calloc(1, sizeof *c.in);
+    if (!c.in)
+        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    c.in->line = 1;
+    c.in->f = fopen(path, "rb");
+    if (!c.in->f) {
+        int e = errno;
+        ig_rd_free(&c);
+        return cf_fail(msg, msglen, CF_EIO, "%s: cannot open: %s", path, strerror(e));
+    }
+    int rc = ig_sniff(&c);
+    if (!rc)
+        rc = ig_scan(&c, entity_de);
+    if (!rc && c.notfound)
+        rc = c.notfound; /* its message is already in msg */
+    double m[IG_MAX_CHAIN][12];
+    for (int i = 1; !rc && i < c.nwant; i++)
+        rc = ig_matrix(&c, &c.want[i], m[i - 1]);
+    if (!rc)
+        rc = ig_surface(&c, &c.want[0], (const double(*)[12])m, c.nwant - 1, out);
+    ig_rd_free(&c);
+    if (rc)
+        cf_surf_free(out);
+    return rc;
+}
+
+/* --------------------------------------------------------------- output */
+
+typedef struct ig_w {
+    FILE *f; /* NULL: only count the lines */
+    char sect;
+    size_t width; /* data columns of a free-format line: 72 (S, G) or 64 (P) */
+    char cur[81];
+    size_t curlen;
+    long seq; /* lines of this section so far */
+} ig_w_t;
+
+static void ig_wline(ig_w_t *w, const char *data, size_t n)
+{
+    char line[96];
+    w->seq++;
+    if (!w->f)
+        return;
+    memset(line, ' ', 80);
+    memcpy(line, data, n < 72 ? n : 72);
+    if (w->sect == 'P')
+        memcpy(line + 64, "       1", 8); /* back pointer to the one entity, DE 1 */
+    snprintf(line + 72, sizeof line - 72, "%c%7ld\n", w->sect, w->seq);
+    fwrite(line, 1, 81, w->f);
+}
+
+static void ig_flush(ig_w_t *w)
+{
+    if (w->curlen)
+        ig_wline(w, w->cur, w->curlen);
+    w->curlen = 0;
+}
+
+/* A parameter and its delimiter; parameters never straddle lines. */
+static void ig_tok(ig_w_t *w, const char *tok, char delim)
+{
+    size_t n = strlen(tok);
+    if (w->curlen + n + 1 > w->width)
+        ig_flush(w);
+    memcpy(w->cur + w->curlen, tok, n);
+    w->curlen += n;
+    w->cur[w->curlen++] = delim;
+}
+
+/* %.17g (round-trip exact) with the decimal point and capital E IGES wants. */
+static void ig_fmt(double x, char *b, size_t bl)
+{
+    snprintf(b, bl, "%.17g", x);
+    char *e = strchr(b, 'e');
+    if (e)
+        *e = 'E';
+    if (!strchr(b, '.')) {
+        size_t n = strlen(b), at = e ? (size_t)(e - b) : n;
+        memmove(b + at + 2, b + at, n - at + 1);
+        b[at] = '.';
+        b[at + 1] = '0';
+    }
+}
+
+static void ig_real_tok(ig_w_t *w, double x, char delim)
+{
+    char b[48];
+    ig_fmt(x, b, sizeof b);
+    ig_tok(w, b, delim);
+}
+
+static void ig_int_tok(ig_w_t *w, long x)
+{
+    char b[24];
+    snprintf(b, sizeof b, "%ld", x);
+    ig_tok(w, b, ',');
+}
+
+/* Hollerith string nH... */
+static void ig_str_tok(ig_w_t *w, const char *str, char delim)
+{
+    char b[80];
+    snprintf(b, sizeof b, "%zuH%s", strlen(str), str);
+    ig_tok(w, b, delim);
+}
+
+/* The parameter data of the 128: counts, flags, knots, weights, points, range. */
+static void ig_pdata(ig_w_t *w, const nf_surf_t *s, int poly)
+{
+    const long n = (long)s->nu * s->nv;
+    double u0, u1, v0, v1;
+    ig_int_tok(w, 128);
+    ig_int_tok(w, s->nu - 1);
+    ig_int_tok(w, s->nv - 1);
+    ig_int_tok(w, s->p);
+    ig_int_tok(w, s->q);
+    ig_int_tok(w, 0); /* PROP1, PROP2: not closed */
+    ig_int_tok(w, 0);
+    ig_int_tok(w, poly);
+    ig_int_tok(w, 0); /* PROP4, PROP5: not periodic */
+    ig_int_tok(w, 0);
+    for (long i = 0; i < s->nu + s->p + 1; i++)
+        ig_real_tok(w, s->U[i], ',');
+    for (long i = 0; i < s->nv + s->q + 1; i++)
+        ig_real_tok(w, s->V[i], ',');
+    for (long i = 0; i < n; i++)
+        ig_real_tok(w, s->w ? s->w[i] : 1.0, ',');
+    for (long i = 0; i < 3 * n; i++)
+        ig_real_tok(w, s->cp[i], ',');
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    ig_real_tok(w, u0, ',');
+    ig_real_tok(w, u1, ',');
+    ig_real_tok(w, v0, ',');
+    ig_real_tok(w, v1, ';');
+    ig_flush(w);
+}
+
+/* Printable ASCII only, at most max characters; empty becomes dflt. */
+static void ig_clean(char *dst, const char *src, size_t max, const char *dflt)
+{
+    size_t n = 0;
+    for (; src && src[n] && n < max; n++)
+        dst[n] = (src[n] >= 0x20 && src[n] < 0x7F) ? src[n] : '_';
+    dst[n] = '\0';
+    if (!n)
+        snprintf(dst, max + 1, "%s", dflt);
+}
+
+static void ig_global_out(ig_w_t *w, const nf_surf_t *s, const char *name, const char *fname,
+                          const char *date)
+{
+    double mx = 0.0;
+    for (long i = 0; i < 3L * s->nu * s->nv; i++)
+        mx = fabs(s->cp[i]) > mx ? fabs(s->cp[i]) : mx;
+    ig_str_tok(w, ",", ',');                 /* 1 parameter delimiter */
+    ig_str_tok(w, ";", ',');                 /* 2 record delimiter */
+    ig_str_tok(w, name, ',');                /* 3 product id (sender) */
+    ig_str_tok(w, fname, ',');               /* 4 file name */
+    ig_str_tok(w, "cellfit", ',');           /* 5 native system */
+    ig_str_tok(w, "cellfit cf_iges 1", ','); /* 6 preprocessor version */
+    ig_int_tok(w, 32);                       /* 7 integer bits */
+    ig_int_tok(w, 38);                       /* 8, 9 single precision */
+    ig_int_tok(w, 6);
+    ig_int_tok(w, 308); /* 10, 11 double precision */
+    ig_int_tok(w, 15);
+    ig_str_tok(w, name, ',');  /* 12 product id (receiver) */
+    ig_real_tok(w, 1.0, ',');  /* 13 model space scale */
+    ig_int_tok(w, 2);          /* 14 units: millimetres */
+    ig_str_tok(w, "MM", ',');  /* 15 */
+    ig_int_tok(w, 1);          /* 16 line weight gradations */
+    ig_real_tok(w, 1.0, ',');  /* 17 maximum line width */
+    ig_str_tok(w, date, ',');  /* 18 file generated */
+    ig_real_tok(w, 1e-9, ','); /* 19 resolution */
+    ig_real_tok(w, mx, ',');   /* 20 maximum coordinate */
+    ig_str_tok(w, "cellfit", ',');
+    ig_str_tok(w, "cellfit", ',');
+    ig_int_tok(w, 11);        /* 23 IGES 5.3 */
+    ig_int_tok(w, 0);         /* 24 no drafting standard */
+    ig_str_tok(w, date, ';'); /* 25 model modified */
+    ig_flush(w);
+}
+
+int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, long long utc,
+                     char *msg, size_t msglen)
+{
+    if (!path || !*path || !s)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_write: bad arguments");
+    int rc = nf_surf_check(s);
+    if (rc)
+        return cf_fail(msg, msglen, rc, "%s: not written: invalid surface: %s", path,
+                       nf_strerror(rc));
+    char nm[65], fname[65], date[72], text[160];
+    const char *base = strrchr(path, '/');
+    ig_clean(nm, name, 64, "surface");
+    ig_clean(fname, base ? base + 1 : path, 64, "surface.igs");
+    time_t t = (time_t)utc;
+    struct tm tm;
+    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
+        t = 0;
+        gmtime_r(&t, &tm);
+    }
+    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
+             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    int poly = 1;
+    for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
+        poly &= s->w[i] == s->w[0];
+
+    ig_w_t w = {NULL, 'P', IG_PCOLS, {0}, 0, 0};
+    ig_pdata(&w, s, poly); /* dry run: the D entry needs the line count */
+    long np = w.seq;
+    if (np > IG_MAX_SEQ)
+        return cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                       "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence "
+                       "numbers",
+                       path, np);
+
+    size_t pl = strlen(path);
+    char *tmp = malloc(pl + 5);
+    if (!tmp)
+        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    memcpy(tmp, path, pl);
+    memcpy(tmp + pl, ".tmp", 5);
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        rc = cf_fail(msg, msglen, CF_EIO, "%s: cannot create: %s", tmp, strerror(errno));
+        free(tmp);
+        return rc;
+    }
+
+    long cnt[4];
+    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0};
+    int tl = snprintf(text, sizeof text,
+                      "cellfit: rational B-spline surface %s (IGES 5.3, one entity 128)", nm);
+    for (int at = 0; at < tl; at += IG_GCOLS)
+        ig_wline(&ws, text + at, (size_t)(tl - at));
+    cnt[0] = ws.seq;
+
+    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0};
+    ig_global_out(&wg, s, nm, fname, date);
+    cnt[1] = wg.seq;
+
+    char d[2][96];
+    snprintf(d[0], sizeof d[0], "%8d%8d%8d%8d%8d%8d%8d%8d%8s%c%7d\n", 128, 1, 0, 0, 0, 0, 0, 0,
+             "00000000", 'D', 1);
+    snprintf(d[1], sizeof d[1], "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", 128, 0, 0, np, 0, "", "",
+             "BSURF", 0, 'D', 2);
+    fputs(d[0], f);
+    fputs(d[1], f);
+    cnt[2] = 2;
+
+    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0};
+    ig_pdata(&wp, s, poly);
+    cnt[3] = wp.seq;
+
+    fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
+
+    int werr = ferror(f) ? errno : 0;
+    if (fclose(f) && !werr)
+        werr = errno ? errno : EIO;
+    if (!werr && rename(tmp, path))
+        werr = errno;
+    if (werr) {
+        remove(tmp);
+        rc = cf_fail(msg, msglen, CF_EIO, "%s: write failed: %s", path, strerror(werr));
+    }
+    free(tmp);
+    return rc;
+}
+
+int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *msg, size_t msglen)
+{
+    /* SOURCE_DATE_EPOCH: the reproducible-builds convention for fixed timestamps. */
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long t = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || t < 0)
+        t = (long long)time(NULL);
+    return cf_iges_write_at(path, s, name, t, msg, msglen);
+}

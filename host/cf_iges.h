@@ -1,0 +1,32 @@
+/* cf_iges.h: IGES 5.3 entity 128 (rational B-spline surface), read and write.
+ * Fixed-80-column ASCII IGES only; binary and compressed forms are refused. */
+#ifndef CF_IGES_H
+#define CF_IGES_H
+
+#include "nf_surf.h"
+#include <stddef.h>
+
+/* Read one entity 128 from an IGES file into out (allocated with
+ * cf_surf_alloc, always with weights; free with cf_surf_free). entity_de = 0
+ * takes the first 128 in the Directory Entry section, otherwise the 128 whose
+ * DE sequence number (odd D line number) is entity_de. A transformation
+ * matrix (entity 124, chained) on the 128 itself is applied to the control
+ * points; matrices of parents (144, 186, ...) are not.
+ * Returns CF_OK, CF_EIO, CF_EPARSE, CF_ENOTFOUND, CF_EUNSUPPORTED, CF_ENOMEM,
+ * or the nf_err_t of nf_surf_check; msg names the file and line/record. On
+ * failure out is zeroed and owns nothing. */
+int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, size_t msglen);
+
+/* Write s as a complete IGES 5.3 file holding one entity 128 (form 0), with
+ * every number in %.17g form so reading back is bit-exact. The file appears
+ * at path only when complete: it is written to path.tmp and renamed. name
+ * (may be NULL) goes into the Start and Global sections. The timestamp is
+ * the current UTC time, or SOURCE_DATE_EPOCH when that is set. */
+int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *msg, size_t msglen);
+
+/* cf_iges_write with an explicit timestamp (seconds since 1970, UTC), for
+ * reproducible output and tests. */
+int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, long long utc,
+                     char *msg, size_t msglen);
+
+#endif

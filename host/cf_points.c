@@ -1,0 +1,851 @@
+/* cf_points.c: streaming point-file reader (ASCII lines; PLY ascii and
+ * binary_little_endian). One fixed buffer refilled with fread; a line is
+ * parsed in place, after moving its start to the front of the buffer when it
+ * straddles a refill. Numbers take Clinger's fast path when that is exact and
+ * strtod otherwise, so every value equals strtod's. */
+#include "cf_points.h"
+#include "cf_err.h"
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CP_BUF (1L << 20)
+#define CP_MAX_PROPS 32
+#define CP_MAX_ELEMS 16
+
+/* x87 extended precision would round the fast path twice: use strtod only. */
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0
+#define CP_FAST 0
+#else
+#define CP_FAST 1
+#endif
+
+/* With x87 80-bit long double, 19-digit mantissas (%.17g output) have an
+ * exact check too; see cp_num. */
+#if CP_FAST && LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
+#define CP_EXT 1
+#else
+#define CP_EXT 0
+#endif
+
+enum { CP_ASCII, CP_PLY_ASCII, CP_PLY_BIN };
+enum { CP_NUM_OK, CP_NUM_JUNK, CP_NUM_NONFINITE, CP_NUM_RANGE };
+enum { CP_T_I8 = 1, CP_T_U8, CP_T_I16, CP_T_U16, CP_T_I32, CP_T_U32, CP_T_F32, CP_T_F64 };
+
+typedef struct cp_prop {
+    int type;  /* scalar type, or item type of a list */
+    int ltype; /* count type of a list; 0 for a scalar */
+    int slot;  /* output column, -1 when not wanted */
+} cp_prop_t;
+
+typedef struct cp_elem {
+    long long count;
+    int nprop, vertex;
+    cp_prop_t prop[CP_MAX_PROPS];
+} cp_elem_t;
+
+struct cf_points {
+    FILE *f;
+    int is_stdin;
+    char name[256];
+    char *buf; /* CP_BUF + 1 bytes: room for a NUL after a final unterminated line */
+    size_t len, pos;
+    long long boff;     /* file offset of buf[0] */
+    long long data_off; /* offset of the first point (after a PLY header) */
+    int eof;
+    int want, cols, fmt;
+    long line, last, data_line;
+    int pending; /* the line [ps, pe) was looked at by open, not yet returned */
+    char *ps, *pe;
+    int err;
+    char errmsg[720];
+    /* PLY */
+    cp_elem_t elem[CP_MAX_ELEMS];
+    int nelem, velem, ply_ready;
+    long long vdone;
+};
+
+static int cp_err(cf_points_t *r, int code, long line, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* "name:line: text", kept so that later reads repeat it. */
+static int cp_err(cf_points_t *r, int code, long line, const char *fmt, ...)
+{
+    char tmp[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (line > 0)
+        snprintf(r->errmsg, sizeof r->errmsg, "%s:%ld: %s", r->name, line, tmp);
+    else
+        snprintf(r->errmsg, sizeof r->errmsg, "%s: %s", r->name, tmp);
+    r->err = code;
+    return code;
+}
+
+/* ------------------------------------------------------------ buffering */
+
+/* Keep the unread bytes, append what fread gives; sets eof at the end. */
+static int cp_fill(cf_points_t *r)
+{
+    size_t keep = r->len - r->pos;
+    if (r->pos) {
+        memmove(r->buf, r->buf + r->pos, keep);
+        r->boff += (long long)r->pos;
+        r->pos = 0;
+        r->len = keep;
+    }
+    size_t got = fread(r->buf + r->len, 1, (size_t)CP_BUF - r->len, r->f);
+    r->len += got;
+    if (got == 0) {
+        if (ferror(r->f))
+            return cp_err(r, CF_EIO, r->line + 1, "read error: %s", strerror(errno));
+        r->eof = 1;
+    }
+    return CF_OK;
+}
+
+/* Next line, NUL-terminated in place: 1, 0 at the end, or an error. */
+static int cp_line(cf_points_t *r, char **s, char **e)
+{
+    for (;;) {
+        char *p = r->buf + r->pos;
+        size_t avail = r->len - r->pos;
+        char *nl = memchr(p, '\n', avail);
+        if (nl) {
+            if (nl - p > CF_POINTS_MAX_LINE)
+                break;
+            *nl = '\0';
+            r->pos = (size_t)(nl + 1 - r->buf);
+            r->line++;
+            *s = p;
+            *e = nl;
+            return 1;
+        }
+        if (avail > CF_POINTS_MAX_LINE)
+            break;
+        if (r->eof) {
+            if (!avail)
+                return 0;
+            p[avail] = '\0';
+            r->pos = r->len;
+            r->line++;
+            *s = p;
+            *e = p + avail;
+            return 1;
+        }
+        int rc = cp_fill(r);
+        if (rc)
+            return rc;
+    }
+    return cp_err(r, CF_EPARSE, r->line + 1, "line longer than %d bytes (not a point file?)",
+                  CF_POINTS_MAX_LINE);
+}
+
+/* ------------------------------------------------------------- numbers */
+
+static const double cp_p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                  1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                  1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+#if CP_EXT
+static const long double cp_p10l[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,  1e6L,
+                                        1e7L,  1e8L,  1e9L,  1e10L, 1e11L, 1e12L, 1e13L,
+                                        1e14L, 1e15L, 1e16L, 1e17L, 1e18L, 1e19L, 1e20L,
+                                        1e21L, 1e22L, 1e23L, 1e24L, 1e25L, 1e26L, 1e27L};
+#endif
+
+static int cp_digit(char c)
+{
+    return (unsigned)(c - '0') < 10u;
+}
+
+static int cp_lower(char c)
+{
+    return (c >= 'A' && c <= 'Z') ? c + ('a' - 'A') : c;
+}
+
+/* s starts with lit, ignoring case (s is NUL-terminated, lit lower case). */
+static int cp_prefix(const char *s, const char *lit)
+{
+    for (; *lit; s++, lit++)
+        if (cp_lower(*s) != *lit)
+            return 0;
+    return 1;
+}
+
+static int cp_sep(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r' || c == ',' || c == '#' || c == '\0' || c == '\v' ||
+           c == '\f';
+}
+
+static int cp_space(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
+
+/* The slow path: strtod on a NUL-terminated copy (the line may go on). */
+static __attribute__((noinline)) double cp_strtod(const char *s, size_t n)
+{
+    char tmp[CF_POINTS_MAX_LINE + 1];
+    memcpy(tmp, s, n);
+    tmp[n] = '\0';
+    return strtod(tmp, NULL);
+}
+
+/* Decimal number at p: [+-] digits [. digits] [e [+-] digits]. *end is set
+ * after it; the caller checks that a separator follows. */
+static int cp_num(const char *p, const char **end, double *out)
+{
+    const char *s = p;
+    int neg = 0, nd = 0, drop = 0, any = 0;
+    uint64_t m = 0;
+    long e10;
+    if (*p == '-' || *p == '+')
+        neg = *p++ == '-';
+    while (*p == '0') {
+        p++;
+        any = 1;
+    }
+    for (; cp_digit(*p); p++, any = 1) {
+        if (nd < 19) {
+            m = m * 10 + (uint64_t)(*p - '0');
+            nd++;
+        } else {
+            drop++;
+        }
+    }
+    e10 = drop;
+    if (*p == '.') {
+        p++;
+        if (!nd)
+            for (; *p == '0'; p++, any = 1)
+                e10--;
+        for (; cp_digit(*p); p++, any = 1) {
+            if (nd < 19) {
+                m = m * 10 + (uint64_t)(*p - '0');
+                nd++;
+                e10--;
+            } else {
+                drop++;
+            }
+        }
+    }
+    if (!any) {
+        /* inf, infinity, nan, nan(chars): parsed only to be refused by name;
+         * "information" stays junk. */
+        const char *q = p;
+        if (cp_prefix(q, "inf")) {
+            q += cp_prefix(q, "infinity") ? 8 : 3;
+        } else if (cp_prefix(q, "nan")) {
+            q += 3;
+            if (*q == '(') {
+                const char *c = q + 1;
+                while ((cp_lower(*c) >= 'a' && cp_lower(*c) <= 'z') || cp_digit(*c) || *c == '_')
+                    c++;
+                q = *c == ')' ? c + 1 : q;
+            }
+        }
+        if (q != p && cp_sep(*q)) {
+            *end = q;
+            return CP_NUM_NONFINITE;
+        }
+        *end = p;
+        return CP_NUM_JUNK;
+    }
+    if (*p == 'e' || *p == 'E') {
+        const char *q = p + 1;
+        int en = 0;
+        long ex = 0;
+        if (*q == '-' || *q == '+')
+            en = *q++ == '-';
+        if (!cp_digit(*q)) {
+            *end = p;
+            return CP_NUM_JUNK;
+        }
+        for (; cp_digit(*q); q++)
+            if (ex < 100000)
+                ex = ex * 10 + (*q - '0');
+        e10 += en ? -ex : ex;
+        p = q;
+    }
+    *end = p;
+    if (m == 0) { /* drop is 0 too: only leading zeros were seen */
+        *out = neg ? -0.0 : 0.0;
+        return CP_NUM_OK;
+    }
+    /* Clinger: m and 10^|e10| are exact doubles, so one IEEE operation gives
+     * the correctly rounded quotient or product. */
+    if (CP_FAST && !drop && m <= (UINT64_C(1) << 53) && e10 >= -22 && e10 <= 22) {
+        double d = (double)m;
+        d = e10 < 0 ? d / cp_p10[-e10] : d * cp_p10[e10];
+        *out = neg ? -d : d;
+        return CP_NUM_OK;
+    }
+#if CP_EXT
+    /* m < 2^64 and 10^|e10| <= 10^27 are exact in the 64-bit significand, so x
+     * is m*10^e10 correctly rounded to 64 bits. Rounding x again to 53 bits is
+     * correct unless x sits exactly on a midpoint between two doubles (low 11
+     * significand bits 10000000000): a monotone rounding cannot move a value
+     * across a midpoint it can represent. Midpoints go to strtod. */
+    if (!drop && e10 >= -27 && e10 <= 27) {
+        long double x = (long double)m;
+        uint64_t sig;
+        x = e10 < 0 ? x / cp_p10l[-e10] : x * cp_p10l[e10];
+        memcpy(&sig, &x, sizeof sig); /* x86 extended: bytes 0-7 hold the significand */
+        if ((sig & 0x7FF) != 0x400) {
+            double d = (double)x;
+            *out = neg ? -d : d;
+            return CP_NUM_OK;
+        }
+    }
+#endif
+    *out = cp_strtod(s, (size_t)(p - s));
+    return isinf(*out) ? CP_NUM_RANGE : CP_NUM_OK;
+}
+
+/* Error for the token at p (st: what cp_num said, bad: first offending byte). */
+static int cp_bad_token(cf_points_t *r, const char *p, const char *bad, int st)
+{
+    char tok[28];
+    int n = 0;
+    unsigned char b = (unsigned char)*bad;
+    if (st == CP_NUM_JUNK || st == CP_NUM_OK) {
+        if (b == 0)
+            return cp_err(r, CF_EPARSE, r->line, "NUL byte: binary data, not a point file");
+        if (b < 0x20 || b >= 0x7F)
+            return cp_err(r, CF_EPARSE, r->line, "byte 0x%02x: binary data, not a point file", b);
+    }
+    for (; p[n] && !cp_sep(p[n]) && n < (int)sizeof tok - 4; n++)
+        tok[n] = (p[n] >= 0x20 && p[n] < 0x7F) ? p[n] : '?';
+    if (p[n] && !cp_sep(p[n]))
+        tok[n++] = '.', tok[n++] = '.', tok[n++] = '.';
+    tok[n] = '\0';
+    if (st == CP_NUM_NONFINITE)
+        return cp_err(r, CF_EPARSE, r->line, "non-finite coordinate '%s'", tok);
+    if (st == CP_NUM_RANGE)
+        return cp_err(r, CF_EPARSE, r->line, "number '%s' out of double range", tok);
+    return cp_err(r, CF_EPARSE, r->line, "'%s' is not a number", tok);
+}
+
+/* Numbers of the line [s, e) (NUL at e): the first lim into row. Returns how
+ * many there are, or an error. */
+static int cp_parse(cf_points_t *r, const char *s, const char *e, double *row, int lim)
+{
+    const char *p = s;
+    int n = 0;
+    double dummy;
+    for (;;) {
+        while (cp_space(*p))
+            p++;
+        if (*p == ',') {
+            if (n == 0)
+                return cp_err(r, CF_EPARSE, r->line, "empty field before ','");
+            p++;
+            while (cp_space(*p))
+                p++;
+            if ((*p == '\0' && p == e) || *p == '#' || *p == ',')
+                return cp_err(r, CF_EPARSE, r->line, "empty field after ','");
+        }
+        if (*p == '\0') {
+            if (p != e)
+                return cp_bad_token(r, p, p, CP_NUM_JUNK);
+            return n;
+        }
+        if (*p == '#') {
+            if (memchr(p, '\0', (size_t)(e - p)))
+                return cp_err(r, CF_EPARSE, r->line, "NUL byte: binary data, not a point file");
+            return n;
+        }
+        const char *q;
+        int st = cp_num(p, &q, n < lim ? &row[n] : &dummy);
+        if (st != CP_NUM_OK || !cp_sep(*q) || (*q == '\0' && q != e))
+            return cp_bad_token(r, p, q, st);
+        n++;
+        p = q;
+    }
+}
+
+/* --------------------------------------------------------------- ASCII */
+
+static int cp_ascii_point(cf_points_t *r, double *row)
+{
+    for (;;) {
+        char *s, *e;
+        int rc = 1;
+        if (r->pending) {
+            r->pending = 0;
+            s = r->ps;
+            e = r->pe;
+        } else {
+            rc = cp_line(r, &s, &e);
+        }
+        if (rc <= 0)
+            return rc;
+        int n = cp_parse(r, s, e, row, r->cols);
+        if (n < 0)
+            return n;
+        if (n == 0)
+            continue;
+        if (n != r->cols)
+            return cp_err(r, CF_EPARSE, r->line, "%d value%s, expected %d", n, n == 1 ? "" : "s",
+                          r->cols);
+        r->last = r->line;
+        return 1;
+    }
+}
+
+/* want_cols = 0: the first data line decides; it is kept for the first read. */
+static int cp_first_cols(cf_points_t *r)
+{
+    double row[CF_POINTS_MAX_COLS];
+    for (;;) {
+        char *s, *e;
+        int rc = cp_line(r, &s, &e);
+        if (rc <= 0)
+            return rc; /* empty file: cols stays 0, reads return 0 */
+        int n = cp_parse(r, s, e, row, CF_POINTS_MAX_COLS);
+        if (n < 0)
+            return n;
+        if (n == 0)
+            continue;
+        if (n != 3 && n != 5)
+            return cp_err(r, CF_EPARSE, r->line,
+                          "%d values; a point line has 3 (x y z) or 5 (u v x y z)", n);
+        r->cols = n;
+        r->pending = 1;
+        r->ps = s;
+        r->pe = e;
+        return CF_OK;
+    }
+}
+
+/* ----------------------------------------------------------------- PLY */
+
+static int cp_type(const char *t)
+{
+    static const struct {
+        const char *name;
+        int type;
+    } map[] = {
+        {"char", CP_T_I8},   {"int8", CP_T_I8},     {"uchar", CP_T_U8},   {"uint8", CP_T_U8},
+        {"short", CP_T_I16}, {"int16", CP_T_I16},   {"ushort", CP_T_U16}, {"uint16", CP_T_U16},
+        {"int", CP_T_I32},   {"int32", CP_T_I32},   {"uint", CP_T_U32},   {"uint32", CP_T_U32},
+        {"float", CP_T_F32}, {"float32", CP_T_F32}, {"double", CP_T_F64}, {"float64", CP_T_F64}};
+    for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+        if (!strcmp(t, map[i].name))
+            return map[i].type;
+    return 0;
+}
+
+static size_t cp_tsize(int t)
+{
+    static const size_t sz[] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
+    return sz[t];
+}
+
+/* Little-endian value of type t at b, as a double. */
+static double cp_le(const unsigned char *b, int t)
+{
+    uint64_t u = 0;
+    size_t n = cp_tsize(t);
+    for (size_t i = 0; i < n; i++)
+        u |= (uint64_t)b[i] << (8 * i);
+    switch (t) {
+    case CP_T_I8: return (double)(int8_t)u;
+    case CP_T_U8: return (double)u;
+    case CP_T_I16: return (double)(int16_t)u;
+    case CP_T_U16: return (double)u;
+    case CP_T_I32: return (double)(int32_t)u;
+    case CP_T_U32: return (double)u;
+    case CP_T_F32: {
+        float f;
+        uint32_t w = (uint32_t)u;
+        memcpy(&f, &w, sizeof f);
+        return (double)f;
+    }
+    default: {
+        double d;
+        memcpy(&d, &u, sizeof d);
+        return d;
+    }
+    }
+}
+
+/* Split a header line into at most max words. */
+static int cp_words(char *s, char **w, int max)
+{
+    int n = 0;
+    for (;;) {
+        while (cp_space(*s))
+            s++;
+        if (!*s || n == max)
+            return n;
+        w[n++] = s;
+        while (*s && !cp_space(*s))
+            s++;
+        if (*s)
+            *s++ = '\0';
+    }
+}
+
+static int cp_ply_slots(cf_points_t *r, cp_elem_t *v, char (*names)[32])
+{
+    int at[5] = {-1, -1, -1, -1, -1}; /* x y z u v */
+    static const char *nm[7] = {"x", "y", "z", "u", "v", "s", "t"};
+    for (int i = 0; i < v->nprop; i++) {
+        v->prop[i].slot = -1;
+        for (int k = 0; k < 7; k++)
+            if (!v->prop[i].ltype && !strcmp(names[i], nm[k]) && at[k < 5 ? k : k - 2] < 0)
+                at[k < 5 ? k : k - 2] = i;
+    }
+    if (at[0] < 0 || at[1] < 0 || at[2] < 0)
+        return cp_err(r, CF_EPARSE, r->line, "PLY vertex element lacks scalar x, y and z");
+    int uv = at[3] >= 0 && at[4] >= 0;
+    int cols = r->want ? r->want : (uv ? 5 : 3);
+    if (cols == 5 && !uv)
+        return cp_err(r, CF_EPARSE, r->line,
+                      "PLY vertices have no u v (or s t) properties, 5 columns wanted");
+    if (cols != 3 && cols != 5)
+        return cp_err(r, CF_EUNSUPPORTED, r->line, "PLY input gives 3 or 5 columns, not %d", cols);
+    for (int k = 0; k < 3; k++)
+        v->prop[at[k]].slot = k + (cols == 5 ? 2 : 0);
+    if (cols == 5) {
+        v->prop[at[3]].slot = 0;
+        v->prop[at[4]].slot = 1;
+    }
+    r->cols = cols;
+    return CF_OK;
+}
+
+static int cp_ply_header(cf_points_t *r)
+{
+    char names[CP_MAX_PROPS][32];
+    int have_format = 0, after = 0; /* after: elements past the vertices, never read */
+    r->velem = -1;
+    for (;;) {
+        char *s, *e, *w[6];
+        int rc = cp_line(r, &s, &e);
+        if (rc < 0)
+            return rc;
+        if (rc == 0)
+            return cp_err(r, CF_EPARSE, r->line, "PLY header without end_header");
+        if ((size_t)(e - s) != strlen(s))
+            return cp_err(r, CF_EPARSE, r->line, "NUL byte in the PLY header");
+        int n = cp_words(s, w, 6);
+        if (r->line == 1) {
+            if (n != 1 || strcmp(w[0], "ply"))
+                return cp_err(r, CF_EPARSE, r->line, "not a PLY header");
+            continue;
+        }
+        if (n == 0 || !strcmp(w[0], "comment") || !strcmp(w[0], "obj_info"))
+            continue;
+        if (!strcmp(w[0], "end_header") && n == 1)
+            break;
+        if (!strcmp(w[0], "element") && r->velem >= 0)
+            after = 1;
+        if (after)
+            continue;
+        if (!strcmp(w[0], "format") && n == 3) {
+            if (!strcmp(w[1], "ascii"))
+                r->fmt = CP_PLY_ASCII;
+            else if (!strcmp(w[1], "binary_little_endian"))
+                r->fmt = CP_PLY_BIN;
+            else
+                return cp_err(r, CF_EUNSUPPORTED, r->line, "PLY format %s is not supported", w[1]);
+            if (strcmp(w[2], "1.0"))
+                return cp_err(r, CF_EUNSUPPORTED, r->line, "PLY version %s", w[2]);
+            have_format = 1;
+        } else if (!strcmp(w[0], "element") && n == 3) {
+            char *end;
+            long long cnt = strtoll(w[2], &end, 10);
+            if (*end || cnt < 0)
+                return cp_err(r, CF_EPARSE, r->line, "element count '%s'", w[2]);
+            if (r->nelem == CP_MAX_ELEMS)
+                return cp_err(r, CF_EUNSUPPORTED, r->line, "more than %d PLY elements",
+                              CP_MAX_ELEMS);
+            cp_elem_t *el = &r->elem[r->nelem++];
+            memset(el, 0, sizeof *el);
+            el->count = cnt;
+            el->vertex = !strcmp(w[1], "vertex");
+            if (el->vertex)
+                r->velem = r->nelem - 1;
+        } else if (!strcmp(w[0], "property") && (n == 3 || n == 5)) {
+            if (!r->nelem)
+                return cp_err(r, CF_EPARSE, r->line, "PLY property before any element");
+            cp_elem_t *el = &r->elem[r->nelem - 1];
+            if (el->nprop == CP_MAX_PROPS)
+                return cp_err(r, CF_EUNSUPPORTED, r->line, "more than %d properties", CP_MAX_PROPS);
+            cp_prop_t *pr = &el->prop[el->nprop];
+            int list = n == 5 && !strcmp(w[1], "list");
+            pr->ltype = list ? cp_type(w[2]) : 0;
+            pr->type = cp_type(w[list ? 3 : 1]);
+            pr->slot = -1;
+            if (!pr->type || (list && (!pr->ltype || pr->ltype >= CP_T_F32)) || (n == 5 && !list))
+                return cp_err(r, CF_EPARSE, r->line, "PLY property type not understood");
+            if (el->vertex)
+                snprintf(names[el->nprop], sizeof names[0], "%s", w[n - 1]);
+            el->nprop++;
+        } else {
+            return cp_err(r, CF_EPARSE, r->line, "PLY header line '%.40s' not understood", w[0]);
+        }
+    }
+    if (!have_format)
+        return cp_err(r, CF_EPARSE, r->line, "PLY header without a format line");
+    if (r->velem < 0)
+        return cp_err(r, CF_EPARSE, r->line, "PLY file without a vertex element");
+    int rc = cp_ply_slots(r, &r->elem[r->velem], names);
+    if (rc)
+        return rc;
+    r->data_off = r->boff + (long long)r->pos;
+    r->data_line = r->line;
+    return CF_OK;
+}
+
+/* Make n bytes readable at pos: 0, 1 at a clean end of file, -1 mid-value. */
+static int cp_need(cf_points_t *r, size_t n)
+{
+    while (r->len - r->pos < n) {
+        if (r->eof)
+            return r->len == r->pos ? 1 : -1;
+        int rc = cp_fill(r);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
+/* One binary element instance; wanted values into row. */
+static int cp_bin_one(cf_points_t *r, const cp_elem_t *el, double *row, long long idx)
+{
+    for (int i = 0; i < el->nprop; i++) {
+        const cp_prop_t *pr = &el->prop[i];
+        size_t sz = cp_tsize(pr->ltype ? pr->ltype : pr->type);
+        int rc = cp_need(r, sz);
+        if (rc > 0 && i == 0)
+            return 1;
+        if (rc)
+            return rc < -1 ? rc
+                           : cp_err(r, CF_EPARSE, 0, "file ends inside element %lld of %lld",
+                                    idx + 1, el->count);
+        double v = cp_le((unsigned char *)r->buf + r->pos, pr->ltype ? pr->ltype : pr->type);
+        r->pos += sz;
+        if (!pr->ltype) {
+            if (pr->slot >= 0) {
+                if (!isfinite(v))
+                    return cp_err(r, CF_EPARSE, 0, "vertex %lld: non-finite coordinate", idx + 1);
+                row[pr->slot] = v;
+            }
+            continue;
+        }
+        /* A list: skip count items, a buffer's worth at a time. */
+        if (v < 0)
+            return cp_err(r, CF_EPARSE, 0, "element %lld: negative list length", idx + 1);
+        long long skip = (long long)v * (long long)cp_tsize(pr->type);
+        while (skip > 0) {
+            rc = cp_need(r, 1);
+            if (rc)
+                return rc < -1 ? rc
+                               : cp_err(r, CF_EPARSE, 0, "file ends inside element %lld", idx + 1);
+            size_t take = r->len - r->pos;
+            if ((long long)take > skip)
+                take = (size_t)skip;
+            r->pos += take;
+            skip -= (long long)take;
+        }
+    }
+    return 0;
+}
+
+/* One ASCII element instance (one line): wanted values into row. */
+static int cp_asc_one(cf_points_t *r, const cp_elem_t *el, double *row, long long idx)
+{
+    char *s, *e;
+    int rc;
+    do {
+        rc = cp_line(r, &s, &e);
+        if (rc < 0)
+            return rc;
+        if (rc == 0)
+            return cp_err(r, CF_EPARSE, r->line, "file ends after %lld of %lld elements", idx,
+                          el->count);
+        while (cp_space(*s))
+            s++;
+    } while (s == e);
+    const char *p = s;
+    for (int i = 0; i < el->nprop; i++) {
+        const cp_prop_t *pr = &el->prop[i];
+        long long items = 1;
+        int list = pr->ltype != 0;
+        for (long long k = 0; k < items + list; k++) {
+            const char *q;
+            double v;
+            while (cp_space(*p))
+                p++;
+            if (*p == '\0' && p == e)
+                return cp_err(r, CF_EPARSE, r->line, "too few values for the PLY element");
+            int st = cp_num(p, &q, &v);
+            if (st != CP_NUM_OK || !cp_sep(*q) || *q == ',' || *q == '#' || (*q == '\0' && q != e))
+                return cp_bad_token(r, p, q, st);
+            if (list && k == 0) {
+                if (v < 0 || v > CF_POINTS_MAX_LINE || v != floor(v))
+                    return cp_err(r, CF_EPARSE, r->line, "bad PLY list length");
+                items = (long long)v;
+            } else if (pr->slot >= 0) {
+                row[pr->slot] = v;
+            }
+            p = q;
+        }
+    }
+    while (cp_space(*p))
+        p++;
+    if (p != e)
+        return cp_err(r, CF_EPARSE, r->line, "more values than the PLY element has properties");
+    return 0;
+}
+
+static int cp_ply_point(cf_points_t *r, double *row)
+{
+    double scratch[CF_POINTS_MAX_COLS];
+    if (!r->ply_ready) { /* elements before the vertices: read and dropped */
+        for (int k = 0; k < r->velem; k++)
+            for (long long i = 0; i < r->elem[k].count; i++) {
+                int rc = r->fmt == CP_PLY_BIN ? cp_bin_one(r, &r->elem[k], scratch, i)
+                                              : cp_asc_one(r, &r->elem[k], scratch, i);
+                if (rc > 0)
+                    return cp_err(r, CF_EPARSE, 0, "file ends in element %d", k);
+                if (rc)
+                    return rc;
+            }
+        r->ply_ready = 1;
+    }
+    const cp_elem_t *v = &r->elem[r->velem];
+    if (r->vdone == v->count)
+        return 0;
+    int rc =
+        r->fmt == CP_PLY_BIN ? cp_bin_one(r, v, row, r->vdone) : cp_asc_one(r, v, row, r->vdone);
+    if (rc > 0)
+        return cp_err(r, CF_EPARSE, 0, "file ends after %lld of %lld vertices", r->vdone, v->count);
+    if (rc)
+        return rc;
+    r->vdone++;
+    r->last = r->fmt == CP_PLY_BIN ? (long)r->vdone : r->line;
+    return 1;
+}
+
+/* ----------------------------------------------------------------- API */
+
+int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg, size_t msglen)
+{
+    if (rp)
+        *rp = NULL;
+    if (!rp || !path || want_cols < 0 || want_cols > CF_POINTS_MAX_COLS)
+        return cf_fail(msg, msglen, CF_EARG, "cf_points_open: bad arguments");
+    cf_points_t *r = calloc(1, sizeof *r);
+    if (!r)
+        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    r->buf = malloc((size_t)CP_BUF + 1);
+    r->is_stdin = !strcmp(path, "-");
+    snprintf(r->name, sizeof r->name, "%s", r->is_stdin ? "<stdin>" : path);
+    r->want = r->cols = want_cols;
+    if (!r->buf) {
+        cf_points_close(r);
+        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    }
+    r->f = r->is_stdin ? stdin : fopen(path, "rb");
+    if (!r->f) {
+        int e = errno;
+        cf_points_close(r);
+        return cf_fail(msg, msglen, CF_EIO, "%s: cannot open: %s", path, strerror(e));
+    }
+    int rc = cp_fill(r);
+    while (!rc && !r->eof && r->len < 4)
+        rc = cp_fill(r);
+    const unsigned char *b = (const unsigned char *)r->buf;
+    if (rc) {
+        /* message already in r->errmsg */
+    } else if (r->len >= 2 && b[0] == 0x1F && b[1] == 0x8B) {
+        rc = cp_err(r, CF_EUNSUPPORTED, 0, "gzip-compressed: gunzip it first");
+    } else if (r->len >= 4 && !memcmp(b, "ply", 3) && (b[3] == '\n' || b[3] == '\r')) {
+        rc = cp_ply_header(r);
+    } else {
+        r->fmt = CP_ASCII;
+        if (!want_cols)
+            rc = cp_first_cols(r);
+    }
+    if (rc) {
+        cf_fail(msg, msglen, rc, "%s", r->errmsg);
+        cf_points_close(r);
+        return rc;
+    }
+    *rp = r;
+    return CF_OK;
+}
+
+int cf_points_cols(const cf_points_t *r)
+{
+    return r ? r->cols : 0;
+}
+
+long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, size_t msglen)
+{
+    if (!r || (!buf && max_points > 0) || max_points < 0)
+        return cf_fail(msg, msglen, CF_EARG, "cf_points_read: bad arguments");
+    if (r->err)
+        return cf_fail(msg, msglen, r->err, "%s", r->errmsg);
+    long k = 0;
+    while (k < max_points && r->cols > 0) {
+        double *row = buf + k * r->cols;
+        int rc = r->fmt == CP_ASCII ? cp_ascii_point(r, row) : cp_ply_point(r, row);
+        if (rc == 0)
+            break;
+        if (rc < 0)
+            return cf_fail(msg, msglen, rc, "%s", r->errmsg);
+        k++;
+    }
+    return k;
+}
+
+long cf_points_line(const cf_points_t *r)
+{
+    return r ? r->last : 0;
+}
+
+int cf_points_rewind(cf_points_t *r)
+{
+    if (!r)
+        return CF_EARG;
+    if (r->is_stdin)
+        return CF_EUNSUPPORTED;
+    clearerr(r->f);
+    if (fseeko(r->f, (off_t)r->data_off, SEEK_SET))
+        return CF_EIO;
+    r->len = r->pos = 0;
+    r->boff = r->data_off;
+    r->eof = 0;
+    r->line = r->data_line;
+    r->last = 0;
+    r->pending = 0;
+    r->err = 0;
+    r->errmsg[0] = '\0';
+    r->ply_ready = 0;
+    r->vdone = 0;
+    return CF_OK;
+}
+
+void cf_points_close(cf_points_t *r)
+{
+    if (!r)
+        return;
+    if (r->f && !r->is_stdin)
+        fclose(r->f);
+    free(r->buf);
+    free(r);
+}

@@ -1,0 +1,238 @@
+/* cmd_bench.c: `cellfit bench accumulate|solve|fit`: single measurements
+ * on generated, seeded data streamed without files (issue 6). Prints
+ * figures; asserts nothing. Nets are square, bicubic, uniform knots. */
+#include "cf_cli.h"
+#include "cf_surf.h"
+#include "nf_err.h"
+#include "nf_fit.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#define CHUNK 65536
+
+typedef struct bench_opts {
+    long points, cp, threads, degree;
+    int random, json;
+    nf_solver_t solver;
+    double alpha, beta, tol;
+} bench_opts_t;
+
+static unsigned long long b_rng = 0x853C49E6748FEA9Bull;
+
+static double brand(void)
+{
+    b_rng ^= b_rng << 13;
+    b_rng ^= b_rng >> 7;
+    b_rng ^= b_rng << 17;
+    return (double)(b_rng >> 11) / 9007199254740992.0;
+}
+
+/* The height field the points sample: smooth plus a bump, cheap to evaluate. */
+static double height(double u, double v)
+{
+    return 10.0 * u * (1.0 - u) + 5.0 * v * v + 0.5 * sin(12.0 * u) * cos(9.0 * v);
+}
+
+/* Fill rows [k0, k0+n) of the point stream: raster (rows of constant v,
+ * as a scanner delivers) or uniformly random parameters. */
+static void gen_chunk(const bench_opts_t *o, long k0, long n, double *rows)
+{
+    long cols = (long)ceil(sqrt((double)o->points));
+    for (long k = 0; k < n; k++) {
+        double u, v, *r = rows + 5 * k;
+        if (o->random) {
+            u = brand();
+            v = brand();
+        } else {
+            long kk = k0 + k;
+            u = ((double)(kk % cols) + 0.5) / (double)cols;
+            v = ((double)(kk / cols) + 0.5) / (double)cols;
+        }
+        r[0] = u;
+        r[1] = v;
+        r[2] = 100.0 * u;
+        r[3] = 100.0 * v;
+        r[4] = height(u, v);
+    }
+}
+
+static int make_net(const bench_opts_t *o, nf_surf_t *s)
+{
+    int side = (int)lround(sqrt((double)o->cp)), p = (int)o->degree;
+    if (side < p + 1)
+        side = p + 1;
+    if (cf_surf_alloc(s, p, p, side, side))
+        return -1;
+    for (int i = 0; i <= p; i++) {
+        s->U[i] = s->V[i] = 0.0;
+        s->U[side + i] = s->V[side + i] = 1.0;
+    }
+    for (int i = p + 1; i < side; i++)
+        s->U[i] = s->V[i] = (double)(i - p) / (side - p);
+    for (int j = 0; j < side; j++)
+        for (int i = 0; i < side; i++) {
+            double *P = s->cp + 3 * (i + (long)j * side);
+            P[0] = 100.0 * i / (side - 1);
+            P[1] = 100.0 * j / (side - 1);
+            P[2] = 0.0;
+        }
+    return 0;
+}
+
+static long peak_rss(void)
+{
+    struct rusage ru;
+    return getrusage(RUSAGE_SELF, &ru) ? -1 : ru.ru_maxrss * 1024L;
+}
+
+static int parse(int argc, char **argv, bench_opts_t *o)
+{
+    memset(o, 0, sizeof *o);
+    o->points = 1000000;
+    o->cp = 10000;
+    o->threads = 1;
+    o->degree = 3;
+    o->solver = NF_SOLVER_AUTO;
+    o->alpha = NF_ALPHA_DEFAULT;
+    o->beta = NF_BETA_DEFAULT;
+    o->tol = 1e-10;
+    for (int i = 2; i < argc;) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
+        int takes = 1, bad = 0;
+        if (!strcmp(a, "--json"))
+            o->json = 1, takes = 0;
+        else if (!strcmp(a, "--points"))
+            bad = cli_int(v, 1, 4000000000L, &o->points);
+        else if (!strcmp(a, "--cp"))
+            bad = cli_int(v, 4, NF_MAX_CP, &o->cp);
+        else if (!strcmp(a, "--threads"))
+            bad = cli_int(v, 1, 64, &o->threads);
+        else if (!strcmp(a, "--degree"))
+            bad = cli_int(v, 1, NF_MAX_DEGREE, &o->degree);
+        else if (!strcmp(a, "--tol"))
+            bad = cli_double(v, &o->tol) || !(o->tol > 0);
+        else if (!strcmp(a, "--order")) {
+            if (!strcmp(v, "random"))
+                o->random = 1;
+            else if (strcmp(v, "raster"))
+                bad = 1;
+        } else if (!strcmp(a, "--solver"))
+            bad = cli_solver(v, &o->solver);
+        else
+            return cli_error("bench", CLI_USAGE, "unknown option '%s'", a);
+        if (bad)
+            return cli_error("bench", CLI_USAGE, "bad value '%s' for %s", v, a);
+        i += 1 + takes;
+    }
+    return CLI_OK;
+}
+
+int cmd_bench(int argc, char **argv)
+{
+    if (argc < 2)
+        return cli_error("bench", CLI_USAGE,
+                         "usage: cellfit bench accumulate|solve|fit "
+                         "[--points M] [--cp N] [--order raster|random] "
+                         "[--solver S] [--json]");
+    const char *what = argv[1];
+    int acc = !strcmp(what, "accumulate"), sol = !strcmp(what, "solve"), fit = !strcmp(what, "fit");
+    if (!acc && !sol && !fit)
+        return cli_error("bench", CLI_USAGE, "unknown benchmark '%s'", what);
+    bench_opts_t o;
+    int rc = parse(argc, argv, &o);
+    if (rc)
+        return rc;
+    if (sol) {
+        o.points = 10 * o.cp; /* enough data to determine every control point */
+        o.random = 1;
+    }
+    nf_surf_t s;
+    if (make_net(&o, &s))
+        return cli_error("bench", CLI_FAIL, "out of memory");
+    long need = nf_fit_bytes(s.nu, s.nv, s.p, s.q, o.solver);
+    if (need < 0 || need > NF_ARENA_BYTES) {
+        cf_surf_free(&s);
+        return cli_error("bench", CLI_USAGE, "net needs %ld bytes, board allows %ld", need,
+                         (long)NF_ARENA_BYTES);
+    }
+    void *mem = malloc((size_t)need);
+    double *rows = malloc(sizeof(double) * 5 * CHUNK);
+    if (!mem || !rows) {
+        free(mem);
+        free(rows);
+        cf_surf_free(&s);
+        return cli_error("bench", CLI_FAIL, "out of memory");
+    }
+    nf_arena_t ar;
+    nf_arena_init(&ar, mem, (size_t)need);
+    nf_fit_t f;
+    nf_fit_params_t prm = {o.alpha, o.beta, o.solver};
+    rc = nf_fit_init(&f, &s, &prm, &ar);
+    double t_acc = 0.0, t_gen = 0.0, t_solve = 0.0;
+    nf_solve_stats_t st = {o.solver, 0, 0.0};
+    for (long k = 0; !rc && k < o.points; k += CHUNK) {
+        long n = o.points - k < CHUNK ? o.points - k : CHUNK;
+        double t0 = cli_now();
+        gen_chunk(&o, k, n, rows);
+        double t1 = cli_now();
+        rc = nf_fit_add_rows(&f, rows, n, NULL);
+        t_acc += cli_now() - t1;
+        t_gen += t1 - t0;
+    }
+    if (!rc && (sol || fit)) {
+        rc = nf_fit_finish(&f);
+        nf_solve_opts_t so = {o.tol, 100000, 0};
+        double t0 = cli_now();
+        if (!rc)
+            rc = nf_fit_solve(&f, o.solver, &so, &st);
+        t_solve = cli_now() - t0;
+    }
+    if (rc) {
+        free(mem);
+        free(rows);
+        cf_surf_free(&s);
+        return cli_error("bench", CLI_FAIL, "%s", nf_strerror(rc));
+    }
+    long store = (long)f.n * f.A.K * (long)sizeof(double);
+    cli_json_t j;
+    if (o.json) {
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "bench", what);
+        cli_json_int(&j, "points", o.points);
+        cli_json_int(&j, "control_points", f.n);
+        cli_json_int(&j, "degree", o.degree);
+        cli_json_str(&j, "order", o.random ? "random" : "raster");
+        if (acc || fit) {
+            cli_json_num(&j, "accumulate_seconds", t_acc);
+            cli_json_num(&j, "points_per_s", (double)o.points / t_acc);
+        }
+        if (sol || fit) {
+            cli_json_str(&j, "solver", nf_solver_name(st.solver));
+            cli_json_num(&j, "solve_seconds", t_solve);
+            cli_json_int(&j, "iterations", st.iterations);
+            cli_json_num(&j, "rel_residual", st.rel_residual);
+        }
+        cli_json_num(&j, "seconds", acc ? t_acc : sol ? t_solve : t_acc + t_solve);
+        cli_json_num(&j, "generate_seconds", t_gen);
+        cli_json_int(&j, "store_bytes", store);
+        cli_json_int(&j, "arena_bytes", need);
+        cli_json_int(&j, "peak_rss_bytes", peak_rss());
+        cli_json_end(&j);
+    } else {
+        printf("bench %s: %ld points, %ld control points, degree %ld, %s order\n", what, o.points,
+               f.n, o.degree, o.random ? "random" : "raster");
+        if (acc || fit)
+            printf("  accumulate %.4f s = %.3g points/s\n", t_acc, (double)o.points / t_acc);
+        if (sol || fit)
+            printf("  solve (%s) %.4f s, %d iterations, relative residual %.2e\n",
+                   nf_solver_name(st.solver), t_solve, st.iterations, st.rel_residual);
+        printf("  stripe store %ld bytes, arena %ld bytes, peak RSS %ld bytes\n", store, need,
+               peak_rss());
+    }
+    free(mem);
+    free(rows);
+    cf_surf_free(&s);
+    return CLI_OK;
+}

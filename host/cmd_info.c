@@ -1,0 +1,145 @@
+/* cmd_info.c: `cellfit info SURF.igs`: what a surface is and what a fit of
+ * its space costs on this board. */
+#include "cf_cli.h"
+#include "cf_iges.h"
+#include "cf_surf.h"
+#include "nf_budget.h"
+#include <math.h>
+#include <string.h>
+
+static void bbox(const nf_surf_t *s, double lo[3], double hi[3], double *wlo, double *whi)
+{
+    long n = (long)s->nu * s->nv;
+    for (int c = 0; c < 3; c++)
+        lo[c] = hi[c] = s->cp[c];
+    *wlo = *whi = s->w ? s->w[0] : 1.0;
+    for (long i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++) {
+            lo[c] = fmin(lo[c], s->cp[3 * i + c]);
+            hi[c] = fmax(hi[c], s->cp[3 * i + c]);
+        }
+        double w = s->w ? s->w[i] : 1.0;
+        *wlo = fmin(*wlo, w);
+        *whi = fmax(*whi, w);
+    }
+}
+
+/* Box of the surface itself: the control-net box plus a dense sample of the
+ * surface (at least 8 samples per knot span and direction, the end points
+ * and every knot line included). */
+static void surf_box(const nf_surf_t *s, double lo[3], double hi[3])
+{
+    int nsu = 8 * (s->nu - s->p), nsv = 8 * (s->nv - s->q);
+    nsu = nsu > 2000 ? 2000 : nsu;
+    nsv = nsv > 2000 ? 2000 : nsv;
+    double u0, u1, v0, v1;
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    for (int c = 0; c < 3; c++) {
+        lo[c] = INFINITY;
+        hi[c] = -INFINITY;
+    }
+    for (int j = 0; j <= nsv; j++)
+        for (int i = 0; i <= nsu; i++) {
+            double P[3];
+            nf_surf_eval(s, u0 + (u1 - u0) * i / nsu, v0 + (v1 - v0) * j / nsv, P);
+            for (int c = 0; c < 3; c++) {
+                lo[c] = fmin(lo[c], P[c]);
+                hi[c] = fmax(hi[c], P[c]);
+            }
+        }
+}
+
+static void print_knots(const char *name, const double *U, int len)
+{
+    printf("%s (%d):", name, len);
+    for (int i = 0; i < len; i++)
+        printf(" %.17g", U[i]);
+    printf("\n");
+}
+
+int cmd_info(int argc, char **argv)
+{
+    const char *path = NULL;
+    long entity = 0;
+    int json = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--json"))
+            json = 1;
+        else if (!strcmp(argv[i], "--entity")) {
+            if (i + 1 >= argc || cli_int(argv[i + 1], 1, 9999999, &entity))
+                return cli_error("info", CLI_USAGE, "--entity needs a DE number");
+            i++;
+        } else if (argv[i][0] == '-' && argv[i][1])
+            return cli_error("info", CLI_USAGE, "unknown option '%s'", argv[i]);
+        else if (!path)
+            path = argv[i];
+        else
+            return cli_error("info", CLI_USAGE, "unexpected argument '%s'", argv[i]);
+    }
+    if (!path)
+        return cli_error("info", CLI_USAGE, "usage: cellfit info SURF.igs [--json]");
+    char msg[512];
+    nf_surf_t s;
+    if (cf_iges_read(path, (int)entity, &s, msg, sizeof msg))
+        return cli_error("info", CLI_USAGE, "%s", msg);
+    double lo[3], hi[3], wlo, whi, slo[3], shi[3];
+    bbox(&s, lo, hi, &wlo, &whi);
+    surf_box(&s, slo, shi);
+    /* The net's box bounds the surface (convex hull, positive weights). */
+    long b_gs = nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_GS);
+    long b_pcg = nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_PCG);
+    long b_chol = nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_CHOL);
+    nf_solver_t pick = nf_solver_pick(s.nu, s.nv, s.p, s.q);
+    if (json) {
+        cli_json_t j;
+        cli_json_begin(&j, stdout);
+        cli_json_int(&j, "p", s.p);
+        cli_json_int(&j, "q", s.q);
+        cli_json_int(&j, "nu", s.nu);
+        cli_json_int(&j, "nv", s.nv);
+        cli_json_int(&j, "control_points", (long)s.nu * s.nv);
+        cli_json_num(&j, "u0", s.U[s.p]);
+        cli_json_num(&j, "u1", s.U[s.nu]);
+        cli_json_num(&j, "v0", s.V[s.q]);
+        cli_json_num(&j, "v1", s.V[s.nv]);
+        cli_json_num(&j, "weight_min", wlo);
+        cli_json_num(&j, "weight_max", whi);
+        cli_json_int(&j, "rational", wlo != whi);
+        cli_json_num(&j, "xmin", slo[0]);
+        cli_json_num(&j, "ymin", slo[1]);
+        cli_json_num(&j, "zmin", slo[2]);
+        cli_json_num(&j, "xmax", shi[0]);
+        cli_json_num(&j, "ymax", shi[1]);
+        cli_json_num(&j, "zmax", shi[2]);
+        cli_json_num(&j, "net_xmin", lo[0]);
+        cli_json_num(&j, "net_ymin", lo[1]);
+        cli_json_num(&j, "net_zmin", lo[2]);
+        cli_json_num(&j, "net_xmax", hi[0]);
+        cli_json_num(&j, "net_ymax", hi[1]);
+        cli_json_num(&j, "net_zmax", hi[2]);
+        cli_json_int(&j, "bytes_gs", b_gs);
+        cli_json_int(&j, "bytes_pcg", b_pcg);
+        cli_json_int(&j, "bytes_chol", b_chol);
+        cli_json_str(&j, "auto_solver", nf_solver_name(pick));
+        cli_json_int(&j, "bytes", nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_AUTO));
+        cli_json_str(&j, "board", BOARD_NAME);
+        cli_json_int(&j, "board_bytes", (long)NF_ARENA_BYTES);
+        cli_json_end(&j);
+    } else {
+        printf("%s: NURBS surface, degree %d x %d, net %d x %d (%ld control points)\n", path, s.p,
+               s.q, s.nu, s.nv, (long)s.nu * s.nv);
+        printf("domain: u [%.17g, %.17g]  v [%.17g, %.17g]\n", s.U[s.p], s.U[s.nu], s.V[s.q],
+               s.V[s.nv]);
+        print_knots("u knots", s.U, s.nu + s.p + 1);
+        print_knots("v knots", s.V, s.nv + s.q + 1);
+        printf("weights: %.17g .. %.17g (%s)\n", wlo, whi, wlo == whi ? "polynomial" : "rational");
+        printf("bounding box (surface, sampled): x [%.6g, %.6g]  y [%.6g, %.6g]  z [%.6g, %.6g]\n",
+               slo[0], shi[0], slo[1], shi[1], slo[2], shi[2]);
+        printf("bounding box (control net):      x [%.6g, %.6g]  y [%.6g, %.6g]  z [%.6g, %.6g]\n",
+               lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
+        printf("fit bytes: gs %ld  pcg %ld  chol %ld  (auto: %s); board %s allows %ld\n", b_gs,
+               b_pcg, b_chol, nf_solver_name(pick), BOARD_NAME, (long)NF_ARENA_BYTES);
+    }
+    cf_surf_free(&s);
+    return CLI_OK;
+}

@@ -1,0 +1,44 @@
+/* main.c: the cellfit command-line tool: dispatch to subcommands. */
+#include "cf_cli.h"
+#include "nf_config.h"
+#include <string.h>
+
+static int usage(FILE *f, int code)
+{
+    fprintf(f,
+            "usage: cellfit <command> [options]\n"
+            "commands:\n"
+            "  fit   --base BASE.igs --points FILE --uv [--alpha A] [--beta B]\n"
+            "        [--solver auto|gs|chol|pcg] [--entity N] --out OUT.igs [--json]\n"
+            "  eval  SURF.igs UVFILE [--entity N]   print x y z for each u v line\n"
+            "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
+            "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
+            "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
+            "  bench accumulate|solve|fit [--points M] [--cp N] [--order raster|random]\n"
+            "        [--solver S] [--json]   benchmarks on generated data\n"
+            "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
+            "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
+            BOARD_NAME, (long)NF_MAX_CP, NF_MAX_DEGREE, (long)NF_ARENA_BYTES);
+    return code;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2)
+        return usage(stderr, CLI_USAGE);
+    const char *c = argv[1];
+    if (!strcmp(c, "fit"))
+        return cmd_fit(argc - 1, argv + 1);
+    if (!strcmp(c, "eval"))
+        return cmd_eval(argc - 1, argv + 1);
+    if (!strcmp(c, "info"))
+        return cmd_info(argc - 1, argv + 1);
+    if (!strcmp(c, "gen"))
+        return cmd_gen(argc - 1, argv + 1);
+    if (!strcmp(c, "bench"))
+        return cmd_bench(argc - 1, argv + 1);
+    if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
+        return usage(stdout, CLI_OK);
+    fprintf(stderr, "cellfit: unknown command '%s'\n", c);
+    return usage(stderr, CLI_USAGE);
+}

@@ -1,0 +1,124 @@
+#!/bin/sh
+# tests/cli/run.sh CELLFIT: end-to-end checks of the cellfit command line:
+# exit codes, one-line errors, JSON fields, agreement with the synthetic
+# part's truth, memory flat in the number of points, and (when OpenCASCADE
+# is installed) that a written IGES evaluates the same in a CAD kernel.
+set -u
+CF=$(realpath "$1")
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-cli.XXXXXX")
+trap 'rm -rf "$T"' EXIT
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); echo "ok   $1"; }
+no() { fail=$((fail + 1)); echo "FAIL $1"; }
+# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
+expect() {
+    want=$1; name=$2; shift 2
+    "$@" >"$T/out" 2>"$T/err"
+    got=$?
+    if [ "$got" -eq "$want" ]; then ok "$name"; else
+        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
+}
+json() { # json FILE KEY: a number or string field of a one-line JSON object
+    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
+}
+# le A B: A <= B as numbers
+le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
+
+# A small synthetic part, fitted with each solver.
+expect 0 "gen small part" "$CF" gen --dir "$T" --nu 16 --nv 12 --points 20000 --noise 0.002
+for s in auto chol pcg gs; do
+    expect 0 "fit --solver $s" "$CF" fit --base "$T/nominal.igs" --points "$T/points.uvxyz" --uv \
+        --solver $s --out "$T/fit-$s.igs" --json
+    cp "$T/out" "$T/fit-$s.json"
+    for k in points control_points rms max_abs solver iterations seconds; do
+        [ -n "$(json "$T/fit-$s.json" $k)" ] || no "fit --solver $s: JSON field $k"
+    done
+    [ "$(json "$T/fit-$s.json" points)" = 20000 ] && ok "fit $s: 20000 points" || no "fit $s: points"
+    [ "$(json "$T/fit-$s.json" control_points)" = 192 ] && ok "fit $s: 192 control points" ||
+        no "fit $s: control_points"
+done
+[ "$(json "$T/fit-auto.json" solver)" = chol ] && ok "auto picks chol on a small net" ||
+    no "auto solver: $(json "$T/fit-auto.json" solver)"
+# The solvers agree with each other on the surface (evaluated on the check grid).
+"$CF" eval "$T/fit-chol.igs" "$T/check.uv" >"$T/e-chol" && "$CF" eval "$T/fit-pcg.igs" "$T/check.uv" >"$T/e-pcg" &&
+    "$CF" eval "$T/fit-gs.igs" "$T/check.uv" >"$T/e-gs"
+d=$(paste "$T/e-chol" "$T/e-pcg" "$T/e-gs" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3); b = $c - $(c+6);
+   if (a < 0) a = -a; if (b < 0) b = -b; if (a > m) m = a; if (b > m) m = b } } END { printf "%.3g", m }')
+le "$d" 1e-6 && ok "chol, pcg and gs surfaces agree within 1e-6 mm ($d)" || no "solvers disagree by $d mm"
+# On a net fine enough for the dent (40 x 30: 5.4 mm spans, dent radius
+# 15 mm), the fit recovers the real part (nominal + dent + warp) to the noise.
+"$CF" gen --dir "$T/fine" --nu 40 --nv 30 --points 60000 --noise 0.005 >/dev/null
+"$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.uvxyz" --uv --out "$T/fine.igs" >/dev/null
+"$CF" eval "$T/fine.igs" "$T/fine/check.uv" >"$T/e-fine"
+"$CF" eval "$T/fine/nominal.igs" "$T/fine/check.uv" >"$T/e-nom"
+errfit=$(paste "$T/e-fine" "$T/fine/check.xyz" | awk '{ d = $3 - $6; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }')
+errnom=$(paste "$T/e-nom" "$T/fine/check.xyz" | awk '{ d = $3 - $6; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }')
+le "$errfit" 0.01 && ok "fitted surface within 0.01 mm of the true part (max $errfit; nominal off by $errnom)" ||
+    no "fit misses the true part by $errfit mm (nominal $errnom)"
+# Exit codes and one-line errors.
+expect 2 "no arguments" "$CF"
+expect 2 "unknown command" "$CF" frobnicate
+expect 2 "fit: missing --out" "$CF" fit --base "$T/nominal.igs" --points "$T/points.uvxyz" --uv
+expect 2 "fit: bad --alpha" "$CF" fit --base "$T/nominal.igs" --points "$T/points.uvxyz" --uv --alpha -1 --out "$T/x.igs"
+expect 2 "fit: bad --solver" "$CF" fit --base "$T/nominal.igs" --points "$T/points.uvxyz" --uv --solver lu --out "$T/x.igs"
+expect 2 "fit: missing base file" "$CF" fit --base "$T/none.igs" --points "$T/points.uvxyz" --uv --out "$T/x.igs"
+grep -q "none.igs" "$T/err" && ok "error names the missing file" || no "error does not name the file"
+printf '0.5 0.5 1 2 3\n0.2 0.3 1 2 3\n# comment\n1.5 0.5 1 2 3\n' >"$T/outside.uvxyz"
+expect 2 "fit: parameter outside the domain" "$CF" fit --base "$T/nominal.igs" --points "$T/outside.uvxyz" --uv --out "$T/x.igs"
+grep -q "outside.uvxyz:4:" "$T/err" && ok "domain error names file:line 4" || no "domain error: $(cat "$T/err")"
+[ ! -e "$T/x.igs" ] && ok "no output file after a failed fit" || no "output left after failure"
+printf '0.5 0.5 1 2 nan\n' >"$T/nan.uvxyz"
+expect 2 "fit: NaN coordinate" "$CF" fit --base "$T/nominal.igs" --points "$T/nan.uvxyz" --uv --out "$T/x.igs"
+printf '# nothing\n' >"$T/empty.uvxyz"
+expect 2 "fit: no points" "$CF" fit --base "$T/nominal.igs" --points "$T/empty.uvxyz" --uv --out "$T/x.igs"
+# Undetermined: alpha = beta = 0 and data on the left half of the part only.
+awk '!/^#/ && $1 < 0.5' "$T/points.uvxyz" >"$T/half.uvxyz"
+expect 2 "fit: undetermined system refused" "$CF" fit --base "$T/nominal.igs" --points "$T/half.uvxyz" --uv --alpha 0 --beta 0 --out "$T/x.igs"
+grep -q "control point" "$T/err" && ok "refusal names a control point" || no "refusal: $(cat "$T/err")"
+[ "$(wc -l <"$T/err")" -eq 1 ] && ok "refusal is one line" || no "refusal is $(wc -l <"$T/err") lines"
+expect 0 "fit: same data with beta keeps the rest at nominal" "$CF" fit --base "$T/nominal.igs" --points "$T/half.uvxyz" --uv --alpha 0 --beta 0.001 --out "$T/half.igs"
+# Over budget: Cholesky's band on a long 20000 x 4 net needs ~38 GB.
+"$CF" gen --dir "$T/long" --nu 20000 --nv 4 --points 10 >/dev/null
+expect 2 "fit: Cholesky over the board budget refused" "$CF" fit --base "$T/long/nominal.igs" --points "$T/long/points.uvxyz" --uv --solver chol --out "$T/x.igs"
+grep -q "needs [0-9]* bytes" "$T/err" && ok "refusal says the bytes needed" || no "budget message: $(cat "$T/err")"
+# info and eval
+expect 0 "info" "$CF" info "$T/nominal.igs" --json
+[ "$(json "$T/out" control_points)" = 192 ] && ok "info: control points" || no "info: $(cat "$T/out")"
+printf '0 0\n1 1\n' >"$T/corners.uv"
+expect 0 "eval corners" "$CF" eval "$T/nominal.igs" "$T/corners.uv"
+[ "$(wc -l <"$T/out")" -eq 2 ] && ok "eval prints a line per point" || no "eval output"
+printf '2 0\n' >"$T/bad.uv"
+expect 2 "eval outside the domain" "$CF" eval "$T/nominal.igs" "$T/bad.uv"
+
+# Memory flat in the number of points: same net, 10^4 and 10^6 points.
+"$CF" gen --dir "$T/m4" --nu 60 --nv 45 --points 10000 >/dev/null &&
+    "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --points 1000000 >/dev/null
+"$CF" fit --base "$T/m4/nominal.igs" --points "$T/m4/points.uvxyz" --uv --out "$T/m4.igs" --json >"$T/m4.json"
+"$CF" fit --base "$T/m6/nominal.igs" --points "$T/m6/points.uvxyz" --uv --out "$T/m6.igs" --json >"$T/m6.json"
+r4=$(json "$T/m4.json" peak_rss_bytes)
+r6=$(json "$T/m6.json" peak_rss_bytes)
+diff=$(awk -v a="$r4" -v b="$r6" 'BEGIN { d = b - a; if (d < 0) d = -d; print d }')
+if [ -n "$r4" ] && [ -n "$r6" ] && le "$diff" 262144; then
+    ok "peak RSS flat in points: 10^4 -> $r4 B, 10^6 -> $r6 B"
+else
+    no "peak RSS grows with points: 10^4 -> $r4, 10^6 -> $r6"
+fi
+
+# A real CAD kernel reads our IGES as the same surface.
+if sh tests/occt/build.sh "$T/occt" >"$T/occt.log" 2>&1; then
+    "$CF" eval "$T/fit-chol.igs" "$T/check.uv" >"$T/e-ours"
+    if "$T/occt/occt_eval" "$T/fit-chol.igs" <"$T/check.uv" >"$T/e-occt" 2>"$T/occt.err"; then
+        d=$(paste "$T/e-ours" "$T/e-occt" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3); if (a < 0) a = -a; if (a > m) m = a } } END { printf "%.3g", m }')
+        n=$(wc -l <"$T/e-occt")
+        [ "$n" -eq 1681 ] && le "$d" 1e-9 && ok "OpenCASCADE evaluates our IGES identically (max diff $d mm over $n points)" ||
+            no "OpenCASCADE disagrees: max diff $d over $n points"
+    else
+        no "OpenCASCADE could not read our IGES: $(head -3 "$T/occt.err")"
+    fi
+else
+    if [ "${CI:-}" = true ]; then no "OpenCASCADE check could not be built: $(tail -2 "$T/occt.log")"; else
+        echo "skip OpenCASCADE check: $(tail -1 "$T/occt.log")"; fi
+fi
+echo "cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]

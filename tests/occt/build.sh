@@ -1,0 +1,26 @@
+#!/bin/sh
+# tests/occt/build.sh OUTDIR: build OUTDIR/occt_eval against Debian's
+# OpenCASCADE packages. Exits 3 with "occt: not available" when the headers
+# or libraries are missing, so callers can skip the check.
+set -u
+out="${1:?usage: build.sh OUTDIR}"
+here=$(dirname "$0")
+inc="${OCCT_INC:-/usr/include/opencascade}" # OCCT_INC: another install
+if [ ! -f "$inc/IGESControl_Reader.hxx" ] || ! command -v g++ >/dev/null 2>&1; then
+    echo "occt: not available"
+    exit 3
+fi
+# Libraries in dependency order (IGES reader down to the kernel).
+libs="-lTKIGES -lTKXSBase -lTKShHealing -lTKTopAlgo -lTKGeomAlgo -lTKBRep \
+-lTKGeomBase -lTKG3d -lTKG2d -lTKMath -lTKernel"
+mkdir -p "$out" || exit 1
+if ! g++ -std=c++11 -O2 -w -I"$inc" "$here/occt_eval.cpp" -o "$out/occt_eval" $libs 2>"$out/occt_build.log"; then
+    if grep -q "cannot find -lTK\|No such file" "$out/occt_build.log"; then
+        echo "occt: not available"
+        exit 3
+    fi
+    cat "$out/occt_build.log" >&2
+    exit 1
+fi
+rm -f "$out/occt_build.log"
+exit 0
