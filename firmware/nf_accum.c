@@ -77,18 +77,28 @@ static inline void v4_store(double *p, nf_v4 v)
 {
     __builtin_memcpy(p, &v, sizeof v);
 }
-NF_INLINE void block_rows(nf_accum_t *ac, int nl, int nlp)
+/* Row t1 from the vector holding column t1 on: the upper triangle plus at
+ * most three entries below it, which the flush ignores. nb is a constant
+ * (NF_ACCUM_BUF) for the full-buffer call, so the k loop unrolls there. */
+NF_INLINE void block_rows_nb(nf_accum_t *ac, int nl, int nlp, const int nb)
 {
-    const int nb = ac->nb;
     for (int t1 = 0; t1 < nl; t1++) {
         double *row = ac->blk + t1 * nlp;
-        for (int T = 0; T < nlp; T += 4) {
+        for (int T = t1 & ~3; T < nlp; T += 4) {
             nf_v4 acc = v4_load(row + T);
             for (int k = 0; k < nb; k++)
                 acc += ac->Rb[k][t1] * v4_load(ac->Rb[k] + T);
             v4_store(row + T, acc);
         }
     }
+}
+
+NF_INLINE void block_rows(nf_accum_t *ac, int nl, int nlp)
+{
+    if (ac->nb == NF_ACCUM_BUF)
+        block_rows_nb(ac, nl, nlp, NF_ACCUM_BUF);
+    else
+        block_rows_nb(ac, nl, nlp, ac->nb);
 }
 #else
 NF_INLINE void block_rows(nf_accum_t *ac, int nl, int nlp)

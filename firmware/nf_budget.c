@@ -20,7 +20,7 @@ long nf_fit_bytes(int nu, int nv, int p, int q, nf_solver_t solver)
     case NF_SOLVER_GS: b = base + 8.0 * 6.0 * n; break;
     case NF_SOLVER_CHOL: b = base + 8.0 * n * ((double)q * nu + p + 1 + 3); break;
     case NF_SOLVER_PCG:
-    default: b = base + 8.0 * 16.0 * n; break;
+    default: b = base + 8.0 * 17.0 * n; break;
     }
     b += (double)NF_ARENA_SLACK;
     if (b > (double)LONG_MAX)

@@ -9,8 +9,8 @@
  *   base   = 8 N (K + 6)                  stripes S, right-hand side R^T Q + beta P0 (3N),
  *                                          solution P (3N)
  *   gs     = base + 8 (6N)                residual and rank-probe vectors
- *   pcg    = base + 8 (16N)               r, z, d, Ad (3N each), inverse diagonal and
- *                                          probe (N each)
+ *   pcg    = base + 8 (17N)               r, d, q, t (3N each), D^1/2 and D^-1 (N each),
+ *                                          determinacy probe (3N)
  *   chol   = base + 8 (N (q Nu + p + 1) + 3N)   upper band of half bandwidth q Nu + p
  *   bytes  = solver term + NF_ARENA_SLACK  alignment of at most 16 blocks
  */
@@ -31,7 +31,7 @@ typedef enum nf_solver {
 #define NF_ARENA_SLACK (16L * NF_ARENA_ALIGN)
 #define NF_BYTES_BASE(n, p, q) (8L * (long)(n) * (NF_STRIPE_SLOTS(p, q) + 6L))
 #define NF_BYTES_GS(n, p, q) (NF_BYTES_BASE(n, p, q) + 8L * 6L * (long)(n) + NF_ARENA_SLACK)
-#define NF_BYTES_PCG(n, p, q) (NF_BYTES_BASE(n, p, q) + 8L * 16L * (long)(n) + NF_ARENA_SLACK)
+#define NF_BYTES_PCG(n, p, q) (NF_BYTES_BASE(n, p, q) + 8L * 17L * (long)(n) + NF_ARENA_SLACK)
 #define NF_BYTES_CHOL(nu, nv, p, q)                                                                \
     (NF_BYTES_BASE((long)(nu) * (nv), p, q) +                                                      \
      8L * (long)(nu) * (nv) * ((long)(q) * (nu) + (p) + 1 + 3) + NF_ARENA_SLACK)

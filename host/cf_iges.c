@@ -10,7 +10,6 @@
 #include "nf_basis.h"
 #include "nf_err.h"
 #include <errno.h>
-#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -695,7 +694,6 @@ typedef struct ig_it {
     ig_rd_t *c;
     const ig_par_t *p;
     size_t pos;
-    long nf; /* fields in the record */
 } ig_it_t;
 
 static int ig_count(ig_rd_t *c, const ig_par_t *p, long *nf)
@@ -772,7 +770,7 @@ static int ig_matrix(ig_rd_t *c, const ig_par_t *p, double m[12])
     int rc = ig_count(c, p, &nf);
     if (rc)
         return rc;
-    ig_it_t it = {c, p, 0, nf};
+    ig_it_t it = {c, p, 0};
     if ((rc = ig_get_int(&it, "entity type", &type, &at)))
         return rc;
     if (type != 124)
@@ -861,7 +859,7 @@ static int ig_surface(ig_rd_t *c, const ig_par_t *p, const double (*m)[12], int 
     if (nf < 10)
         return ig_pfail(c, p, 0, CF_EPARSE,
                         "%ld parameters; a rational B-spline surface needs at least 10", nf);
-    ig_it_t it = {c, p, 0, nf};
+    ig_it_t it = {c, p, 0};
     for (int i = 0; i < 10; i++)
         if ((rc = ig_get_int(&it, hname[i], &h[i], &at[i])))
             return rc;

@@ -752,6 +752,10 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     if (!r)
         return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
     r->buf = malloc((size_t)CP_BUF + 1);
+    /* Touch every page now (not with zeros: malloc+memset 0 may become a lazy
+     * calloc) so the footprint is fixed at open, whatever the file size. */
+    if (r->buf)
+        memset(r->buf, ' ', (size_t)CP_BUF + 1);
     r->is_stdin = !strcmp(path, "-");
     snprintf(r->name, sizeof r->name, "%s", r->is_stdin ? "<stdin>" : path);
     r->want = r->cols = want_cols;

@@ -6,6 +6,8 @@
 #include "nf_err.h"
 #include "nf_fit.h"
 #include <math.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -17,6 +19,7 @@ typedef struct bench_opts {
     int random, json;
     nf_solver_t solver;
     double alpha, beta, tol;
+    const char *out;
 } bench_opts_t;
 
 static unsigned long long b_rng = 0x853C49E6748FEA9Bull;
@@ -81,6 +84,41 @@ static int make_net(const bench_opts_t *o, nf_surf_t *s)
     return 0;
 }
 
+/* The assembled Eq. 7 as a file other solvers read (bench/): "CFNE0001",
+ * int64 n, int64 nnz, nnz x (int64 row, int64 col, double value) for the
+ * upper triangle with row <= col, then n x 3 doubles of right-hand side
+ * (x y z of control point i together). Little-endian, as the host writes. */
+static int export_system(const nf_fit_t *f, const char *path)
+{
+    if (!path)
+        return -1;
+    FILE *fp = fopen(path, "wb");
+    if (!fp)
+        return -1;
+    const nf_stripe_t *A = &f->A;
+    int64_t n = A->n, nnz = 0;
+    for (long i = 0; i < A->n; i++)
+        for (int sl = 0; sl < A->K; sl++)
+            nnz += A->S[i * A->K + sl] != 0.0 && i + A->delta[sl] < A->n;
+    fwrite("CFNE0001", 1, 8, fp);
+    fwrite(&n, sizeof n, 1, fp);
+    fwrite(&nnz, sizeof nnz, 1, fp);
+    for (long i = 0; i < A->n; i++)
+        for (int sl = 0; sl < A->K; sl++) {
+            double v = A->S[i * A->K + sl];
+            int64_t r = i, c = i + A->delta[sl];
+            if (v == 0.0 || c >= A->n)
+                continue;
+            fwrite(&r, sizeof r, 1, fp);
+            fwrite(&c, sizeof c, 1, fp);
+            fwrite(&v, sizeof v, 1, fp);
+        }
+    fwrite(f->rhs, sizeof(double), (size_t)(3 * A->n), fp);
+    int bad = ferror(fp);
+    bad |= fclose(fp);
+    return bad ? -1 : 0;
+}
+
 static long peak_rss(void)
 {
     struct rusage ru;
@@ -111,6 +149,8 @@ static int parse(int argc, char **argv, bench_opts_t *o)
             bad = cli_int(v, 1, 64, &o->threads);
         else if (!strcmp(a, "--degree"))
             bad = cli_int(v, 1, NF_MAX_DEGREE, &o->degree);
+        else if (!strcmp(a, "--out"))
+            o->out = v;
         else if (!strcmp(a, "--tol"))
             bad = cli_double(v, &o->tol) || !(o->tol > 0);
         else if (!strcmp(a, "--order")) {
@@ -138,6 +178,8 @@ int cmd_bench(int argc, char **argv)
                          "[--solver S] [--json]");
     const char *what = argv[1];
     int acc = !strcmp(what, "accumulate"), sol = !strcmp(what, "solve"), fit = !strcmp(what, "fit");
+    int exp = !strcmp(what, "export");
+    sol |= exp; /* export writes the system the solve benchmark solves */
     if (!acc && !sol && !fit)
         return cli_error("bench", CLI_USAGE, "unknown benchmark '%s'", what);
     bench_opts_t o;
@@ -180,6 +222,15 @@ int cmd_bench(int argc, char **argv)
         rc = nf_fit_add_rows(&f, rows, n, NULL);
         t_acc += cli_now() - t1;
         t_gen += t1 - t0;
+    }
+    if (!rc && exp) {
+        rc = nf_fit_finish(&f);
+        if (!rc)
+            rc = export_system(&f, o.out);
+        free(mem);
+        free(rows);
+        cf_surf_free(&s);
+        return rc ? cli_error("bench", CLI_FAIL, "%s: cannot write", o.out) : CLI_OK;
     }
     if (!rc && (sol || fit)) {
         rc = nf_fit_finish(&f);

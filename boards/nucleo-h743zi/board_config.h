@@ -11,8 +11,8 @@
  * for later DMA buffers (Ethernet DMA cannot reach DTCM). */
 #define NF_ARENA_BYTES (448L * 1024L)
 /* Largest net the arena holds with PCG at bicubic, (448 KiB - 1 KiB slack) /
- * 376 bytes; main.c proves it is also the largest such number. */
-#define NF_MAX_CP 1217L
+ * 384 bytes; main.c proves it is also the largest such number. */
+#define NF_MAX_CP 1192L
 #define NF_MAX_DEGREE 5
 #define NF_DESIGN_DEGREE 3
 /* Solver jobs use unless they ask (nf_solver_t): AUTO takes Cholesky when its

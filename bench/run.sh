@@ -1,0 +1,191 @@
+#!/bin/sh
+# bench/run.sh CELLFIT: issue 6's benchmarks (`make bench`): accumulation,
+# solvers, CHOLMOD and FITPACK on the same problems, end to end, and the
+# machine's memory bandwidth; prints Markdown tables beside the paper's
+# Tables 2-4 (bench/tables.py) and keeps every raw JSON line in
+# BUILD/bench/*.jsonl. Measures, asserts nothing. About 2-3 minutes on 2 cores.
+# Environment: BENCH_REPS (3) runs per cell, best kept, while one run takes
+# less than BENCH_REPEAT_S (5) seconds of wall time; BENCH_CHOL_MAX_S (20): banded
+# Cholesky is skipped ("-") where its estimate from N = 10^4 exceeds this.
+set -eu
+
+if [ $# -ne 1 ] || [ ! -x "$1" ]; then
+    echo "usage: sh bench/run.sh CELLFIT (e.g. build/cellfit)" >&2
+    exit 2
+fi
+CF=$1
+case $CF in /*) ;; *) CF=./$CF ;; esac
+HERE=$(dirname "$0")
+OUT=$(dirname "$CF")/bench
+REPS=${BENCH_REPS:-3}
+REPEAT_S=${BENCH_REPEAT_S:-5}
+CHOL_MAX_S=${BENCH_CHOL_MAX_S:-20}
+CC=${CC:-gcc}
+PY=/usr/bin/python3
+[ -x "$PY" ] || PY=python3
+
+mkdir -p "$OUT"
+rm -f "$OUT"/*.jsonl "$OUT"/*.cfne "$OUT"/stderr.txt
+rm -rf "$OUT/e2e"
+cleanup() {
+    rm -f "$OUT"/*.cfne "$OUT"/stderr.txt
+    rm -rf "$OUT/e2e"
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
+
+now_ns() { date +%s%N; }
+start=$(now_ns)
+say() { echo "bench: $*" >&2; }
+# errmsg: the failed command's stderr as one JSON-safe line
+errmsg() { sed 's/[\\"]/ /g' "$OUT/stderr.txt" | tr '\t\n' '  ' | cut -c1-300; }
+# side N: round(sqrt(N)), the side of cellfit's square bench nets
+side() { awk -v n="$1" 'BEGIN { printf "%d", int(sqrt(n) + 0.5) }'; }
+
+# cell FILE CMD...: run CMD (one JSON line on stdout) up to REPS times,
+# appending each line to FILE (tables.py keeps the fastest); a run of
+# REPEAT_S seconds or more (wall) is not repeated. A failure is recorded.
+cell() {
+    file=$1
+    shift
+    i=0
+    while [ "$i" -lt "$REPS" ]; do
+        i=$((i + 1))
+        t0=$(now_ns)
+        if ! line=$("$@" 2>"$OUT/stderr.txt"); then
+            msg=$(errmsg)
+            printf '{"bench": "error", "command": "%s", "message": "%s"}\n' "$*" "$msg" >>"$file"
+            say "FAILED: $* ($msg)"
+            return 0
+        fi
+        t1=$(now_ns)
+        printf '%s\n' "$line" >>"$file"
+        awk -v a="$t0" -v b="$t1" -v lim="$REPEAT_S" 'BEGIN { exit !((b - a) / 1e9 >= lim) }' &&
+            break
+    done
+    return 0
+}
+table() { "$PY" "$HERE/tables.py" "$OUT" "$1"; }
+
+# --- the machine, the tools -------------------------------------------------
+say "building bench/stream.c and bench/cholmod_bench.c with $CC"
+"$CC" -std=c11 -D_POSIX_C_SOURCE=200809L -O3 -march=x86-64-v3 -fassociative-math \
+    -fno-signed-zeros -fno-trapping-math -Wall -Wextra -Werror "$HERE/stream.c" \
+    -o "$OUT/stream" -lm
+"$CC" -std=c11 -D_POSIX_C_SOURCE=200809L -O2 -march=x86-64-v3 -Wall -Wextra -Werror \
+    -I/usr/include/suitesparse "$HERE/cholmod_bench.c" -o "$OUT/cholmod_bench" \
+    -lcholmod -lsuitesparseconfig -lm
+
+cpu=$(sed -n 's/^model name[^:]*: *//p' /proc/cpuinfo | head -n 1)
+blas=$(readlink -f /usr/lib/x86_64-linux-gnu/libblas.so.3 2>/dev/null || echo unknown)
+rev=$(git -C "$HERE" rev-parse --short HEAD 2>/dev/null || echo unknown)
+if [ "$rev" != unknown ] && [ -n "$(git -C "$HERE" status --porcelain -- firmware host 2>/dev/null)" ]; then
+    rev="$rev+local changes"
+fi
+{
+    printf '{"bench": "machine", "date": "%s", "nproc": %s, "cpu": "%s", ' \
+        "$(date -u '+%Y-%m-%d %H:%M UTC')" "$(nproc)" "$cpu"
+    printf '"mem_total_kb": %s, "kernel": "%s", "compiler": "%s", ' \
+        "$(awk '/^MemTotal/ { print $2 }' /proc/meminfo)" "$(uname -r)" \
+        "$("$CC" --version | head -n 1)"
+    printf '"cellfit_cflags": "%s", "cellfit_rev": "%s", "blas": "%s", "python": "%s", ' \
+        "$(sed -n 's/^BOARD_CFLAGS *:= *//p' "$HERE/../boards/linux-cell/board.mk")" "$rev" \
+        "$blas" "$("$PY" --version 2>&1)"
+    printf '"scipy": "%s", "reps": %s, "repeat_below_s": %s}\n' \
+        "$("$PY" -c 'import scipy; print(scipy.__version__)')" "$REPS" "$REPEAT_S"
+} >"$OUT/machine.jsonl"
+table machine
+
+say "memory bandwidth (bench/stream.c)"
+cell "$OUT/stream.jsonl" "$OUT/stream"
+table stream
+
+# --- accumulation: the paper's Table 2 grid, raster and random ---------------
+say "accumulation: M x N grid, raster and random order"
+for m in 10000 100000 1000000; do
+    for n in 100 1000 10000 100000; do
+        for o in raster random; do
+            cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points "$m" --cp "$n" \
+                --order "$o" --json
+        done
+    done
+done
+for o in raster random; do
+    cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points 1000000 --cp 1000000 \
+        --order "$o" --json
+done
+table accumulate
+
+# --- solvers: Tables 3 and 4 -------------------------------------------------
+say "solve: gs, pcg, chol on M = 10 N random points"
+for n in 100 1000 10000 100000; do
+    for s in gs pcg; do
+        cell "$OUT/solve.jsonl" "$CF" bench solve --cp "$n" --solver "$s" --json
+    done
+done
+chol4=
+for n in 100 1000 10000 100000; do
+    if [ "$n" -eq 100000 ] && [ -n "$chol4" ]; then
+        # cost N (q Nu + p)^2 of a square bicubic net, scaled from N = 10^4
+        est=$(awk -v t="$chol4" -v a="$(side 10000)" -v b="$(side 100000)" \
+            'BEGIN { printf "%.3g", t * (b * b) / (a * a) * ((3 * b + 3) / (3 * a + 3)) ^ 2 }')
+        if awk -v e="$est" -v lim="$CHOL_MAX_S" 'BEGIN { exit !(e > lim) }'; then
+            printf '{"bench": "solve", "control_points": %s, "solver": "chol", "skipped": true, "estimate_seconds": %s}\n' \
+                "$(($(side 100000) * $(side 100000)))" "$est" >>"$OUT/solve.jsonl"
+            say "chol at N = 10^5 skipped: estimated $est s > $CHOL_MAX_S s"
+            continue
+        fi
+    fi
+    cell "$OUT/solve.jsonl" "$CF" bench solve --cp "$n" --solver chol --json
+    if [ "$n" -eq 10000 ]; then
+        chol4=$(grep '"solver": "chol"' "$OUT/solve.jsonl" | grep '"control_points": 10000,' |
+            sed -n 's/.*"solve_seconds": \([-0-9.eE+]*\),.*/\1/p' | sort -g | head -n 1)
+    fi
+done
+say "solve: pcg at N = 10^6 (10^7 random points to accumulate first)"
+cell "$OUT/solve.jsonl" "$CF" bench solve --cp 1000000 --solver pcg --json
+table solve
+
+# --- CHOLMOD on the same normal equations ------------------------------------
+say "CHOLMOD on the exported normal equations"
+for n in 1000 10000 100000; do
+    "$CF" bench export --cp "$n" --out "$OUT/ne_$n.cfne"
+    cell "$OUT/cholmod.jsonl" "$OUT/cholmod_bench" "$OUT/ne_$n.cfne"
+    rm -f "$OUT/ne_$n.cfne"
+done
+table cholmod
+
+# --- FITPACK (scipy LSQBivariateSpline) against our fit ----------------------
+say "FITPACK (scipy) and cellfit on the same random points"
+for m in 10000 100000; do
+    for n in 100 1000 10000; do
+        cell "$OUT/fitpack.jsonl" "$PY" "$HERE/fitpack_bench.py" --points "$m" --cp "$n"
+        cell "$OUT/fit.jsonl" "$CF" bench fit --points "$m" --cp "$n" --order random --json
+    done
+done
+table fitpack
+
+# --- end to end: 10^6 ASCII points onto ~10^5 control points -----------------
+say "end to end: cellfit gen (not timed), then cellfit fit --uv"
+"$CF" gen --dir "$OUT/e2e" --nu 316 --nv 316 --points 1000000 >/dev/null
+i=0
+while [ "$i" -lt "$REPS" ]; do
+    i=$((i + 1))
+    t0=$(now_ns)
+    if ! line=$("$CF" fit --base "$OUT/e2e/nominal.igs" --points "$OUT/e2e/points.uvxyz" --uv \
+        --out "$OUT/e2e/fitted.igs" --json 2>"$OUT/stderr.txt"); then
+        msg=$(errmsg)
+        printf '{"bench": "error", "command": "fit", "message": "%s"}\n' "$msg" >>"$OUT/e2e.jsonl"
+        break
+    fi
+    t1=$(now_ns)
+    wall=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.4f", (b - a) / 1e9 }')
+    printf '%s\n' "$line" | sed "s/^{/{\"bench\": \"e2e\", \"wall_seconds\": $wall, /" \
+        >>"$OUT/e2e.jsonl"
+done
+table e2e
+
+table targets
+end=$(now_ns)
+say "done in $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.0f", (b - a) / 1e9 }') s; raw JSON in $OUT/*.jsonl"
