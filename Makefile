@@ -99,7 +99,9 @@ lint:
 format:
 	clang-format -i firmware/*.[ch] host/*.[ch] tests/*.[ch] boards/*/*.[ch]
 
-demo: all
+demo:
+	@sh scripts/deps.sh demo
+	$(MAKE) all
 	@sh scripts/demo.sh $(BUILD)/cellfit
 
 bench:

@@ -77,10 +77,13 @@ say "building bench/stream.c and bench/cholmod_bench.c with $CC"
     -I/usr/include/suitesparse "$HERE/cholmod_bench.c" -o "$OUT/cholmod_bench" \
     -lcholmod -lsuitesparseconfig -lm
 
-cpu=$(sed -n 's/^model name[^:]*: *//p' /proc/cpuinfo | head -n 1)
+cpuinfo() { sed -n "s/^$1[[:space:]]*: *//p" /proc/cpuinfo | head -n 1; }
+cpu="$(cpuinfo 'model name') (family $(cpuinfo 'cpu family') model $(cpuinfo model),"
+cpu="$cpu $(cpuinfo 'cpu MHz') MHz, cache $(cpuinfo 'cache size'))"
 blas=$(readlink -f /usr/lib/x86_64-linux-gnu/libblas.so.3 2>/dev/null || echo unknown)
-rev=$(git -C "$HERE" rev-parse --short HEAD 2>/dev/null || echo unknown)
-if [ "$rev" != unknown ] && [ -n "$(git -C "$HERE" status --porcelain -- firmware host 2>/dev/null)" ]; then
+rev=$(git -C "$HERE/.." rev-parse --short HEAD 2>/dev/null || echo unknown)
+if [ "$rev" != unknown ] &&
+    [ -n "$(git -C "$HERE/.." status --porcelain -- firmware host boards 2>/dev/null)" ]; then
     rev="$rev+local changes"
 fi
 {
@@ -92,8 +95,8 @@ fi
     printf '"cellfit_cflags": "%s", "cellfit_rev": "%s", "blas": "%s", "python": "%s", ' \
         "$(sed -n 's/^BOARD_CFLAGS *:= *//p' "$HERE/../boards/linux-cell/board.mk")" "$rev" \
         "$blas" "$("$PY" --version 2>&1)"
-    printf '"scipy": "%s", "reps": %s, "repeat_below_s": %s}\n' \
-        "$("$PY" -c 'import scipy; print(scipy.__version__)')" "$REPS" "$REPEAT_S"
+    printf '"scipy": "%s", "reps": %s, "repeat_below_s": %s, "command": "sh %s %s"}\n' \
+        "$("$PY" -c 'import scipy; print(scipy.__version__)')" "$REPS" "$REPEAT_S" "$0" "$1"
 } >"$OUT/machine.jsonl"
 table machine
 

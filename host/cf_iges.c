@@ -63,7 +63,8 @@ typedef struct ig_rd {
     const char *path;
     char *msg;
     size_t ml;
-    char pd, rd; /* parameter and record delimiters */
+    char pd, rd;    /* parameter and record delimiters */
+    double unit_mm; /* Global fields 14/15: millimetres per model unit */
     char *g;
     size_t glen;
     ig_de_t *de;
@@ -219,6 +220,60 @@ static int ig_field8(const char *t, int i, long *v)
     return 0;
 }
 
+/* The Global field after the delimiter at g[*i] into buf (Hollerith
+ * strings unwrapped); *i moves to the delimiter that ends it. 0, or -1 at
+ * the end of the section or for a string running past it. */
+static int ig_gnext(const ig_rd_t *c, size_t *i, char *buf, size_t bl)
+{
+    const char *g = c->g;
+    size_t n = c->glen, k = *i, o = 0;
+    if (k >= n || g[k] == c->rd)
+        return -1;
+    k++;
+    while (k < n && g[k] == ' ')
+        k++;
+    size_t j = k;
+    long len = 0;
+    while (j < n && g[j] >= '0' && g[j] <= '9' && len < 100000)
+        len = len * 10 + (g[j++] - '0');
+    if (j > k && j < n && (g[j] == 'H' || g[j] == 'h')) {
+        if (j + 1 + (size_t)len > n)
+            return -1;
+        for (long t = 0; t < len; t++)
+            if (o + 1 < bl)
+                buf[o++] = g[j + 1 + t];
+        k = j + 1 + (size_t)len;
+    } else {
+        while (k < n && g[k] != c->pd && g[k] != c->rd) {
+            if (o + 1 < bl && g[k] != ' ')
+                buf[o++] = g[k];
+            k++;
+        }
+    }
+    while (k < n && g[k] == ' ')
+        k++;
+    buf[o] = 0;
+    *i = k;
+    return 0;
+}
+
+/* Millimetres per unit for the Global unit flag (field 14), or for the
+ * unit name (field 15) when the flag is 3; 0 when unknown. */
+static double ig_unit_mm(long flag, const char *name)
+{
+    static const struct {
+        long flag;
+        const char *name;
+        double mm;
+    } u[] = {{1, "IN", 25.4},    {1, "INCH", 25.4}, {2, "MM", 1.0},      {4, "FT", 304.8},
+             {5, "MI", 1609344}, {6, "M", 1000.0},  {7, "KM", 1.0e6},    {8, "MIL", 0.0254},
+             {9, "UM", 0.001},   {10, "CM", 10.0},  {11, "UIN", 2.54e-5}};
+    for (size_t k = 0; k < sizeof u / sizeof u[0]; k++)
+        if ((flag != 3 && flag == u[k].flag) || (flag == 3 && !strcmp(name, u[k].name)))
+            return u[k].mm;
+    return 0.0;
+}
+
 static int ig_global(ig_rd_t *c, long line)
 {
     const char *g = c->g;
@@ -266,6 +321,30 @@ static int ig_global(ig_rd_t *c, long line)
     if (c->pd == c->rd || strchr(bad, c->pd) || strchr(bad, c->rd) || !c->pd || !c->rd)
         return ig_fail(c, CF_EPARSE, "Global section: unusable delimiters '%c' and '%c'", c->pd,
                        c->rd);
+    /* Fields 3..15: the unit flag (14) and unit name (15) say what a model
+     * unit is; cellfit works in millimetres, as CAD kernels convert. */
+    char f14[64] = "", f15[64] = "";
+    c->unit_mm = 1.0;
+    for (int field = 3; field <= 15; field++) {
+        char buf[64];
+        if (ig_gnext(c, &i, buf, sizeof buf))
+            return CF_OK; /* a short Global section defaults the rest: mm */
+        if (field == 14)
+            memcpy(f14, buf, sizeof f14);
+        if (field == 15)
+            memcpy(f15, buf, sizeof f15);
+    }
+    for (char *p = f15; *p; p++)
+        *p = (char)(*p >= 'a' && *p <= 'z' ? *p - 32 : *p);
+    char *end;
+    long flag = f14[0] ? strtol(f14, &end, 10) : 2;
+    if (f14[0] && *end)
+        return ig_fail(c, CF_EPARSE, "Global section: unit flag (field 14) '%s' is not an integer",
+                       f14);
+    c->unit_mm = ig_unit_mm(flag, f15);
+    if (c->unit_mm == 0.0)
+        return ig_fail(c, CF_EUNSUPPORTED, "Global section: unknown unit (flag %ld, name '%s')",
+                       flag, f15);
     return CF_OK;
 }
 
@@ -961,6 +1040,7 @@ int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, siz
         return cf_fail(msg, msglen, CF_EARG, "cf_iges_read: bad arguments");
     ig_rd_t c;
     memset(&c, 0, sizeof c);
+    c.unit_mm = 1.0;
     c.path = path;
     c.msg = msg;
     c.ml = msglen;
@@ -987,6 +1067,9 @@ int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, siz
         rc = ig_matrix(&c, &c.want[i], m[i - 1]);
     if (!rc)
         rc = ig_surface(&c, &c.want[0], (const double(*)[12])m, c.nwant - 1, out);
+    if (!rc && c.unit_mm != 1.0) /* model units to millimetres; knots are unitless */
+        for (long k = 0; k < 3L * out->nu * out->nv; k++)
+            out->cp[k] *= c.unit_mm;
     ig_rd_free(&c);
     if (rc)
         cf_surf_free(out);

@@ -34,24 +34,23 @@ int cmd_eval(int argc, char **argv)
         cf_surf_free(&s);
         return cli_error("eval", CLI_USAGE, "%s", msg);
     }
-    double u0, u1, v0, v1, buf[2 * 1024];
+    double u0, u1, v0, v1, buf[2];
     nf_surf_domain(&s, &u0, &u1, &v0, &v1);
     long got;
     int ec = CLI_OK;
-    while ((got = cf_points_read(r, buf, 1024, msg, sizeof msg)) > 0) {
-        for (long k = 0; k < got; k++) {
-            double u = buf[2 * k], v = buf[2 * k + 1], P[3];
-            if (u < u0 || u > u1 || v < v0 || v > v1) {
-                fflush(stdout);
-                ec = cli_error("eval", CLI_USAGE,
-                               "%s: point %ld: (%.17g, %.17g) outside the domain [%.17g, %.17g] "
-                               "x [%.17g, %.17g]",
-                               uvf, k + 1, u, v, u0, u1, v0, v1);
-                goto done;
-            }
-            nf_surf_eval(&s, u, v, P);
-            printf("%.17g %.17g %.17g\n", P[0], P[1], P[2]);
+    /* One point per read so that an error can name its line exactly. */
+    while ((got = cf_points_read(r, buf, 1, msg, sizeof msg)) > 0) {
+        double u = buf[0], v = buf[1], P[3];
+        if (u < u0 || u > u1 || v < v0 || v > v1) {
+            fflush(stdout);
+            ec = cli_error("eval", CLI_USAGE,
+                           "%s:%ld: (%.17g, %.17g) outside the domain [%.17g, %.17g] x "
+                           "[%.17g, %.17g]",
+                           uvf, cf_points_line(r), u, v, u0, u1, v0, v1);
+            goto done;
         }
+        nf_surf_eval(&s, u, v, P);
+        printf("%.17g %.17g %.17g\n", P[0], P[1], P[2]);
     }
     if (got < 0)
         ec = cli_error("eval", CLI_USAGE, "%s", msg);

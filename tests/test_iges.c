@@ -236,6 +236,61 @@ static void test_first_128(void **state)
     remove(path);
 }
 
+/* Global unit flag and name: coordinates come back in millimetres (as CAD
+ * kernels convert them), knots and weights untouched; unknown units refused. */
+static void test_units_to_mm(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *field; /* replaces ",2,2HMM," in fixture A's G line 2 */
+        double mm;
+    } cases[] = {{",1,2HIN,", 25.4}, {",3,2HCM,", 10.0}, {",6,1HM ,", 1000.0}, {",2,2HMM,", 1.0}};
+    char path[600];
+    tmp_path(path, sizeof path, "units.igs");
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        const char *lines[64];
+        char g2[81];
+        int n = 0;
+        for (; iges_a[n]; n++)
+            lines[n] = iges_a[n];
+        lines[n] = NULL;
+        int gl = 0; /* the G line with the unit fields */
+        while (!strstr(iges_a[gl], ",2,2HMM,"))
+            gl++;
+        memcpy(g2, iges_a[gl], 81);
+        memcpy(strstr(g2, ",2,2HMM,"), cases[k].field, 8);
+        lines[gl] = g2;
+        write_lines(path, lines, EOL_LF);
+        nf_surf_t s, ref;
+        assert_int_equal(cf_iges_read(path, 0, &s, msg, sizeof msg), CF_OK);
+        write_lines(path, iges_a, EOL_LF);
+        assert_int_equal(cf_iges_read(path, 0, &ref, msg, sizeof msg), CF_OK);
+        for (int i = 0; i < 3 * s.nu * s.nv; i++)
+            assert_near(s.cp[i], cases[k].mm * ref.cp[i], 1e-12 * fabs(cases[k].mm * ref.cp[i]));
+        for (int i = 0; i < s.nu + s.p + 1; i++)
+            assert_true(s.U[i] == ref.U[i]);
+        cf_surf_free(&s);
+        cf_surf_free(&ref);
+    }
+    const char *lines[64];
+    char g2[81];
+    int n = 0;
+    for (; iges_a[n]; n++)
+        lines[n] = iges_a[n];
+    lines[n] = NULL;
+    int gl = 0;
+    while (!strstr(iges_a[gl], ",2,2HMM,"))
+        gl++;
+    memcpy(g2, iges_a[gl], 81);
+    memcpy(strstr(g2, ",2,2HMM,"), ",3,2HXX,", 8);
+    lines[gl] = g2;
+    write_lines(path, lines, EOL_LF);
+    nf_surf_t s;
+    assert_int_equal(cf_iges_read(path, 0, &s, msg, sizeof msg), CF_EUNSUPPORTED);
+    assert_non_null(strstr(msg, "unit"));
+    remove(path);
+}
+
 static void test_second_128_by_de(void **state)
 {
     (void)state;
@@ -835,6 +890,7 @@ int main(void)
         cmocka_unit_test(test_fixtures_are_80_columns),
         cmocka_unit_test(test_first_128),
         cmocka_unit_test(test_second_128_by_de),
+        cmocka_unit_test(test_units_to_mm),
         cmocka_unit_test(test_de_not_a_128),
         cmocka_unit_test(test_delimiters_and_matrix),
         cmocka_unit_test(test_line_endings),

@@ -88,8 +88,9 @@ expect 0 "info" "$CF" info "$T/nominal.igs" --json
 printf '0 0\n1 1\n' >"$T/corners.uv"
 expect 0 "eval corners" "$CF" eval "$T/nominal.igs" "$T/corners.uv"
 [ "$(wc -l <"$T/out")" -eq 2 ] && ok "eval prints a line per point" || no "eval output"
-printf '2 0\n' >"$T/bad.uv"
+printf '0 0\n# two\n2 0\n' >"$T/bad.uv"
 expect 2 "eval outside the domain" "$CF" eval "$T/nominal.igs" "$T/bad.uv"
+grep -q "bad.uv:3:" "$T/err" && ok "eval error names file:line 3" || no "eval error: $(cat "$T/err")"
 
 # Memory flat in the number of points: same net, 10^4 and 10^6 points.
 "$CF" gen --dir "$T/m4" --nu 60 --nv 45 --points 10000 >/dev/null &&
