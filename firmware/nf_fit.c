@@ -47,6 +47,9 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
     f->npoints = 0;
     f->sumw = 0.0;
     f->finished = 0;
+    /* A store that fits in cache gains nothing from prefetching. */
+    f->prefetch = (double)n * K * sizeof(double) > 8.0 * 1024 * 1024;
+    f->pf_l = f->pf_k = -1;
     nf_surf_domain(base, &f->dom[0], &f->dom[1], &f->dom[2], &f->dom[3]);
     f->dtol[0] = 1e-12 * (f->dom[1] - f->dom[0]);
     f->dtol[1] = 1e-12 * (f->dom[3] - f->dom[2]);
@@ -70,10 +73,45 @@ int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt)
     return NF_OK;
 }
 
+/* Points this far ahead have their stripe rows prefetched: in random order
+ * every point's 16 rows are cache misses, and the loads of later points can
+ * overlap the arithmetic of this one. */
+#define NF_PREFETCH_AHEAD 6
+
+static void prefetch_point(nf_fit_t *f, double u, double v)
+{
+#if defined(__GNUC__)
+    const nf_surf_t *s = f->base;
+    if (!(u >= f->dom[0] && u <= f->dom[1] && v >= f->dom[2] && v <= f->dom[3]))
+        return; /* nf_fit_add reports it */
+    /* Raster scans stay in one span for many points: its rows are in cache. */
+    if (f->pf_l >= 0 && u >= s->U[f->pf_l] && u < s->U[f->pf_l + 1] && v >= s->V[f->pf_k] &&
+        v < s->V[f->pf_k + 1])
+        return;
+    const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
+              k = nf_find_span(s->nv - 1, s->q, v, s->V);
+    f->pf_l = l;
+    f->pf_k = k;
+    const long base = (l - s->p) + (long)(k - s->q) * s->nu, K = f->A.K;
+    for (int b = 0; b <= s->q; b++) {
+        const char *a = (const char *)(f->A.S + (base + (long)b * s->nu) * K);
+        const long bytes = (long)(s->p + 1) * K * (long)sizeof(double);
+        for (long o = 0; o < bytes; o += 64)
+            __builtin_prefetch(a + o, 1, 3);
+    }
+#else
+    (void)f;
+    (void)u;
+    (void)v;
+#endif
+}
+
 int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
 {
     for (long i = 0; i < n; i++) {
         const double *r = rows + 5 * i;
+        if (i + NF_PREFETCH_AHEAD < n && f->prefetch)
+            prefetch_point(f, r[5 * NF_PREFETCH_AHEAD], r[5 * NF_PREFETCH_AHEAD + 1]);
         int rc = nf_fit_add(f, r[0], r[1], r + 2, 1.0);
         if (rc) {
             if (bad)

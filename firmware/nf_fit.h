@@ -54,6 +54,8 @@ typedef struct nf_fit {
     double dom[4];   /* u0 u1 v0 v1 */
     double dtol[2];  /* rounding allowance at the domain ends */
     nf_accum_t acc;  /* hot-loop state: fixed size, see nf_accum.h */
+    int prefetch;    /* nf_fit_add_rows prefetches stripe rows ahead */
+    int pf_l, pf_k;  /* span last prefetched */
 } nf_fit_t;
 
 /* Check the base surface and the budget, then take the job's storage from
