@@ -120,10 +120,12 @@ def stream(out):
             if d["triad_GBps"] > s["triad_GBps"]:
                 s = d
         table(["triad GB/s", "read GB/s",
-               "random 4x800 B read-modify-write, M points/s: N = 10^4", "10^5", "10^6"],
+               "random 4 x 800 B read-modify-write, M points/s: N = 10^4", "10^5", "10^6",
+               "dependent FMA ns", "peak GFLOP/s (AVX2 FMA)"],
               [["%.1f" % s["triad_GBps"], "%.1f" % s["read_GBps"],
                 mps(s["scatter_1e4_points_per_s"]), mps(s["scatter_1e5_points_per_s"]),
-                mps(s["scatter_1e6_points_per_s"])]])
+                mps(s["scatter_1e6_points_per_s"]), "%.2f" % s["fma_latency_ns"],
+                "%.0f" % s["fma_peak_gflops"]]])
     failures(bad)
 
 
@@ -171,13 +173,15 @@ def solve(out):
         paper = {"gs": T3_MS, "chol": T4_MS}.get(s, {}).get(decade(n))
         pap = " / ".join(paper_ms(v) for v in paper) if paper else "(not in the paper)"
         if k in skipped:
-            rows.append(["{:,}".format(n), s, "- (est. %s s)" % sec(skipped[k]["estimate_seconds"]),
-                         "-", "-", "-", pap])
+            rows.append(["{:,}".format(n), s,
+                         "- (est. %s s)" % sec(skipped[k]["estimate_seconds"]), "-", "-", "-",
+                         "-", pap])
             continue
         d = b[k][0]
         rows.append(["{:,}".format(n), s, ms(d["solve_seconds"]), d["iterations"],
-                     "%.1e" % d["rel_residual"], "%.1f" % (d["arena_bytes"] / 2**20), pap])
-    table(["N", "solver", "ms", "iterations", "rel. residual", "arena MiB",
+                     "%.1e" % d["rel_residual"], "%.1f" % (d["arena_bytes"] / 2**20),
+                     "%.0f" % (d["arena_bytes"] / n), pap])
+    table(["N", "solver", "ms", "iterations", "rel. residual", "arena MiB", "arena B/cp",
            "paper ms, M = 10^4 / 10^5 / 10^6"], rows)
     failures(bad)
 
@@ -218,7 +222,11 @@ def fitpack(out):
     print("## FITPACK (scipy LSQBivariateSpline, surfit) on the same points\n")
     print("Same random points and height field, bicubic, same uniform knots. FITPACK fits z "
           "only; cellfit fits x, y and z (3 right-hand sides) with Eq. 7's regularisation. "
-          "FITPACK: the LSQBivariateSpline call; cellfit: `bench fit` accumulate + solve.\n")
+          "FITPACK: the LSQBivariateSpline call (Givens QR of the observation matrix, no "
+          "normal equations); cellfit: `bench fit` accumulate + solve. N = 1,024 = 2^10: "
+          "FITPACK runs several times slower there than at N = 961 (and about 30 s at "
+          "N = 4,096), presumably cache-set conflicts from a power-of-two stride in its band "
+          "array; both are shown.\n")
     rows, notes = [], []
     for k in sorted(set(f) | set(o)):
         d = f.get(k, ({}, 0))[0]

@@ -84,10 +84,15 @@ static void prefetch_point(nf_fit_t *f, double u, double v)
     const nf_surf_t *s = f->base;
     if (!(u >= f->dom[0] && u <= f->dom[1] && v >= f->dom[2] && v <= f->dom[3]))
         return; /* nf_fit_add reports it */
-    /* Raster scans stay in one span for many points: its rows are in cache. */
-    if (f->pf_l >= 0 && u >= s->U[f->pf_l] && u < s->U[f->pf_l + 1] && v >= s->V[f->pf_k] &&
-        v < s->V[f->pf_k + 1])
+    /* Raster scans stay in one span for many points, then step to the next
+     * span in u, whose rows follow in memory: the hardware prefetcher has
+     * them. Only a jump elsewhere is worth two searches and the prefetches. */
+    if (f->pf_l >= 0 && v >= s->V[f->pf_k] && v < s->V[f->pf_k + 1] && u >= s->U[f->pf_l] &&
+        u < s->U[f->pf_l + 2 < s->nu + 1 ? f->pf_l + 2 : s->nu]) {
+        if (u >= s->U[f->pf_l + 1])
+            f->pf_l++;
         return;
+    }
     const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
               k = nf_find_span(s->nv - 1, s->q, v, s->V);
     f->pf_l = l;

@@ -2,7 +2,7 @@
 # scripts/lint.sh: clang-format (the project's .clang-format) and cppcheck on
 # every C file we own. Fails on any difference or finding.
 set -eu
-files=$(ls firmware/*.[ch] host/*.[ch] hal/*.[ch] sim/*.[ch] tests/*.[ch] boards/*/*.[ch] 2>/dev/null || true)
+files=$(ls firmware/*.[ch] host/*.[ch] hal/*.[ch] sim/*.[ch] tests/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
 bad=0
 for f in $files; do
     if ! clang-format --dry-run -Werror "$f" >/dev/null 2>&1; then
@@ -14,6 +14,9 @@ done
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability \
     --inline-suppr --suppress=missingIncludeSystem -Iboards/linux-cell -Ifirmware -Ihost \
     --std=c11 -D__GNUC__ firmware host tests $( [ -d hal ] && echo hal ) $( [ -d sim ] && echo sim ) || bad=1
+# Benchmarks (CHOLMOD's headers when installed: make bench installs them).
+cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --inline-suppr \
+    --suppress=missingIncludeSystem -I/usr/include/suitesparse --std=c11 bench || bad=1
 # Board ports, with a cross board's configuration.
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --inline-suppr \
     --suppress=missingIncludeSystem -Iboards/mps2-an500 -Iboards/common -Ifirmware --std=c11 \
