@@ -6,20 +6,53 @@
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_points.h"
+#include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "nf_err.h"
 #include "nf_fit.h"
+#include "nf_project.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
 
 #define BATCH 4096
+#define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
+
+/* Start points for projection: surface samples (8 per knot span and
+ * direction) binned in a cell grid; host memory O(net), never O(points). */
+typedef cf_seedgrid_t projector_t;
+
+static int projector_init(projector_t *pj, const nf_surf_t *s)
+{
+    return cf_seedgrid_init(pj, s, 8);
+}
+
+/* rows of x y z in, rows of u v x y z out (distance in *dist if asked). */
+static void project_rows(const projector_t *pj, const double *xyz, long n, double *uvxyz,
+                         double *dist)
+{
+    for (long k = 0; k < n; k++) {
+        const double *Q = xyz + 3 * k;
+        double u0, v0;
+        nf_proj_t pr;
+        cf_seedgrid_start(pj, Q, &u0, &v0);
+        nf_project(pj->seed.s, Q, u0, v0, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+        double *r = uvxyz + 5 * k;
+        r[0] = pr.u;
+        r[1] = pr.v;
+        r[2] = Q[0];
+        r[3] = Q[1];
+        r[4] = Q[2];
+        if (dist)
+            dist[k] = pr.dist;
+    }
+}
 
 typedef struct fit_opts {
     const char *base, *points, *out;
     int uv, json;
-    long entity;
+    long entity, reparam;
     double alpha, beta, tol;
     long max_iter;
     nf_solver_t solver;
@@ -60,6 +93,9 @@ static int parse(int argc, char **argv, fit_opts_t *o)
         } else if (!strcmp(a, "--max-iter")) {
             if (cli_int(v, 1, 100000000, &o->max_iter))
                 return cli_error("fit", CLI_USAGE, "--max-iter '%s': need 1..1e8", v);
+        } else if (!strcmp(a, "--reparam")) {
+            if (cli_int(v, 0, 100, &o->reparam))
+                return cli_error("fit", CLI_USAGE, "--reparam '%s': need 0..100", v);
         } else if (!strcmp(a, "--entity")) {
             if (cli_int(v, 1, 9999999, &o->entity))
                 return cli_error("fit", CLI_USAGE, "--entity '%s': need a DE number", v);
@@ -72,10 +108,8 @@ static int parse(int argc, char **argv, fit_opts_t *o)
     }
     if (!o->base || !o->points || !o->out)
         return cli_error("fit", CLI_USAGE, "need --base BASE.igs --points FILE --out OUT.igs");
-    if (!o->uv)
-        return cli_error("fit", CLI_USAGE,
-                         "points without parameters need projection onto the base, which this "
-                         "build does not have yet: give 'u v x y z' points and --uv");
+    if (o->uv && o->reparam)
+        return cli_error("fit", CLI_USAGE, "--reparam projects x y z points: not with --uv");
     return CLI_OK;
 }
 
@@ -125,16 +159,23 @@ typedef struct resid {
     long n;
 } resid_t;
 
-static int residuals(cf_points_t *r, const nf_surf_t *s, double *buf, resid_t *out, char *msg,
-                     size_t ml)
+/* Second pass for the summary: |Q - S(u, v)| at the given parameters with
+ * --uv, else the normal distance to the fitted surface (projection). */
+static int residuals(cf_points_t *r, const nf_surf_t *s, const projector_t *pj, double *buf,
+                     double *rows, resid_t *out, char *msg, size_t ml)
 {
     memset(out, 0, sizeof *out);
     if (cf_points_rewind(r))
         return cli_error("fit", CLI_FAIL, "cannot re-read the points for the summary");
     long got;
     while ((got = cf_points_read(r, buf, BATCH, msg, ml)) > 0) {
+        const double *uv = buf;
+        if (pj) {
+            project_rows(pj, buf, got, rows, NULL);
+            uv = rows;
+        }
         for (long k = 0; k < got; k++) {
-            const double *q = buf + 5 * k;
+            const double *q = uv + 5 * k;
             double P[3];
             nf_surf_eval(s, q[0], q[1], P);
             double d2 = (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
@@ -159,6 +200,81 @@ static long peak_rss(void)
     return ru.ru_maxrss * 1024L;
 }
 
+typedef struct pass_out {
+    long points;
+    nf_solve_stats_t st;
+    double t_acc, t_solve;
+} pass_out_t;
+
+/* One fit: stream the points (parameters given, or by projection onto
+ * proj_onto) into a fresh job on base's space, solve, leave P in out->cp. */
+static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t *proj_onto,
+                    cf_points_t *pr, void *mem, long need, double *buf, double *rows,
+                    nf_surf_t *out, pass_out_t *po)
+{
+    char msg[512];
+    nf_arena_t ar;
+    nf_fit_t f;
+    projector_t pj;
+    memset(&pj, 0, sizeof pj);
+    int ec = CLI_OK;
+    double t0 = cli_now();
+    memset(po, 0, sizeof *po);
+    nf_arena_init(&ar, mem, (size_t)need);
+    nf_fit_params_t prm = {o->alpha, o->beta, o->solver};
+    int rc = nf_fit_init(&f, base, &prm, &ar);
+    if (rc)
+        return fit_error(rc, &f, base);
+    if (proj_onto && projector_init(&pj, proj_onto))
+        return cli_error("fit", CLI_FAIL, "out of memory");
+    if (cf_points_rewind(pr)) {
+        cf_seedgrid_free(&pj);
+        return cli_error("fit", CLI_USAGE, "%s: cannot read the points again", o->points);
+    }
+    long got;
+    while ((got = cf_points_read(pr, buf, BATCH, msg, sizeof msg)) > 0) {
+        long bad = -1;
+        const double *uv = buf;
+        if (proj_onto) {
+            project_rows(&pj, buf, got, rows, NULL);
+            uv = rows;
+        }
+        rc = nf_fit_add_rows(&f, uv, got, &bad);
+        if (rc) {
+            const double *q = uv + 5 * bad;
+            long line = line_of_point(pr, po->points + bad);
+            double u0, u1, v0, v1;
+            nf_surf_domain(base, &u0, &u1, &v0, &v1);
+            if (rc == NF_EDOMAIN)
+                ec = cli_error("fit", CLI_USAGE,
+                               "%s:%ld: parameters (%.17g, %.17g) outside the knot domain "
+                               "[%.17g, %.17g] x [%.17g, %.17g] of %s",
+                               o->points, line, q[0], q[1], u0, u1, v0, v1, o->base);
+            else
+                ec = cli_error("fit", CLI_USAGE, "%s:%ld: %s", o->points, line, nf_strerror(rc));
+            cf_seedgrid_free(&pj);
+            return ec;
+        }
+        po->points += got;
+    }
+    cf_seedgrid_free(&pj);
+    if (got < 0)
+        return cli_error("fit", CLI_USAGE, "%s", msg);
+    if (po->points == 0)
+        return cli_error("fit", CLI_USAGE, "%s: no points", o->points);
+    double t1 = cli_now();
+    rc = nf_fit_finish(&f);
+    nf_solve_opts_t so = {o->tol, (int)o->max_iter, 1};
+    if (!rc)
+        rc = nf_fit_solve(&f, o->solver, &so, &po->st);
+    if (rc)
+        return fit_error(rc, &f, base);
+    memcpy(out->cp, f.P, sizeof(double) * (size_t)(3 * f.n));
+    po->t_acc = t1 - t0;
+    po->t_solve = cli_now() - t1;
+    return CLI_OK;
+}
+
 int cmd_fit(int argc, char **argv)
 {
     fit_opts_t o;
@@ -167,8 +283,9 @@ int cmd_fit(int argc, char **argv)
         return rc;
     char msg[512];
     double t0 = cli_now();
-    nf_surf_t base, out;
+    nf_surf_t base, out, prev;
     memset(&out, 0, sizeof out);
+    memset(&prev, 0, sizeof prev);
     rc = cf_iges_read(o.base, (int)o.entity, &base, msg, sizeof msg);
     if (rc)
         return cli_error("fit", CLI_USAGE, "%s", msg);
@@ -185,73 +302,41 @@ int cmd_fit(int argc, char **argv)
                          BOARD_NAME, (long)NF_ARENA_BYTES);
     }
     cf_points_t *pr = NULL;
-    rc = cf_points_open(&pr, o.points, 5, msg, sizeof msg);
+    rc = cf_points_open(&pr, o.points, o.uv ? 5 : 3, msg, sizeof msg);
     if (rc) {
         cf_surf_free(&base);
         return cli_error("fit", CLI_USAGE, "%s", msg);
     }
     void *mem = malloc((size_t)need);
-    double *buf = malloc(sizeof(double) * 5 * BATCH);
-    nf_arena_t ar;
-    nf_fit_t f;
+    double *buf = malloc(sizeof(double) * 5 * BATCH), *rows = malloc(sizeof(double) * 5 * BATCH);
     int ec = CLI_OK;
-    if (!mem || !buf) {
+    pass_out_t po = {0, {NF_SOLVER_AUTO, 0, 0.0}, 0.0, 0.0};
+    double t_acc = 0.0, t_solve = 0.0;
+    if (!mem || !buf || !rows || cf_surf_copy(&out, &base) || cf_surf_copy(&prev, &base)) {
         ec = cli_error("fit", CLI_FAIL, "cannot allocate %ld bytes", need);
         goto done;
     }
-    nf_arena_init(&ar, mem, (size_t)need);
-    nf_fit_params_t prm = {o.alpha, o.beta, o.solver};
-    rc = nf_fit_init(&f, &base, &prm, &ar);
-    if (rc) {
-        ec = fit_error(rc, &f, &base);
-        goto done;
-    }
-    long got, total = 0;
-    while ((got = cf_points_read(pr, buf, BATCH, msg, sizeof msg)) > 0) {
-        long bad = -1;
-        rc = nf_fit_add_rows(&f, buf, got, &bad);
-        if (rc) {
-            const double *q = buf + 5 * bad;
-            long line = line_of_point(pr, total + bad);
-            double u0, u1, v0, v1;
-            nf_surf_domain(&base, &u0, &u1, &v0, &v1);
-            if (rc == NF_EDOMAIN)
-                ec = cli_error("fit", CLI_USAGE,
-                               "%s:%ld: parameters (%.17g, %.17g) outside the knot domain "
-                               "[%.17g, %.17g] x [%.17g, %.17g] of %s",
-                               o.points, line, q[0], q[1], u0, u1, v0, v1, o.base);
-            else
-                ec = cli_error("fit", CLI_USAGE, "%s:%ld: %s", o.points, line, nf_strerror(rc));
+    /* Pass 0 takes parameters from the file or from projection onto the
+     * base; each --reparam pass projects onto the previous fit and refits
+     * in the same space with the same nominal P0 (Section 2.2). */
+    for (long pass = 0; pass <= o.reparam; pass++) {
+        ec = fit_pass(&o, &base, o.uv ? NULL : &prev, pr, mem, need, buf, rows, &out, &po);
+        if (ec)
             goto done;
-        }
-        total += got;
-    }
-    if (got < 0) {
-        ec = cli_error("fit", CLI_USAGE, "%s", msg);
-        goto done;
-    }
-    if (total == 0) {
-        ec = cli_error("fit", CLI_USAGE, "%s: no points", o.points);
-        goto done;
-    }
-    double t1 = cli_now();
-    rc = nf_fit_finish(&f);
-    nf_solve_stats_t st = {NF_SOLVER_AUTO, 0, 0.0};
-    nf_solve_opts_t so = {o.tol, (int)o.max_iter, 1};
-    if (!rc)
-        rc = nf_fit_solve(&f, o.solver, &so, &st);
-    if (rc) {
-        ec = fit_error(rc, &f, &base);
-        goto done;
+        t_acc += po.t_acc;
+        t_solve += po.t_solve;
+        memcpy(prev.cp, out.cp, sizeof(double) * 3 * (size_t)base.nu * (size_t)base.nv);
     }
     double t2 = cli_now();
-    if (cf_surf_copy(&out, &base)) {
+    resid_t res;
+    projector_t pj;
+    memset(&pj, 0, sizeof pj);
+    if (!o.uv && projector_init(&pj, &out)) {
         ec = cli_error("fit", CLI_FAIL, "out of memory");
         goto done;
     }
-    memcpy(out.cp, f.P, sizeof(double) * (size_t)(3 * f.n));
-    resid_t res;
-    ec = residuals(pr, &out, buf, &res, msg, sizeof msg);
+    ec = residuals(pr, &out, o.uv ? NULL : &pj, buf, rows, &res, msg, sizeof msg);
+    cf_seedgrid_free(&pj);
     if (ec)
         goto done;
     rc = cf_iges_write(o.out, &out, "cellfit fit", msg, sizeof msg);
@@ -261,38 +346,45 @@ int cmd_fit(int argc, char **argv)
     }
     double t3 = cli_now();
     double rms = sqrt(res.ss / (double)res.n);
+    long ncp = (long)base.nu * base.nv;
     if (o.json) {
         cli_json_t j;
         cli_json_begin(&j, stdout);
-        cli_json_int(&j, "points", total);
-        cli_json_int(&j, "control_points", f.n);
+        cli_json_int(&j, "points", po.points);
+        cli_json_int(&j, "control_points", ncp);
         cli_json_int(&j, "nu", base.nu);
         cli_json_int(&j, "nv", base.nv);
         cli_json_int(&j, "p", base.p);
         cli_json_int(&j, "q", base.q);
         cli_json_num(&j, "alpha", o.alpha);
         cli_json_num(&j, "beta", o.beta);
-        cli_json_str(&j, "solver", nf_solver_name(st.solver));
-        cli_json_int(&j, "iterations", st.iterations);
-        cli_json_num(&j, "rel_residual", st.rel_residual);
+        cli_json_str(&j, "parameters", o.uv ? "given" : "projected");
+        cli_json_int(&j, "reparam", o.reparam);
+        cli_json_str(&j, "solver", nf_solver_name(po.st.solver));
+        cli_json_int(&j, "iterations", po.st.iterations);
+        cli_json_num(&j, "rel_residual", po.st.rel_residual);
         cli_json_num(&j, "rms", rms);
         cli_json_num(&j, "max_abs", res.mx);
         cli_json_num(&j, "seconds", t3 - t0);
-        cli_json_num(&j, "accumulate_seconds", t1 - t0);
-        cli_json_num(&j, "solve_seconds", t2 - t1);
+        cli_json_num(&j, "accumulate_seconds", t_acc);
+        cli_json_num(&j, "solve_seconds", t_solve);
         cli_json_int(&j, "bytes", need);
         cli_json_int(&j, "peak_rss_bytes", peak_rss());
         cli_json_str(&j, "board", BOARD_NAME);
         cli_json_str(&j, "out", o.out);
         cli_json_end(&j);
     } else {
-        printf("cellfit fit: %ld points, %ld control points (%d x %d, degree %d x %d)\n", total,
-               f.n, base.nu, base.nv, base.p, base.q);
-        printf("  alpha %g  beta %g  solver %s  iterations %d  relative residual %.2e\n", o.alpha,
-               o.beta, nf_solver_name(st.solver), st.iterations, st.rel_residual);
-        printf("  rms %.6g  max |Q - S| %.6g\n", rms, res.mx);
+        printf("cellfit fit: %ld points, %ld control points (%d x %d, degree %d x %d)\n", po.points,
+               ncp, base.nu, base.nv, base.p, base.q);
+        printf("  parameters %s", o.uv ? "given (--uv)" : "by projection onto the base");
+        if (o.reparam)
+            printf(", then %ld reparameterisation pass%s", o.reparam, o.reparam > 1 ? "es" : "");
+        printf("\n  alpha %g  beta %g  solver %s  iterations %d  relative residual %.2e\n", o.alpha,
+               o.beta, nf_solver_name(po.st.solver), po.st.iterations, po.st.rel_residual);
+        printf("  rms %.6g  max %.6g  (%s)\n", rms, res.mx,
+               o.uv ? "|Q - S(u,v)| at the given parameters" : "normal distance to the fit");
         printf("  %.3f s (read + accumulate %.3f, solve %.3f, summary + write %.3f)\n", t3 - t0,
-               t1 - t0, t2 - t1, t3 - t2);
+               t_acc, t_solve, t3 - t2);
         printf("  %ld bytes of fitter memory (board %s allows %ld)\n", need, BOARD_NAME,
                (long)NF_ARENA_BYTES);
         printf("  wrote %s\n", o.out);
@@ -300,7 +392,9 @@ int cmd_fit(int argc, char **argv)
 done:
     cf_points_close(pr);
     free(buf);
+    free(rows);
     free(mem);
+    cf_surf_free(&prev);
     cf_surf_free(&out);
     cf_surf_free(&base);
     return ec;

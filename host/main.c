@@ -8,13 +8,17 @@ static int usage(FILE *f, int code)
     fprintf(f,
             "usage: cellfit <command> [options]\n"
             "commands:\n"
-            "  fit   --base BASE.igs --points FILE --uv [--alpha A] [--beta B]\n"
-            "        [--solver auto|gs|chol|pcg] [--entity N] --out OUT.igs [--json]\n"
+            "  fit   --base BASE.igs --points FILE [--uv | --reparam K] [--alpha A]\n"
+            "        [--beta B] [--solver auto|gs|chol|pcg] [--entity N] --out OUT.igs [--json]\n"
+            "        (x y z points are projected onto BASE; --uv takes u v x y z)\n"
             "  eval  SURF.igs UVFILE [--entity N]   print x y z for each u v line\n"
+            "  project SURF.igs XYZFILE [--entity N]  print u v distance for each point\n"
+            "  report SURF.igs POINTS --tol T [--png MAP.png] [--json]\n"
+            "        signed normal deviations, statistics, histogram, colour deviation map\n"
             "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
             "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
             "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
-            "  bench accumulate|solve|fit [--points M] [--cp N] [--order raster|random]\n"
+            "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
             "        [--solver S] [--json]   benchmarks on generated data\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
             "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
@@ -37,6 +41,10 @@ int main(int argc, char **argv)
         return cmd_gen(argc - 1, argv + 1);
     if (!strcmp(c, "bench"))
         return cmd_bench(argc - 1, argv + 1);
+    if (!strcmp(c, "report"))
+        return cmd_report(argc - 1, argv + 1);
+    if (!strcmp(c, "project"))
+        return cmd_project(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);

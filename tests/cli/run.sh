@@ -56,6 +56,42 @@ errfit=$(paste "$T/e-fine" "$T/fine/check.xyz" | awk '{ d = $3 - $6; if (d < 0) 
 errnom=$(paste "$T/e-nom" "$T/fine/check.xyz" | awk '{ d = $3 - $6; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }')
 le "$errfit" 0.01 && ok "fitted surface within 0.01 mm of the true part (max $errfit; nominal off by $errnom)" ||
     no "fit misses the true part by $errfit mm (nominal $errnom)"
+# Scattered x y z points: parameters by projection onto the base (issue 3).
+grep -v '^#' "$T/fine/points.uvxyz" | cut -d' ' -f3- >"$T/fine/points.xyz"
+expect 0 "fit x y z by projection" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.xyz" --out "$T/proj.igs" --json
+cp "$T/out" "$T/proj.json"
+[ "$(json "$T/proj.json" parameters)" = projected ] && ok "fit reports projected parameters" || no "parameters: $(cat "$T/proj.json")"
+# The same fit with the projected parameters given explicitly is the same surface.
+expect 0 "project points onto the base" "$CF" project "$T/fine/nominal.igs" "$T/fine/points.xyz"
+paste -d' ' "$T/out" "$T/fine/points.xyz" | awk '{ print $1, $2, $4, $5, $6 }' >"$T/fine/projected.uvxyz"
+"$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/projected.uvxyz" --uv --out "$T/proj-uv.igs" >/dev/null
+"$CF" eval "$T/proj.igs" "$T/fine/check.uv" >"$T/e-proj"
+"$CF" eval "$T/proj-uv.igs" "$T/fine/check.uv" >"$T/e-proj-uv"
+d=$(paste "$T/e-proj" "$T/e-proj-uv" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3); if (a < 0) a = -a; if (a > m) m = a } } END { printf "%.3g", m }')
+le "$d" 1e-9 && ok "projected fit equals the --uv fit on the projected parameters ($d mm)" || no "projected vs --uv fit differ by $d"
+# The fit recovers the true part: normal distances of the true check points to it.
+expect 0 "project true points onto the fit" "$CF" project "$T/proj.igs" "$T/fine/check.xyz"
+e=$(awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }' "$T/out")
+le "$e" 0.01 && ok "projected fit within 0.01 mm of the true part (max normal distance $e)" || no "projected fit misses the true part by $e mm"
+expect 0 "fit --reparam 2" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.xyz" --reparam 2 --out "$T/reparam.igs" --json
+r0=$(json "$T/proj.json" rms)
+r2=$(json "$T/out" rms)
+le "$r2" "$(awk -v a="$r0" 'BEGIN { print a * 1.0001 }')" && ok "reparameterisation does not worsen the fit (rms $r0 -> $r2)" || no "reparam rms $r0 -> $r2"
+expect 2 "--reparam with --uv refused" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.uvxyz" --uv --reparam 1 --out "$T/x.igs"
+# Deviation report: statistics, JSON, and the colour map as a PNG.
+expect 0 "report with --png" "$CF" report "$T/fine/nominal.igs" "$T/fine/points.xyz" --tol 0.05 --png "$T/map.png" --json
+for k in points rms max_abs within_tol_pct p95_abs histogram; do
+    grep -q "\"$k\"" "$T/out" || no "report JSON lacks $k"
+done
+[ "$(json "$T/out" points)" = 60000 ] && ok "report counts 60000 points" || no "report points"
+w=$(json "$T/out" within_tol_pct)
+le "$w" 99 && le 20 "$w" && ok "report: nominal vs real part, $w % within 0.05 mm (dent and warp outside)" || no "within_tol_pct $w"
+[ "$(od -An -tx1 -N8 "$T/map.png" | tr -d ' ')" = 89504e470d0a1a0a ] && ok "deviation map is a PNG" || no "map.png is not a PNG"
+expect 0 "report of the fit" "$CF" report "$T/proj.igs" "$T/fine/points.xyz" --tol 0.05 --json
+w=$(json "$T/out" within_tol_pct)
+le 99.9 "$w" && ok "report: fit vs points, $w % within 0.05 mm (noise sigma 0.005)" || no "fit within_tol_pct $w"
+expect 2 "report without --tol" "$CF" report "$T/fine/nominal.igs" "$T/fine/points.xyz"
+
 # Exit codes and one-line errors.
 expect 2 "no arguments" "$CF"
 expect 2 "unknown command" "$CF" frobnicate

@@ -1,0 +1,135 @@
+/* cf_seedgrid.c: nearest seed sample by a uniform cell grid. */
+#include "cf_seedgrid.h"
+#include "cf_err.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SG_MAX_DIM 512
+
+static int clampi(long x, int hi)
+{
+    return x < 0 ? 0 : (x > hi ? hi : (int)x);
+}
+
+int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
+{
+    memset(g, 0, sizeof *g);
+    int spans = (s->nu - s->p) > (s->nv - s->q) ? (s->nu - s->p) : (s->nv - s->q);
+    long ns = (long)per_span * spans + 1;
+    ns = ns > 1024 ? 1024 : (ns < 16 ? 16 : ns);
+    const long n2 = ns * ns;
+    g->pts = malloc(sizeof(double) * 3 * (size_t)n2);
+    g->next = malloc(sizeof(int) * (size_t)n2);
+    if (!g->pts || !g->next) {
+        cf_seedgrid_free(g);
+        return CF_ENOMEM;
+    }
+    nf_seed_init(&g->seed, s, (int)ns, g->pts);
+    const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
+    double hi[3];
+    for (int c = 0; c < 3; c++) {
+        g->lo[c] = INFINITY;
+        hi[c] = -INFINITY;
+    }
+    for (long k = 0; k < n2; k++) {
+        const double P[3] = {X[k], Y[k], Z[k]};
+        for (int c = 0; c < 3; c++) {
+            g->lo[c] = fmin(g->lo[c], P[c]);
+            hi[c] = fmax(hi[c], P[c]);
+        }
+    }
+    /* About two samples per cell along the surface; no axis over SG_MAX_DIM
+     * cells and no more cells than 4 per sample. */
+    double ext = fmax(hi[0] - g->lo[0], fmax(hi[1] - g->lo[1], hi[2] - g->lo[2]));
+    g->cell = ext > 0 ? 2.0 * ext / (double)(ns - 1) : 1.0;
+    for (;;) {
+        long cells = 1;
+        for (int c = 0; c < 3; c++) {
+            double d = floor((hi[c] - g->lo[c]) / g->cell) + 1;
+            g->dim[c] = d > SG_MAX_DIM ? SG_MAX_DIM + 1 : (int)d;
+            cells *= g->dim[c];
+        }
+        if (g->dim[0] <= SG_MAX_DIM && g->dim[1] <= SG_MAX_DIM && g->dim[2] <= SG_MAX_DIM &&
+            cells <= 4 * n2)
+            break;
+        g->cell *= 1.5;
+    }
+    const long cells = (long)g->dim[0] * g->dim[1] * g->dim[2];
+    g->head = malloc(sizeof(int) * (size_t)cells);
+    if (!g->head) {
+        cf_seedgrid_free(g);
+        return CF_ENOMEM;
+    }
+    for (long i = 0; i < cells; i++)
+        g->head[i] = -1;
+    for (long k = n2 - 1; k >= 0; k--) {
+        const double P[3] = {X[k], Y[k], Z[k]};
+        int ix = clampi((long)floor((P[0] - g->lo[0]) / g->cell), g->dim[0] - 1);
+        int iy = clampi((long)floor((P[1] - g->lo[1]) / g->cell), g->dim[1] - 1);
+        int iz = clampi((long)floor((P[2] - g->lo[2]) / g->cell), g->dim[2] - 1);
+        long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+        g->next[k] = g->head[ci];
+        g->head[ci] = (int)k;
+    }
+    return CF_OK;
+}
+
+void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, double *v0)
+{
+    const long ns = g->seed.ns, n2 = ns * ns;
+    const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
+    int c0[3];
+    for (int c = 0; c < 3; c++)
+        c0[c] = clampi((long)floor((Q[c] - g->lo[c]) / g->cell), g->dim[c] - 1);
+    const int rmax = g->dim[0] > g->dim[1] ? (g->dim[0] > g->dim[2] ? g->dim[0] : g->dim[2])
+                                           : (g->dim[1] > g->dim[2] ? g->dim[1] : g->dim[2]);
+    double best = INFINITY;
+    long bk = 0;
+    for (int r = 0; r <= rmax; r++) {
+        for (int dz = -r; dz <= r; dz++) {
+            int iz = c0[2] + dz;
+            if (iz < 0 || iz >= g->dim[2])
+                continue;
+            for (int dy = -r; dy <= r; dy++) {
+                int iy = c0[1] + dy;
+                if (iy < 0 || iy >= g->dim[1])
+                    continue;
+                /* Only the shell: interior cells were searched at smaller r. */
+                int step = (abs(dz) == r || abs(dy) == r) ? 1 : 2 * r;
+                for (int dx = -r; dx <= r; dx += step ? step : 1) {
+                    int ix = c0[0] + dx;
+                    if (ix < 0 || ix >= g->dim[0])
+                        continue;
+                    long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+                    for (int k = g->head[ci]; k >= 0; k = g->next[k]) {
+                        double dx3 = X[k] - Q[0], dy3 = Y[k] - Q[1], dz3 = Z[k] - Q[2];
+                        double d = dx3 * dx3 + dy3 * dy3 + dz3 * dz3;
+                        if (d < best) {
+                            best = d;
+                            bk = k;
+                        }
+                    }
+                    if (r == 0)
+                        break;
+                }
+            }
+        }
+        /* Cells beyond shell r are at least r cells from Q's cell. */
+        if (best < INFINITY && sqrt(best) <= r * g->cell)
+            break;
+    }
+    double ua, ub, va, vb;
+    nf_surf_domain(g->seed.s, &ua, &ub, &va, &vb);
+    long i = bk % ns, j = bk / ns;
+    *u0 = i == ns - 1 ? ub : ua + (ub - ua) * (double)i / (double)(ns - 1);
+    *v0 = j == ns - 1 ? vb : va + (vb - va) * (double)j / (double)(ns - 1);
+}
+
+void cf_seedgrid_free(cf_seedgrid_t *g)
+{
+    free(g->pts);
+    free(g->next);
+    free(g->head);
+    memset(g, 0, sizeof *g);
+}

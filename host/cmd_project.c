@@ -1,0 +1,93 @@
+/* cmd_project.c: `cellfit project SURF.igs XYZFILE [--entity N]`: for each
+ * measured point x y z, the parameters of its closest point on the surface
+ * and the signed distance to it (Piegl & Tiller 2001, Section 3; NURBS Book
+ * 6.1), one line "u v distance" (%.17g) per point. Start points come from a
+ * sample grid of the surface (nf_seed, sized by nf_seed_size); memory is
+ * the grid and one read batch, whatever the number of points. */
+#include "cf_cli.h"
+#include "cf_iges.h"
+#include "cf_points.h"
+#include "cf_surf.h"
+#include "nf_err.h"
+#include "nf_project.h"
+#include <stdlib.h>
+#include <string.h>
+
+#define BATCH 4096
+#define PROJ_TOL 1e-9          /* parameter accuracy, relative to the domain */
+#define SEED_CAP (256L * 256L) /* samples: 8 per span and direction, at most 256^2 */
+
+int cmd_project(int argc, char **argv)
+{
+    const char *surf = NULL, *xyzf = NULL;
+    long entity = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--entity")) {
+            if (i + 1 >= argc || cli_int(argv[i + 1], 1, 9999999, &entity))
+                return cli_error("project", CLI_USAGE, "--entity needs a DE number");
+            i++;
+        } else if (argv[i][0] == '-' && argv[i][1])
+            return cli_error("project", CLI_USAGE, "unknown option '%s'", argv[i]);
+        else if (!surf)
+            surf = argv[i];
+        else if (!xyzf)
+            xyzf = argv[i];
+        else
+            return cli_error("project", CLI_USAGE, "unexpected argument '%s'", argv[i]);
+    }
+    if (!surf || !xyzf)
+        return cli_error("project", CLI_USAGE,
+                         "usage: cellfit project SURF.igs XYZFILE [--entity N]");
+    char msg[512];
+    nf_surf_t s;
+    if (cf_iges_read(surf, (int)entity, &s, msg, sizeof msg))
+        return cli_error("project", CLI_USAGE, "%s", msg);
+    cf_points_t *r = NULL;
+    if (cf_points_open(&r, xyzf, 3, msg, sizeof msg)) {
+        cf_surf_free(&s);
+        return cli_error("project", CLI_USAGE, "%s", msg);
+    }
+    int nsu, nsv;
+    nf_seed_size(&s, SEED_CAP, &nsu, &nsv);
+    double *pts = malloc(sizeof(double) * (size_t)NF_SEED_DOUBLES(nsu, nsv));
+    double *buf = malloc(sizeof(double) * 3 * BATCH);
+    int ec = CLI_OK;
+    if (!pts || !buf) {
+        ec = cli_error("project", CLI_FAIL, "out of memory");
+        goto done;
+    }
+    nf_seed_t g;
+    nf_seed_init_uv(&g, &s, nsu, nsv, pts);
+    long got, n = 0, lost = 0, first_lost = 0;
+    while ((got = cf_points_read(r, buf, BATCH, msg, sizeof msg)) > 0) {
+        for (long k = 0; k < got; k++) {
+            nf_proj_t pr;
+            int rc = nf_project_seeded(&g, buf + 3 * k, PROJ_TOL, &pr);
+            n++;
+            if (rc == NF_ENOCONV) { /* the nearest point found is still printed */
+                first_lost = lost++ ? first_lost : n;
+            } else if (rc != NF_OK) { /* the reader passes finite points only: a bug */
+                fflush(stdout);
+                ec = cli_error("project", CLI_FAIL, "%s: point %ld: %s", xyzf, n, nf_strerror(rc));
+                goto done;
+            }
+            printf("%.17g %.17g %.17g\n", pr.u, pr.v, pr.dist);
+        }
+    }
+    if (got < 0) {
+        fflush(stdout);
+        ec = cli_error("project", CLI_USAGE, "%s", msg);
+    } else if (lost) {
+        fflush(stdout);
+        ec = cli_error("project", CLI_FAIL,
+                       "%s: %ld point(s) did not converge in %d Newton steps (the first is point "
+                       "%ld); the nearest point found is printed for them",
+                       xyzf, lost, NF_PROJ_MAX_ITERS, first_lost);
+    }
+done:
+    free(buf);
+    free(pts);
+    cf_points_close(r);
+    cf_surf_free(&s);
+    return ec;
+}

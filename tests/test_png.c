@@ -1,0 +1,397 @@
+/* test_png.c: the PNG writer, checked by an independent decoder written here
+ * (chunk walk, bitwise CRC-32 without a table, stored-block inflate, Adler-32
+ * by definition, filter bytes) and, when python3 is installed, by Python's
+ * zlib; the canvas and the 5x7 font against typed-in dot patterns. */
+
+#include "cf_err.h"
+#include "cf_png.h"
+#include "cf_test.h"
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char tmpdir[512];
+static char msg[1024];
+
+static void make_tmpdir(void)
+{
+    const char *d = getenv("CF_TEST_TMP");
+    snprintf(tmpdir, sizeof tmpdir, "%s", d && *d ? d : "/tmp");
+    for (char *p = tmpdir + 1; *p; p++) /* mkdir -p */
+        if (*p == '/') {
+            *p = '\0';
+            mkdir(tmpdir, 0777);
+            *p = '/';
+        }
+    mkdir(tmpdir, 0777);
+}
+
+static void tmp_path(char *buf, size_t n, const char *name)
+{
+    snprintf(buf, n, "%s/cf_png_%ld_%s", tmpdir, (long)getpid(), name);
+}
+
+static int exists(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0;
+}
+
+static unsigned char *read_all(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long len = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *b = malloc((size_t)len + 1);
+    assert_non_null(b);
+    assert_int_equal(fread(b, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    *n = (size_t)len;
+    return b;
+}
+
+/* CRC-32 (ISO 3309, reflected 0xEDB88320) one bit at a time. */
+static uint32_t crc_bits(uint32_t crc, const unsigned char *p, size_t n)
+{
+    crc = ~crc;
+    for (size_t i = 0; i < n; i++) {
+        crc ^= p[i];
+        for (int k = 0; k < 8; k++)
+            crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1)));
+    }
+    return ~crc;
+}
+
+/* Adler-32 by RFC 1950's definition, modulo after every byte. */
+static uint32_t adler_def(const unsigned char *p, size_t n)
+{
+    uint32_t a = 1, b = 0;
+    for (size_t i = 0; i < n; i++) {
+        a = (a + p[i]) % 65521;
+        b = (b + a) % 65521;
+    }
+    return b << 16 | a;
+}
+
+static uint32_t rd32(const unsigned char *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+/* Decode path (an RGB8 PNG of stored blocks) and compare with rgb. Returns the
+ * number of stored blocks. */
+static int check_png(const char *path, const unsigned char *rgb, int w, int h)
+{
+    size_t n;
+    unsigned char *f = read_all(path, &n);
+    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    assert_true(n >= 8 && !memcmp(f, sig, 8));
+    size_t pos = 8, zlen = 0;
+    unsigned char *z = malloc(n);
+    assert_non_null(z);
+    int nchunk = 0, seen_iend = 0, idat_done = 0;
+    while (pos < n) {
+        assert_true(pos + 12 <= n);
+        uint32_t len = rd32(f + pos);
+        assert_true(pos + 12 + len <= n);
+        const unsigned char *type = f + pos + 4, *data = f + pos + 8;
+        assert_int_equal(crc_bits(0, type, 4 + (size_t)len), rd32(data + len));
+        if (nchunk == 0) { /* IHDR first */
+            assert_memory_equal(type, "IHDR", 4);
+            assert_int_equal(len, 13);
+            assert_int_equal(rd32(data), (uint32_t)w);
+            assert_int_equal(rd32(data + 4), (uint32_t)h);
+            assert_int_equal(data[8], 8);
+            assert_int_equal(data[9], 2);
+            assert_int_equal(data[10], 0);
+            assert_int_equal(data[11], 0);
+            assert_int_equal(data[12], 0);
+        } else if (!memcmp(type, "IDAT", 4)) {
+            assert_false(idat_done); /* IDAT chunks are consecutive */
+            memcpy(z + zlen, data, len);
+            zlen += len;
+        } else {
+            if (zlen)
+                idat_done = 1;
+            if (!memcmp(type, "IEND", 4)) {
+                assert_int_equal(len, 0);
+                seen_iend = 1;
+                pos += 12;
+                break;
+            }
+        }
+        nchunk++;
+        pos += 12 + len;
+    }
+    assert_true(seen_iend);
+    assert_int_equal(pos, n); /* nothing after IEND */
+    /* zlib: CMF/FLG, stored blocks, Adler-32. */
+    assert_true(zlen >= 2 + 5 + 4);
+    assert_int_equal(z[0] & 0x0F, 8);              /* deflate */
+    assert_int_equal((z[0] * 256 + z[1]) % 31, 0); /* header check */
+    assert_int_equal(z[1] & 0x20, 0);              /* no preset dictionary */
+    size_t rawcap = (size_t)h * (1 + 3 * (size_t)w), rawlen = 0, zp = 2;
+    unsigned char *raw = malloc(rawcap);
+    assert_non_null(raw);
+    int blocks = 0, final = 0;
+    while (!final) {
+        assert_true(zp + 5 <= zlen);
+        final = z[zp] & 1;
+        assert_int_equal((z[zp] >> 1) & 3, 0); /* BTYPE 00: stored */
+        unsigned len = z[zp + 1] | (unsigned)z[zp + 2] << 8;
+        unsigned nlen = z[zp + 3] | (unsigned)z[zp + 4] << 8;
+        assert_int_equal(len ^ 0xFFFFu, nlen);
+        zp += 5;
+        assert_true(zp + len <= zlen);
+        assert_true(rawlen + len <= rawcap);
+        memcpy(raw + rawlen, z + zp, len);
+        rawlen += len;
+        zp += len;
+        blocks++;
+    }
+    assert_int_equal(zp + 4, zlen);
+    assert_int_equal(rd32(z + zp), adler_def(raw, rawlen));
+    assert_int_equal(rawlen, rawcap);
+    for (int y = 0; y < h; y++) {
+        const unsigned char *r = raw + (size_t)y * (1 + 3 * (size_t)w);
+        assert_int_equal(r[0], 0); /* filter: none */
+        assert_memory_equal(r + 1, rgb + (size_t)y * 3 * (size_t)w, 3 * (size_t)w);
+    }
+    free(raw);
+    free(z);
+    free(f);
+    return blocks;
+}
+
+/* Python's zlib as a second, unrelated decoder: it checks every chunk CRC,
+ * inflates the IDAT stream and prints "w h crc32(pixels)". */
+static const char *py_check =
+    "import sys, zlib, struct\n"
+    "d = open(sys.argv[1], 'rb').read()\n"
+    "assert d[:8] == b'\\x89PNG\\r\\n\\x1a\\n'\n"
+    "p, z, w, h = 8, b'', 0, 0\n"
+    "while p < len(d):\n"
+    "    n, t = struct.unpack('>I4s', d[p:p + 8])\n"
+    "    c = d[p + 4:p + 8 + n]\n"
+    "    assert zlib.crc32(c) == struct.unpack('>I', d[p + 8 + n:p + 12 + n])[0], t\n"
+    "    if t == b'IHDR': w, h = struct.unpack('>II', c[4:12])\n"
+    "    if t == b'IDAT': z += c[4:]\n"
+    "    p += 12 + n\n"
+    "r = zlib.decompress(z)\n"
+    "s = 3 * w + 1\n"
+    "assert len(r) == h * s and all(r[y * s] == 0 for y in range(h))\n"
+    "px = b''.join(r[y * s + 1:(y + 1) * s] for y in range(h))\n"
+    "print(w, h, zlib.crc32(px))\n";
+
+static const char *find_python(void)
+{
+    if (access("/usr/bin/python3", X_OK) == 0)
+        return "/usr/bin/python3";
+    if (system("python3 -c '' >/dev/null 2>&1") == 0)
+        return "python3";
+    return NULL;
+}
+
+static void python_check(const char *path, const unsigned char *rgb, int w, int h)
+{
+    const char *py = find_python();
+    if (!py) {
+        fprintf(stderr, "test_png: python3 not found: zlib cross-check NOT run (the C "
+                        "decoder above still checked the file)\n");
+        return;
+    }
+    char script[600], cmd[1400], line[256];
+    tmp_path(script, sizeof script, "check.py");
+    FILE *f = fopen(script, "w");
+    assert_non_null(f);
+    fputs(py_check, f);
+    assert_int_equal(fclose(f), 0);
+    snprintf(cmd, sizeof cmd, "%s '%s' '%s'", py, script, path);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    assert_non_null(fgets(line, sizeof line, p));
+    assert_int_equal(pclose(p), 0);
+    remove(script);
+    unsigned long pw, ph, pc;
+    assert_int_equal(sscanf(line, "%lu %lu %lu", &pw, &ph, &pc), 3);
+    assert_int_equal(pw, (unsigned long)w);
+    assert_int_equal(ph, (unsigned long)h);
+    assert_int_equal(pc, (unsigned long)crc_bits(0, rgb, (size_t)w * (size_t)h * 3));
+}
+
+static unsigned char *pattern(int w, int h, unsigned seed)
+{
+    unsigned char *p = malloc((size_t)w * (size_t)h * 3);
+    assert_non_null(p);
+    unsigned s = seed;
+    for (size_t i = 0; i < (size_t)w * (size_t)h * 3; i++) {
+        s = s * 1103515245u + 12345u;
+        p[i] = (unsigned char)(s >> 16);
+    }
+    return p;
+}
+
+static int write_and_check(int w, int h, const char *name)
+{
+    char path[600];
+    tmp_path(path, sizeof path, name);
+    unsigned char *rgb = pattern(w, h, (unsigned)(w * 7919 + h));
+    assert_int_equal(cf_png_write(path, rgb, w, h, msg, sizeof msg), CF_OK);
+    int blocks = check_png(path, rgb, w, h);
+    python_check(path, rgb, w, h);
+    char tmp[700];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    assert_false(exists(tmp));
+    free(rgb);
+    remove(path);
+    return blocks;
+}
+
+static void test_roundtrip(void **state)
+{
+    (void)state;
+    assert_int_equal(write_and_check(1, 1, "1x1.png"), 1);
+    /* 300 x 200: 180200 raw bytes, three stored blocks (65535 + 65535 + 49130). */
+    assert_int_equal(write_and_check(300, 200, "300x200.png"), 3);
+    /* 28 x 771: exactly 65535 raw bytes, one full block that is also the last. */
+    assert_int_equal(write_and_check(28, 771, "28x771.png"), 1);
+    /* 29 x 744 = 65472 raw bytes: 63 short of a block. */
+    assert_int_equal(write_and_check(29, 744, "29x744.png"), 1);
+    /* Rows longer than the 5552 bytes Adler-32 sums may take between two
+     * reductions, random and all 0xFF (the largest sums). */
+    assert_int_equal(write_and_check(6000, 12, "6000x12.png"), 4);
+    {
+        char path[600];
+        tmp_path(path, sizeof path, "white.png");
+        unsigned char *rgb = malloc(16384 * 3 * 2);
+        assert_non_null(rgb);
+        memset(rgb, 0xFF, 16384 * 3 * 2);
+        assert_int_equal(cf_png_write(path, rgb, 16384, 2, msg, sizeof msg), CF_OK);
+        assert_int_equal(check_png(path, rgb, 16384, 2), 2);
+        python_check(path, rgb, 16384, 2);
+        remove(path);
+        free(rgb);
+    }
+    /* 28 x 1542: 131070 raw bytes, two full blocks and no empty third one. */
+    assert_int_equal(write_and_check(28, 1542, "28x1542.png"), 2);
+}
+
+/* Overwriting keeps the new content; failures leave no file under either name. */
+static void test_failures(void **state)
+{
+    (void)state;
+    unsigned char px[12] = {0};
+    char path[600], tmp[700];
+    assert_int_equal(cf_png_write("/nonexistent-dir-cf/x.png", px, 2, 2, msg, sizeof msg), CF_EIO);
+    assert_non_null(strstr(msg, "/nonexistent-dir-cf/x.png.tmp"));
+    assert_false(exists("/nonexistent-dir-cf/x.png"));
+    assert_int_equal(cf_png_write("x.png", px, 0, 2, msg, sizeof msg), CF_EARG);
+    assert_int_equal(cf_png_write("x.png", px, 2, CF_PNG_MAX_DIM + 1, msg, sizeof msg), CF_EARG);
+    assert_int_equal(cf_png_write("x.png", NULL, 2, 2, msg, sizeof msg), CF_EARG);
+    /* The target is a directory: the rename fails and the .tmp is removed. */
+    tmp_path(path, sizeof path, "dir.png");
+    assert_int_equal(mkdir(path, 0777), 0);
+    assert_int_equal(cf_png_write(path, px, 2, 2, msg, sizeof msg), CF_EIO);
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    assert_false(exists(tmp));
+    assert_int_equal(rmdir(path), 0);
+    /* Overwrite an existing file. */
+    tmp_path(path, sizeof path, "over.png");
+    unsigned char *a = pattern(40, 30, 1), *b = pattern(40, 30, 2);
+    assert_int_equal(cf_png_write(path, a, 40, 30, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_png_write(path, b, 40, 30, msg, sizeof msg), CF_OK);
+    check_png(path, b, 40, 30);
+    remove(path);
+    free(a);
+    free(b);
+}
+
+/* Dots of a glyph drawn at scale 1 at (0, 0), as a 5-character row string each. */
+static void expect_glyph(const cf_image_t *im, int x0, const char *const rows[7])
+{
+    for (int r = 0; r < 7; r++)
+        for (int c = 0; c < 5; c++) {
+            int on = cf_image_get(im, x0 + c, r) == 0x000000;
+            if (on != (rows[r][c] == '#'))
+                fail_msg("glyph at x %d: dot (%d, %d) is %s", x0, c, r, on ? "set" : "clear");
+        }
+    for (int c = 0; c < 6; c++) /* spacing row below */
+        assert_int_equal(cf_image_get(im, x0 + c, 7), 0xFFFFFF);
+}
+
+static void test_font(void **state)
+{
+    (void)state;
+    cf_image_t im;
+    assert_int_equal(cf_image_init(&im, 60, 20, 0xFFFFFF, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_image_text(&im, 0, 0, 1, 0x000000, "0-mR\xC2\xB1"), 5 * CF_FONT_W);
+    static const char *const zero[7] = {" ### ", "#   #", "#  ##", "# # #",
+                                        "##  #", "#   #", " ### "};
+    static const char *const minus[7] = {"     ", "     ", "     ", "#####",
+                                         "     ", "     ", "     "};
+    static const char *const m[7] = {"     ", "     ", "## # ", "# # #", "# # #", "#   #", "#   #"};
+    static const char *const R[7] = {"#### ", "#   #", "#   #", "#### ", "# #  ", "#  # ", "#   #"};
+    static const char *const pm[7] = {"  #  ", "  #  ", "#####", "  #  ",
+                                      "  #  ", "     ", "#####"};
+    expect_glyph(&im, 0, zero);
+    expect_glyph(&im, 6, minus);
+    expect_glyph(&im, 12, m);
+    expect_glyph(&im, 18, R);
+    expect_glyph(&im, 24, pm);
+    /* Scale 2: each dot 2 x 2; '1' has its stem in column 2. */
+    cf_image_fill(&im, 0, 0, 60, 20, 0xFFFFFF);
+    assert_int_equal(cf_image_text(&im, 10, 2, 2, 0xFF0000, "1"), 12);
+    for (int r = 1; r < 7; r++) /* stem rows 1..6 of column 2 */
+        for (int dy = 0; dy < 2; dy++)
+            for (int dx = 0; dx < 2; dx++)
+                assert_int_equal(cf_image_get(&im, 10 + 4 + dx, 2 + 2 * r + dy), 0xFF0000);
+    assert_int_equal(cf_image_get(&im, 10, 2 + 2 * 3), 0xFFFFFF);
+    /* Widths: one glyph per code point, unknown ones as '?'. */
+    assert_int_equal(cf_text_width("RMS 0.012 mm", 1), 12 * CF_FONT_W);
+    assert_int_equal(cf_text_width("\xC2\xB1\xC2\xB5m", 2), 3 * 2 * CF_FONT_W);
+    assert_int_equal(cf_text_width("\xE2\x82\xAC", 1), CF_FONT_W); /* euro sign: '?' */
+    /* Drawing clips at the canvas edges. */
+    cf_image_text(&im, 55, 15, 3, 0x0000FF, "W");
+    cf_image_text(&im, -20, -5, 3, 0x0000FF, "W");
+    cf_image_box(&im, -1, -1, 62, 22, 0x00FF00);
+    assert_int_equal(cf_image_get(&im, 55, 15), 0x0000FF); /* W's first dot */
+    assert_int_equal(cf_image_get(&im, 59, 19), 0xFFFFFF);
+    cf_image_free(&im);
+    assert_int_equal(cf_image_init(&im, 0, 10, 0, msg, sizeof msg), CF_EARG);
+    assert_null(im.px);
+}
+
+/* A canvas written with cf_png_write_image decodes to the same pixels. */
+static void test_canvas_png(void **state)
+{
+    (void)state;
+    cf_image_t im;
+    char path[600];
+    assert_int_equal(cf_image_init(&im, 120, 40, 0xF0F0F0, msg, sizeof msg), CF_OK);
+    cf_image_fill(&im, 5, 5, 30, 30, 0x2080FF);
+    cf_image_box(&im, 4, 4, 32, 32, 0x000000);
+    cf_image_text(&im, 40, 12, 2, 0x202020, "0.05mm");
+    tmp_path(path, sizeof path, "canvas.png");
+    assert_int_equal(cf_png_write_image(path, &im, msg, sizeof msg), CF_OK);
+    check_png(path, im.px, im.w, im.h);
+    python_check(path, im.px, im.w, im.h);
+    remove(path);
+    cf_image_free(&im);
+}
+
+int main(void)
+{
+    make_tmpdir();
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_roundtrip),
+        cmocka_unit_test(test_failures),
+        cmocka_unit_test(test_font),
+        cmocka_unit_test(test_canvas_png),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
