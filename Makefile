@@ -24,7 +24,7 @@ ifeq ($(SAN),1)
 CFLAGS_BASE += -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 LDSAN := -fsanitize=address,undefined
 endif
-INC := -Iboards/$(BOARD) -Ifirmware -Ihost
+INC := -Iboards/$(BOARD) -Ifirmware -Ihost -Ihal
 CFLAGS_ALL = $(CFLAGS_BASE) $(INC) $(CFLAGS)
 
 FW_SRC := $(sort $(wildcard firmware/*.c))
@@ -35,11 +35,23 @@ TEST_SRC := $(sort $(wildcard tests/test_*.c))
 TEST_BIN := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 TESTLIB_SRC := $(sort $(wildcard tests/ref_*.c))
 TESTLIB_OBJ := $(patsubst tests/%.c,$(BUILD)/tests/%.o,$(TESTLIB_SRC))
-LIBS := -lm
+# hal/: transports to real devices (libmodbus, libserialport, libusb), host
+# builds only; firmware/ never sees them.
+HAL_SRC := $(sort $(wildcard hal/*.c))
+HAL_OBJ := $(patsubst hal/%.c,$(BUILD)/hal/%.o,$(HAL_SRC))
+HAL_PKGS := libmodbus libserialport libusb-1.0
+HAL_CFLAGS = $(shell pkg-config --cflags $(HAL_PKGS) 2>/dev/null)
+HAL_LIBS = $(if $(HAL_SRC),$(shell pkg-config --libs $(HAL_PKGS) 2>/dev/null))
+# sim/: cellsim, the simulated rig (its own main), on the same wire protocols.
+SIM_SRC := $(sort $(wildcard sim/*.c))
+SIM_OBJ := $(patsubst sim/%.c,$(BUILD)/sim/%.o,$(SIM_SRC))
+LIBS = -lm $(HAL_LIBS) -lpthread
+# Extra test targets that mk/*.mk files add (TEST_EXTRA += ...); make test runs them.
+TEST_EXTRA :=
 
-.PHONY: all firmware cellfit test check unit unit-run demo bench clean lint format deps \
-	test-cli fwcheck
-all: $(if $(filter 1,$(BOARD_CROSS)),,cellfit) firmware
+.PHONY: all firmware cellfit cellsim test check unit unit-run demo bench clean lint format deps \
+	test-cli fwcheck test-extra
+all: $(if $(filter 1,$(BOARD_CROSS)),,cellfit $(if $(SIM_SRC),cellsim)) firmware
 
 cellfit: $(BUILD)/cellfit
 firmware: $(FW_OBJ)
@@ -48,18 +60,30 @@ $(BUILD)/firmware/%.o: firmware/%.c $(wildcard firmware/*.h) boards/$(BOARD)/boa
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_ALL) -c $< -o $@
 
-$(BUILD)/host/%.o: host/%.c $(wildcard host/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+$(BUILD)/host/%.o: host/%.c $(wildcard host/*.h hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_ALL) -c $< -o $@
 
-$(BUILD)/cellfit: $(BUILD)/host/main.o $(HOST_OBJ) $(FW_OBJ)
+$(BUILD)/hal/%.o: hal/%.c $(wildcard hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -c $< -o $@
+
+$(BUILD)/sim/%.o: sim/%.c $(wildcard sim/*.h hal/*.h host/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Isim -c $< -o $@
+
+$(BUILD)/cellfit: $(BUILD)/host/main.o $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
 	$(CC) $(LDSAN) -o $@ $^ $(LIBS)
 
-$(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h host/*.h firmware/*.h)
-	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) -Itests -c $< -o $@
+cellsim: $(BUILD)/cellsim
+$(BUILD)/cellsim: $(SIM_OBJ) $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+	$(CC) $(LDSAN) -o $@ $^ $(LIBS)
 
-$(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(HOST_OBJ) $(FW_OBJ)
+$(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h host/*.h hal/*.h firmware/*.h)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Itests -c $< -o $@
+
+$(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
 	$(CC) $(LDSAN) -o $@ $^ -lcmocka $(LIBS)
 
 # Unit tests of one build tree, each binary in turn; cmocka prints its summary.
@@ -85,19 +109,24 @@ test: deps
 	$(MAKE) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
 	$(MAKE) BOARD=sim BUILD=build/t-clang CC=clang unit-run
 	$(MAKE) test-cli
+	$(MAKE) test-extra
 	$(MAKE) boards
 	$(MAKE) boards-test
 	$(MAKE) lint
 	@echo "make test: all passed"
 
-test-cli: $(BUILD)/cellfit
-	@sh tests/cli/run.sh $(BUILD)/cellfit
+# Every tests/cli/*.sh script, each given the cellfit binary (and cellsim
+# beside it); each prints "<name>: N passed, N failed" and fails on a failure.
+test-cli: all
+	@set -e; for s in $(sort $(wildcard tests/cli/*.sh)); do \
+	  echo "== $$s"; sh $$s $(BUILD)/cellfit; done
+
 
 lint:
 	@sh scripts/lint.sh
 
 format:
-	clang-format -i firmware/*.[ch] host/*.[ch] tests/*.[ch] boards/*/*.[ch]
+	clang-format -i $(wildcard firmware/*.[ch] host/*.[ch] hal/*.[ch] sim/*.[ch] tests/*.[ch] boards/*/*.[ch])
 
 demo:
 	@sh scripts/deps.sh demo
@@ -112,5 +141,9 @@ bench:
 clean:
 	rm -rf build
 
-# Cross builds for microcontroller boards (make BOARD=<b> firmware, make boards).
--include mk/cross.mk
+# Cross builds for microcontroller boards (make BOARD=<b> firmware, make boards)
+# and the parts' own fragments (mk/<part>.mk, each adding to TEST_EXTRA).
+include $(sort $(wildcard mk/*.mk))
+
+# After the fragments, which fill TEST_EXTRA.
+test-extra: $(TEST_EXTRA)

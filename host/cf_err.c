@@ -1,6 +1,7 @@
 /* cf_err.c: strings for host error codes (and the firmware's). */
 #include "cf_err.h"
 #include "nf_err.h"
+#include "rig_err.h"
 #include <stdarg.h>
 #include <stdio.h>
 
@@ -14,7 +15,7 @@ const char *cf_strerror(int err)
     case CF_EUNSUPPORTED: return "unsupported input";
     case CF_EARG: return "invalid argument (caller bug)";
     case CF_EEMPTY: return "no points in input";
-    default: return nf_strerror(err);
+    default: return err <= -200 ? rig_strerror(err) : nf_strerror(err);
     }
 }
 
