@@ -1,4 +1,5 @@
-/* cf_iges.c: IGES 5.3 entity 128 (rational B-spline surface), read and write.
+/* cf_iges.c: IGES 5.3 entities 128 (rational B-spline surface) and 126
+ * (rational B-spline curve), read and write.
  * The reader makes one pass: Start (skipped), Global (delimiters), Directory
  * (every entry, a few integers each), Parameter (only the lines of the wanted
  * 128 and of its transformation matrices), Terminate (counts checked).
@@ -72,8 +73,10 @@ typedef struct ig_rd {
     long count[4]; /* S G D P lines */
     char d1[81];   /* first line of a D entry waiting for its second */
     long d1line;
-    long target;  /* index into de of the wanted 128, -1 none */
-    int notfound; /* CF_ENOTFOUND with msg already written */
+    long target;   /* index into de of the wanted entity, -1 none */
+    int want_type; /* 128 (surface) or 126 (curve) */
+    long nth;      /* entity_de = 0: take the nth (0-based) of want_type */
+    int notfound;  /* CF_ENOTFOUND with msg already written */
     ig_par_t want[1 + IG_MAX_CHAIN];
     int nwant;
 } ig_rd_t;
@@ -366,9 +369,15 @@ static int ig_add_want(ig_rd_t *c, long idx)
     return CF_OK;
 }
 
-/* At the start of the P section: find the wanted 128 and its matrices. */
+static const char *ig_tname(int type)
+{
+    return type == 126 ? "rational B-spline curve" : "rational B-spline surface";
+}
+
+/* At the start of the P section: find the wanted entity and its matrices. */
 static int ig_pick(ig_rd_t *c, int entity_de, long line)
 {
+    const int ty = c->want_type;
     if (c->nde == 0)
         return ig_fail(c, CF_EPARSE, "line %ld: no Directory Entry (D) section", line);
     if (c->d1line)
@@ -377,14 +386,19 @@ static int ig_pick(ig_rd_t *c, int entity_de, long line)
                        c->d1line);
     c->target = -1;
     if (entity_de == 0) {
+        long seen = 0;
         for (long k = 0; k < c->nde && c->target < 0; k++)
-            if (c->de[k].type == 128)
+            if (c->de[k].type == ty && seen++ == c->nth)
                 c->target = k;
         if (c->target < 0) {
-            c->notfound = ig_fail(c, CF_ENOTFOUND,
-                                  "no rational B-spline surface (entity 128) among the %ld "
-                                  "Directory Entries",
-                                  c->nde);
+            if (c->nth == 0)
+                c->notfound = ig_fail(c, CF_ENOTFOUND,
+                                      "no %s (entity %d) among the %ld "
+                                      "Directory Entries",
+                                      ig_tname(ty), ty, c->nde);
+            else
+                c->notfound = ig_fail(c, CF_ENOTFOUND, "only %ld %s entities (%d), wanted %ld",
+                                      seen, ig_tname(ty), ty, c->nth + 1);
             return CF_OK;
         }
     } else {
@@ -396,11 +410,10 @@ static int ig_pick(ig_rd_t *c, int entity_de, long line)
         }
         c->target = (entity_de - 1) / 2;
         const ig_de_t *d = &c->de[c->target];
-        if (d->type != 128) {
-            c->notfound = ig_fail(c, CF_ENOTFOUND,
-                                  "line %ld (DE %d): entity %d form %d, not a rational B-spline "
-                                  "surface (128)",
-                                  d->line, entity_de, d->type, d->form);
+        if (d->type != ty) {
+            c->notfound =
+                ig_fail(c, CF_ENOTFOUND, "line %ld (DE %d): entity %d form %d, not a %s (%d)",
+                        d->line, entity_de, d->type, d->form, ig_tname(ty), ty);
             c->target = -1;
             return CF_OK;
         }
@@ -1032,6 +1045,41 @@ static void ig_rd_free(ig_rd_t *c)
     }
 }
 
+/* Read the file up to the wanted entity's parameter data and its
+ * matrices (m, *nm); c must be freed with ig_rd_free whatever happens. */
+static int ig_load(ig_rd_t *c, const char *path, int type, int entity_de, long nth, char *msg,
+                   size_t msglen, double (*m)[12], int *nm)
+{
+    memset(c, 0, sizeof *c);
+    c->unit_mm = 1.0;
+    c->path = path;
+    c->msg = msg;
+    c->ml = msglen;
+    c->pd = ',';
+    c->rd = ';';
+    c->target = -1;
+    c->want_type = type;
+    c->nth = nth;
+    c->in = calloc(1, sizeof *c->in);
+    if (!c->in)
+        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    c->in->line = 1;
+    c->in->f = fopen(path, "rb");
+    if (!c->in->f) {
+        int e = errno;
+        return cf_fail(msg, msglen, CF_EIO, "%s: cannot open: %s", path, strerror(e));
+    }
+    int rc = ig_sniff(c);
+    if (!rc)
+        rc = ig_scan(c, entity_de);
+    if (!rc && c->notfound)
+        rc = c->notfound; /* its message is already in msg */
+    for (int i = 1; !rc && i < c->nwant; i++)
+        rc = ig_matrix(c, &c->want[i], m[i - 1]);
+    *nm = c->nwant > 0 ? c->nwant - 1 : 0;
+    return rc;
+}
+
 int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, size_t msglen)
 {
     if (out)
@@ -1039,40 +1087,168 @@ int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, siz
     if (!path || !out || entity_de < 0)
         return cf_fail(msg, msglen, CF_EARG, "cf_iges_read: bad arguments");
     ig_rd_t c;
-    memset(&c, 0, sizeof c);
-    c.unit_mm = 1.0;
-    c.path = path;
-    c.msg = msg;
-    c.ml = msglen;
-    c.pd = ',';
-    c.rd = ';';
-    c.target = -1;
-    c.in = calloc(1, sizeof *c.in);
-    if (!c.in)
-        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
-    c.in->line = 1;
-    c.in->f = fopen(path, "rb");
-    if (!c.in->f) {
-        int e = errno;
-        ig_rd_free(&c);
-        return cf_fail(msg, msglen, CF_EIO, "%s: cannot open: %s", path, strerror(e));
-    }
-    int rc = ig_sniff(&c);
-    if (!rc)
-        rc = ig_scan(&c, entity_de);
-    if (!rc && c.notfound)
-        rc = c.notfound; /* its message is already in msg */
     double m[IG_MAX_CHAIN][12];
-    for (int i = 1; !rc && i < c.nwant; i++)
-        rc = ig_matrix(&c, &c.want[i], m[i - 1]);
+    int nm = 0;
+    int rc = ig_load(&c, path, 128, entity_de, 0, msg, msglen, m, &nm);
     if (!rc)
-        rc = ig_surface(&c, &c.want[0], (const double(*)[12])m, c.nwant - 1, out);
+        rc = ig_surface(&c, &c.want[0], (const double(*)[12])m, nm, out);
     if (!rc && c.unit_mm != 1.0) /* model units to millimetres; knots are unitless */
         for (long k = 0; k < 3L * out->nu * out->nv; k++)
             out->cp[k] *= c.unit_mm;
     ig_rd_free(&c);
     if (rc)
         cf_surf_free(out);
+    return rc;
+}
+
+/* ------------------------------------------------------ entity 126 */
+
+enum { IGC_K, IGC_W, IGC_XYZ, IGC_RANGE };
+
+static int ig_get_creal(ig_it_t *it, int kind, long idx, int p, double *v)
+{
+    ig_fld_t f;
+    ig_next(it->c, it->p, &it->pos, &f); /* counted before: cannot fail */
+    int r = ig_real(&f, v);
+    if (r != IG_NUM_OK) {
+        char what[64];
+        switch (kind) {
+        case IGC_K: snprintf(what, sizeof what, "knot T(%ld)", idx - p); break;
+        case IGC_W: snprintf(what, sizeof what, "weight W(%ld)", idx); break;
+        case IGC_XYZ: snprintf(what, sizeof what, "%c(%ld)", "XYZ"[idx % 3], idx / 3); break;
+        default: snprintf(what, sizeof what, "parameter range V(%ld)", idx); break;
+        }
+        return ig_pfail(it->c, it->p, f.at, CF_EPARSE, "%s '%.*s' %s, not a number", what,
+                        (int)(f.n > 40 ? 40 : f.n), f.s, ig_numwhy(r));
+    }
+    return CF_OK;
+}
+
+void cf_curve_free(nf_curve_t *c)
+{
+    if (c && c->U)
+        free(c->U);
+    if (c)
+        memset(c, 0, sizeof *c);
+}
+
+int cf_curve_alloc(nf_curve_t *c, int p, int n)
+{
+    memset(c, 0, sizeof *c);
+    if (p < 1 || n < 1)
+        return CF_EARG;
+    double *mem = calloc((size_t)NF_CURVE_DOUBLES(n, p), sizeof(double));
+    if (!mem)
+        return CF_ENOMEM;
+    nf_curve_wire(c, p, n, mem);
+    return CF_OK;
+}
+
+/* The 126 in p: K, M, PROP1-4, knots, weights, points, V(0) V(1) [, normal]. */
+static int ig_curve(ig_rd_t *c, const ig_par_t *p, const double (*m)[12], int nm, nf_curve_t *cv)
+{
+    long nf, h[7];
+    size_t at[7];
+    static const char *hname[7] = {"entity type", "K", "M", "PROP1", "PROP2", "PROP3", "PROP4"};
+    int rc = ig_count(c, p, &nf);
+    if (rc)
+        return rc;
+    if (nf < 7)
+        return ig_pfail(c, p, 0, CF_EPARSE,
+                        "%ld parameters; a rational B-spline curve needs at least 7", nf);
+    ig_it_t it = {c, p, 0};
+    for (int i = 0; i < 7; i++)
+        if ((rc = ig_get_int(&it, hname[i], &h[i], &at[i])))
+            return rc;
+    long K = h[1], M = h[2];
+    if (h[0] != 126)
+        return ig_pfail(c, p, at[0], CF_EPARSE, "parameter data of entity %ld, D entry says 126",
+                        h[0]);
+    if (M < 1 || M > NF_MAX_DEGREE)
+        return ig_pfail(c, p, at[2], NF_EDEGREE,
+                        "degree M = %ld; this build (board %s) takes 1 to %d", M, BOARD_NAME,
+                        NF_MAX_DEGREE);
+    if (K < M)
+        return ig_pfail(c, p, at[1], NF_ESIZE,
+                        "K = %ld gives %ld control points, too few for degree %ld", K, K + 1, M);
+    if (K + 1 > NF_MAX_CP)
+        return ig_pfail(c, p, at[1], NF_EBUDGET, "%ld control points; this build takes at most %ld",
+                        K + 1, (long)NF_MAX_CP);
+    long need = 7 + (K + M + 2) + 4 * (K + 1) + 2;
+    if (nf < need)
+        return ig_pfail(c, p, at[1], CF_EPARSE,
+                        "%ld parameters, but K = %ld, M = %ld need %ld (truncated data or wrong "
+                        "counts)",
+                        nf, K, M, need);
+    const int n = (int)K + 1, pd = (int)M;
+    if (cf_curve_alloc(cv, pd, n))
+        return ig_fail(c, CF_ENOMEM, "out of memory for a curve of %d points", n);
+    for (long i = 0; i < n + pd + 1 && !rc; i++)
+        rc = ig_get_creal(&it, IGC_K, i, pd, &cv->U[i]);
+    for (long i = 0; i < n && !rc; i++)
+        rc = ig_get_creal(&it, IGC_W, i, pd, &cv->w[i]);
+    for (long i = 0; i < 3L * n && !rc; i++)
+        rc = ig_get_creal(&it, IGC_XYZ, i, pd, &cv->cp[i]);
+    double range[2];
+    for (int i = 0; i < 2 && !rc; i++)
+        rc = ig_get_creal(&it, IGC_RANGE, i, pd, &range[i]);
+    if (rc)
+        return rc;
+    for (int k = 0; k < nm; k++)
+        for (int i = 0; i < n; i++) {
+            double *P = cv->cp + 3 * i, x = P[0], y = P[1], z = P[2];
+            for (int r = 0; r < 3; r++)
+                P[r] =
+                    m[k][4 * r] * x + m[k][4 * r + 1] * y + m[k][4 * r + 2] * z + m[k][4 * r + 3];
+        }
+    rc = nf_curve_check(cv);
+    if (rc == NF_EKNOTS) {
+        const char *why;
+        int iu = ig_knot_diag(n - 1, pd, cv->U, &why);
+        return ig_pfail(c, p, ig_field_at(c, p, 7 + iu), rc, "%s at T(%d) = %.17g", why, iu - pd,
+                        cv->U[iu]);
+    }
+    if (rc == NF_EWEIGHT) {
+        long i = 0;
+        while (i < n - 1 && cv->w[i] > 0.0)
+            i++;
+        return ig_pfail(c, p, ig_field_at(c, p, 7 + n + pd + 1 + i), rc,
+                        "weight W(%ld) = %.17g is not positive", i, cv->w[i]);
+    }
+    if (rc)
+        return ig_pfail(c, p, 0, rc, "invalid curve: %s", nf_strerror(rc));
+    if (!(range[0] < range[1]) || range[0] < cv->U[pd] || range[1] > cv->U[n])
+        return ig_pfail(c, p, ig_field_at(c, p, 7 + n + pd + 1 + 4L * n), CF_EUNSUPPORTED,
+                        "parameter range [%.17g, %.17g] is not within the knot domain [%.17g, "
+                        "%.17g] (trimmed curves are not supported)",
+                        range[0], range[1], cv->U[pd], cv->U[n]);
+    if (range[0] != cv->U[pd] || range[1] != cv->U[n])
+        return ig_pfail(c, p, ig_field_at(c, p, 7 + n + pd + 1 + 4L * n), CF_EUNSUPPORTED,
+                        "parameter range [%.17g, %.17g] is a part of the knot domain [%.17g, "
+                        "%.17g]: trimmed curves are not supported",
+                        range[0], range[1], cv->U[pd], cv->U[n]);
+    return CF_OK;
+}
+
+int cf_iges_read_curve(const char *path, int entity_de, long nth, nf_curve_t *out, char *msg,
+                       size_t msglen)
+{
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!path || !out || entity_de < 0 || nth < 0)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_read_curve: bad arguments");
+    ig_rd_t c;
+    double m[IG_MAX_CHAIN][12];
+    int nm = 0;
+    int rc = ig_load(&c, path, 126, entity_de, nth, msg, msglen, m, &nm);
+    if (!rc)
+        rc = ig_curve(&c, &c.want[0], (const double(*)[12])m, nm, out);
+    if (!rc && c.unit_mm != 1.0)
+        for (long k = 0; k < 3L * out->n; k++)
+            out->cp[k] *= c.unit_mm;
+    ig_rd_free(&c);
+    if (rc)
+        cf_curve_free(out);
     return rc;
 }
 
@@ -1085,6 +1261,7 @@ typedef struct ig_w {
     char cur[81];
     size_t curlen;
     long seq; /* lines of this section so far */
+    long de;  /* P lines: DE number of the entity they belong to (0: 1) */
 } ig_w_t;
 
 static void ig_wline(ig_w_t *w, const char *data, size_t n)
@@ -1096,7 +1273,7 @@ static void ig_wline(ig_w_t *w, const char *data, size_t n)
     memset(line, ' ', 80);
     memcpy(line, data, n < 72 ? n : 72);
     if (w->sect == 'P')
-        memcpy(line + 64, "       1", 8); /* back pointer to the one entity, DE 1 */
+        snprintf(line + 64, 9, "%8ld", w->de ? w->de : 1L); /* back pointer to its DE */
     snprintf(line + 72, sizeof line - 72, "%c%7ld\n", w->sect, w->seq);
     fwrite(line, 1, 81, w->f);
 }
@@ -1198,12 +1375,17 @@ static void ig_clean(char *dst, const char *src, size_t max, const char *dflt)
         snprintf(dst, max + 1, "%s", dflt);
 }
 
-static void ig_global_out(ig_w_t *w, const nf_surf_t *s, const char *name, const char *fname,
-                          const char *date)
+static double ig_maxabs(const double *x, long n)
 {
     double mx = 0.0;
-    for (long i = 0; i < 3L * s->nu * s->nv; i++)
-        mx = fabs(s->cp[i]) > mx ? fabs(s->cp[i]) : mx;
+    for (long i = 0; i < n; i++)
+        mx = fabs(x[i]) > mx ? fabs(x[i]) : mx;
+    return mx;
+}
+
+static void ig_global_out(ig_w_t *w, double mx, const char *name, const char *fname,
+                          const char *date)
+{
     ig_str_tok(w, ",", ',');                 /* 1 parameter delimiter */
     ig_str_tok(w, ";", ',');                 /* 2 record delimiter */
     ig_str_tok(w, name, ',');                /* 3 product id (sender) */
@@ -1257,7 +1439,7 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
         poly &= s->w[i] == s->w[0];
 
-    ig_w_t w = {NULL, 'P', IG_PCOLS, {0}, 0, 0};
+    ig_w_t w = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
     ig_pdata(&w, s, poly); /* dry run: the D entry needs the line count */
     long np = w.seq;
     if (np > IG_MAX_SEQ)
@@ -1280,15 +1462,15 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     }
 
     long cnt[4];
-    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0};
+    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
     int tl = snprintf(text, sizeof text,
                       "cellfit: rational B-spline surface %s (IGES 5.3, one entity 128)", nm);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
     cnt[0] = ws.seq;
 
-    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0};
-    ig_global_out(&wg, s, nm, fname, date);
+    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), nm, fname, date);
     cnt[1] = wg.seq;
 
     char d[2][96];
@@ -1300,7 +1482,7 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     fputs(d[1], f);
     cnt[2] = 2;
 
-    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0};
+    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
     ig_pdata(&wp, s, poly);
     cnt[3] = wp.seq;
 
@@ -1328,4 +1510,115 @@ int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *
     if (!e || !*e || *end || t < 0)
         t = (long long)time(NULL);
     return cf_iges_write_at(path, s, name, t, msg, msglen);
+}
+
+/* ------------------------------------------------- entity 126 output */
+
+static void ig_cdata(ig_w_t *w, const nf_curve_t *c)
+{
+    int poly = 1;
+    for (int i = 1; c->w && i < c->n; i++)
+        poly &= c->w[i] == c->w[0];
+    ig_int_tok(w, 126);
+    ig_int_tok(w, c->n - 1);
+    ig_int_tok(w, c->p);
+    ig_int_tok(w, 0); /* PROP1: not known to be planar */
+    ig_int_tok(w, 0); /* PROP2: open */
+    ig_int_tok(w, poly);
+    ig_int_tok(w, 0); /* PROP4: not periodic */
+    for (int i = 0; i < c->n + c->p + 1; i++)
+        ig_real_tok(w, c->U[i], ',');
+    for (int i = 0; i < c->n; i++)
+        ig_real_tok(w, c->w ? c->w[i] : 1.0, ',');
+    for (long i = 0; i < 3L * c->n; i++)
+        ig_real_tok(w, c->cp[i], ',');
+    ig_real_tok(w, c->U[c->p], ',');
+    ig_real_tok(w, c->U[c->n], ',');
+    ig_real_tok(w, 0.0, ','); /* normal: unused for a non-planar curve */
+    ig_real_tok(w, 0.0, ',');
+    ig_real_tok(w, 0.0, ';');
+    ig_flush(w);
+}
+
+int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const char *name, char *msg,
+                         size_t msglen)
+{
+    if (!path || !*path || !c || nc < 1 || nc > 9999)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_write_curves: bad arguments");
+    double mx = 0.0;
+    for (int k = 0; k < nc; k++) {
+        int rc = nf_curve_check(&c[k]);
+        if (rc)
+            return cf_fail(msg, msglen, rc, "%s: not written: curve %d invalid: %s", path, k + 1,
+                           nf_strerror(rc));
+        mx = fmax(mx, ig_maxabs(c[k].cp, 3L * c[k].n));
+    }
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long utc = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || utc < 0)
+        utc = (long long)time(NULL);
+    char nm[65], fname[65], date[72], text[160];
+    const char *base = strrchr(path, '/');
+    ig_clean(nm, name, 64, "curves");
+    ig_clean(fname, base ? base + 1 : path, 64, "curves.igs");
+    time_t t = (time_t)utc;
+    struct tm tm;
+    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
+        t = 0;
+        gmtime_r(&t, &tm);
+    }
+    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
+             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    size_t pl = strlen(path);
+    char *tmp = malloc(pl + 5);
+    if (!tmp)
+        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    memcpy(tmp, path, pl);
+    memcpy(tmp + pl, ".tmp", 5);
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        int rc = cf_fail(msg, msglen, CF_EIO, "%s: cannot create: %s", tmp, strerror(errno));
+        free(tmp);
+        return rc;
+    }
+    long cnt[4];
+    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    int tl = snprintf(text, sizeof text,
+                      "cellfit: %d rational B-spline curves %s (IGES 5.3, entity 126)", nc, nm);
+    for (int at = 0; at < tl; at += IG_GCOLS)
+        ig_wline(&ws, text + at, (size_t)(tl - at));
+    cnt[0] = ws.seq;
+    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_global_out(&wg, mx, nm, fname, date);
+    cnt[1] = wg.seq;
+    long pstart = 1;
+    for (int k = 0; k < nc; k++) { /* D entries: each curve's P line count from a dry run */
+        ig_w_t dry = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
+        ig_cdata(&dry, &c[k]);
+        fprintf(f, "%8d%8ld%8d%8d%8d%8d%8d%8d%8s%c%7d\n", 126, pstart, 0, 0, 0, 0, 0, 0, "00000000",
+                'D', 2 * k + 1);
+        fprintf(f, "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", 126, 0, 0, dry.seq, 0, "", "", "BCURVE",
+                k + 1, 'D', 2 * k + 2);
+        pstart += dry.seq;
+    }
+    cnt[2] = 2L * nc;
+    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    for (int k = 0; k < nc; k++) {
+        wp.de = 2L * k + 1;
+        ig_cdata(&wp, &c[k]);
+    }
+    cnt[3] = wp.seq;
+    fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
+    int rc = CF_OK, werr = ferror(f) ? errno : 0;
+    if (fclose(f) && !werr)
+        werr = errno ? errno : EIO;
+    if (!werr && rename(tmp, path))
+        werr = errno;
+    if (werr) {
+        remove(tmp);
+        rc = cf_fail(msg, msglen, CF_EIO, "%s: write failed: %s", path, strerror(werr));
+    }
+    free(tmp);
+    return rc;
 }

@@ -3,6 +3,7 @@
 #ifndef CF_IGES_H
 #define CF_IGES_H
 
+#include "nf_curve.h"
 #include "nf_surf.h"
 #include <stddef.h>
 
@@ -28,5 +29,25 @@ int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *
  * reproducible output and tests. */
 int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, long long utc,
                      char *msg, size_t msglen);
+
+/* Entity 126 (rational B-spline curve), read like the 128: entity_de = 0
+ * takes the nth (0-based) 126 of the Directory, otherwise the 126 at that
+ * DE number; its own transformation matrices (124) and the Global unit are
+ * applied. out is allocated (always with weights; cf_curve_free). Curves
+ * whose parameter range V(0), V(1) is a part of the knot domain (trimmed)
+ * are refused (CF_EUNSUPPORTED). Errors as cf_iges_read, plus
+ * nf_curve_check's. */
+int cf_iges_read_curve(const char *path, int entity_de, long nth, nf_curve_t *out, char *msg,
+                       size_t msglen);
+
+/* nc curves as entities 126 (form 0, DE 1, 3, 5, ...), %.17g numbers (bit
+ * exact on reading back), written through path.tmp and renamed. The
+ * timestamp follows SOURCE_DATE_EPOCH as cf_iges_write. */
+int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const char *name, char *msg,
+                         size_t msglen);
+
+/* Heap storage for a curve of this shape (weights 1); CF_ENOMEM. */
+int cf_curve_alloc(nf_curve_t *c, int p, int n);
+void cf_curve_free(nf_curve_t *c);
 
 #endif
