@@ -62,14 +62,21 @@ static int normalise(double x[3])
     return 0;
 }
 
-/* Orthonormal pair from y1, y2 (Gram-Schmidt); -1 when degenerate. */
+/* Orthonormal pair from y1, y2 (Gram-Schmidt, twice for accuracy); -1
+ * when y2 is (numerically) parallel to y1: what is left of it would be
+ * rounding noise, whose direction means nothing. */
 static int orth(double y1[3], double y2[3])
 {
+    double n2 = sqrt(dot(y2, y2));
     if (normalise(y1))
         return -1;
-    double d = dot(y1, y2);
-    for (int k = 0; k < 3; k++)
-        y2[k] -= d * y1[k];
+    for (int pass = 0; pass < 2; pass++) {
+        double d = dot(y1, y2);
+        for (int k = 0; k < 3; k++)
+            y2[k] -= d * y1[k];
+    }
+    if (!(sqrt(dot(y2, y2)) > 1e-12 * n2))
+        return -1;
     return normalise(y2);
 }
 

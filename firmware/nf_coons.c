@@ -134,7 +134,8 @@ static void merge_plan(const nf_curve_t *a, const nf_curve_t *b, double *Xa, int
                        int *rb)
 {
     const int p = a->p;
-    int ia = p + 1, ib = p + 1, ea = a->n, eb = b->n; /* interior knots [p+1, n) */
+    int ia = p + 1, ea = a->n, eb = b->n; /* interior knots [p+1, n) */
+    int ib = ia;
     *ra = *rb = 0;
     while (ia < ea || ib < eb) {
         double va = ia < ea ? a->U[ia] : HUGE_VAL, vb = ib < eb ? b->U[ib] : HUGE_VAL;

@@ -5,6 +5,7 @@
  * (bilinear patch of four lines, eigenvectors of a rotated diagonal). */
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_surf.h"
 #include "cf_test.h"
 #include "nf_base.h"
 #include "nf_basis.h"
@@ -16,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* ------------------------------------------------------------ helpers */
@@ -492,6 +494,419 @@ static void test_bicubic_beats_bilinear(void **state)
     ref_surf_free(&t);
 }
 
+/* The paper's derivative scaling changes the cross derivatives, not the
+ * boundary curves. */
+static void test_bicubic_scaled_keeps_boundary(void **state)
+{
+    (void)state;
+    ref_seed(33);
+    nf_surf_t t;
+    ref_surf_random(&t, 3, 3, 7, 6, 0, 1, 0, 1, 1, 1);
+    t.w = NULL;
+    nf_coons_t cs;
+    nf_coons3_t b;
+    double *mem, *mem3;
+    bicubic_of(&t, &cs, &b, &mem, &mem3, 1000, 1);
+    nf_surf_t s;
+    surf_for(&cs, &s);
+    assert_int_equal(nf_coons3_surface(&b, &s), NF_OK);
+    check_boundary(&s, &t, 1e-12 * 100);
+    for (int k = 0; k < 4; k++)
+        assert_true(b.s[k] > 0.0 && b.s[k] != 1.0);
+    free(mem);
+    free(mem3);
+    free(s.U);
+    ref_surf_free(&t);
+}
+
+static void test_bicubic_refusals(void **state)
+{
+    (void)state;
+    ref_seed(34);
+    nf_surf_t t;
+    ref_surf_random(&t, 3, 3, 5, 5, 0, 1, 0, 1, 0.5, 2.0); /* rational */
+    nf_curve_t c[4];
+    boundary(&t, c);
+    nf_coons_t cs;
+    int rc;
+    double *mem = prep(&cs, c, 3, 1e-9, &rc);
+    assert_int_equal(rc, NF_OK);
+    int K = nf_coons3_unknowns(&cs);
+    long need = NF_COONS3_DOUBLES(K, cs.c[0].n, cs.c[2].n);
+    double *m3 = malloc(sizeof(double) * (size_t)need);
+    nf_coons3_t b;
+    assert_int_equal(nf_coons3_init(&b, &cs, m3, need), NF_COONS_ERATIONAL);
+    free(mem);
+    /* Polynomial, but too few points for the unknowns: singular. */
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < c[k].n; i++)
+            c[k].w[i] = 1.0;
+    mem = prep(&cs, c, 3, 1e-9, &rc);
+    assert_int_equal(rc, NF_OK);
+    assert_int_equal(nf_coons3_init(&b, &cs, m3, need - 1), NF_COONS_EWORK);
+    assert_int_equal(nf_coons3_init(&b, &cs, m3, need), NF_OK);
+    double Q[3] = {0, 0, 0};
+    assert_int_equal(nf_coons3_add(&b, 1.5, 0.5, Q), NF_EDOMAIN);
+    assert_int_equal(nf_coons3_add(&b, 0.5, 0.5, Q), NF_OK);
+    assert_int_equal(nf_coons3_solve(&b), NF_ESINGULAR);
+    free(mem);
+    free(m3);
+    for (int k = 0; k < 4; k++)
+        curve_free(&c[k]);
+    ref_surf_free(&t);
+}
+
+/* ---------------------------------------------------- refused curves */
+
+static void test_bad_curves_refused(void **state)
+{
+    (void)state;
+    ref_seed(41);
+    nf_surf_t t;
+    ref_surf_random(&t, 2, 2, 5, 4, 0, 1, 0, 1, 1, 1);
+    nf_curve_t c[4];
+    boundary(&t, c);
+    nf_coons_t cs;
+    int rc;
+    /* A corner off by 0.1: refused at tol 0.01 naming the corner, taken at 0.2. */
+    c[3].cp[3 * (c[3].n - 1) + 2] += 0.1;
+    double *mem = prep(&cs, c, 1, 0.01, &rc);
+    assert_int_equal(rc, NF_COONS_ECORNER);
+    assert_int_equal(cs.corner, 3);
+    assert_near(cs.gap, 0.1, 1e-12);
+    free(mem);
+    mem = prep(&cs, c, 1, 0.2, &rc);
+    assert_int_equal(rc, NF_OK);
+    free(mem);
+    c[3].cp[3 * (c[3].n - 1) + 2] -= 0.1;
+    /* Decreasing knots. */
+    double k = c[2].U[3];
+    c[2].U[3] = c[2].U[2] - 0.5;
+    assert_int_equal(nf_coons_doubles(c, 1), NF_EKNOTS);
+    long len = 100000;
+    double *big = malloc(sizeof(double) * (size_t)len);
+    assert_int_equal(nf_coons_prepare(&cs, c, 1, 1.0, big, len), NF_EKNOTS);
+    c[2].U[3] = k;
+    /* A zero weight. */
+    c[1].w[2] = 0.0;
+    assert_int_equal(nf_coons_prepare(&cs, c, 1, 1.0, big, len), NF_EWEIGHT);
+    c[1].w[2] = 1.0;
+    /* Too little storage. */
+    assert_int_equal(nf_coons_prepare(&cs, c, 1, 1.0, big, nf_coons_doubles(c, 1) - 1),
+                     NF_COONS_EWORK);
+    /* Rational curves whose end weights cannot agree around the loop. */
+    c[0].w[c[0].n - 1] = 2.0;
+    assert_int_equal(nf_coons_prepare(&cs, c, 1, 1.0, big, len), NF_COONS_EWEIGHTS);
+    assert_string_equal(nf_coons_strerror(NF_COONS_EWEIGHTS),
+                        "rational boundary curves: end weights cannot be made to agree at the "
+                        "corners");
+    free(big);
+    for (int i = 0; i < 4; i++)
+        curve_free(&c[i]);
+    ref_surf_free(&t);
+}
+
+/* -------------------------------------------------------------- plane */
+
+/* Rotation by angle a about the unit axis n (Rodrigues), row-major. */
+static void rotation(const double n[3], double a, double R[9])
+{
+    double c = cos(a), s = sin(a), C = 1 - c;
+    double x = n[0], y = n[1], z = n[2];
+    double r[9] = {c + x * x * C,     x * y * C - z * s, x * z * C + y * s,
+                   y * x * C + z * s, c + y * y * C,     y * z * C - x * s,
+                   z * x * C - y * s, z * y * C + x * s, c + z * z * C};
+    memcpy(R, r, sizeof r);
+}
+
+static void test_power_closed_form(void **state)
+{
+    (void)state;
+    /* M = R diag(5, 2, 0.5) R^T: eigenvectors are R's columns. */
+    double ax[3] = {1 / sqrt(3.0), 1 / sqrt(3.0), 1 / sqrt(3.0)}, R[9];
+    rotation(ax, 0.7, R);
+    const double lam[3] = {5.0, 2.0, 0.5};
+    double M[3][3] = {{0}};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++)
+                M[i][j] += R[3 * i + k] * lam[k] * R[3 * j + k];
+    double m6[6] = {M[0][0], M[0][1], M[0][2], M[1][1], M[1][2], M[2][2]}, e[3][3], l[3];
+    int it = nf_base_power(m6, e, l);
+    assert_true(it > 0);
+    for (int k = 0; k < 3; k++) {
+        double col[3] = {R[k], R[3 + k], R[6 + k]};
+        double d = fabs(e[k][0] * col[0] + e[k][1] * col[1] + e[k][2] * col[2]);
+        assert_near(d, 1.0, 1e-12); /* same direction up to sign */
+        assert_near(l[k], lam[k], 1e-12 * 5);
+    }
+}
+
+/* Points on a tilted plane (any spread in it): the plane comes back, the
+ * patch lies in it, covers every point's projection and is affine. */
+static void test_plane_patch(void **state)
+{
+    (void)state;
+    ref_seed(51);
+    double ax[3] = {0.6, -0.8, 0.0}, R[9];
+    rotation(ax, 0.4, R);
+    const double c0[3] = {100, -50, 20};
+    const double nrm[3] = {R[2], R[5], R[8]}; /* the rotated z axis */
+    nf_base_plane_t pl;
+    nf_base_plane_init(&pl);
+    enum { M = 5000 };
+    double *pts = malloc(sizeof(double) * 3 * M);
+    for (int k = 0; k < M; k++) {
+        double x = ref_rand(-80, 80), y = ref_rand(-30, 30), *P = pts + 3 * k;
+        for (int i = 0; i < 3; i++)
+            P[i] = c0[i] + R[3 * i] * x + R[3 * i + 1] * y;
+        assert_int_equal(nf_base_plane_add(&pl, P), NF_OK);
+    }
+    assert_int_equal(nf_base_plane_axes(&pl), NF_OK);
+    double d = fabs(pl.e[2][0] * nrm[0] + pl.e[2][1] * nrm[1] + pl.e[2][2] * nrm[2]);
+    assert_near(d, 1.0, 1e-12);
+    assert_true(pl.e[2][2] > 0);
+    for (int k = 0; k < M; k++)
+        nf_base_plane_extent(&pl, pts + 3 * k);
+    nf_surf_t s;
+    nf_surf_wire(&s, 3, 2, 9, 7, malloc(sizeof(double) * NF_SURF_DOUBLES(9, 7, 3, 2)));
+    assert_int_equal(nf_base_plane_patch(&pl, 0.01, &s), NF_OK);
+    assert_int_equal(nf_surf_check(&s), NF_OK);
+    for (int i = 0; i < 63; i++) {
+        const double *P = s.cp + 3 * i;
+        double off = (P[0] - c0[0]) * nrm[0] + (P[1] - c0[1]) * nrm[1] + (P[2] - c0[2]) * nrm[2];
+        assert_true(fabs(off) <= 1e-9);
+    }
+    /* Affine: S(u, v) = S00 + u (S10 - S00) + v (S01 - S00). */
+    double S00[3], S10[3], S01[3];
+    nf_surf_eval(&s, 0, 0, S00);
+    nf_surf_eval(&s, 1, 0, S10);
+    nf_surf_eval(&s, 0, 1, S01);
+    for (int k = 0; k < 50; k++) {
+        double u = ref_rand(0, 1), v = ref_rand(0, 1), S[3], A[3];
+        nf_surf_eval(&s, u, v, S);
+        for (int i = 0; i < 3; i++)
+            A[i] = S00[i] + u * (S10[i] - S00[i]) + v * (S01[i] - S00[i]);
+        assert_true(d3(S, A) <= 1e-10);
+    }
+    /* Every point projects strictly inside: its coordinates along the
+     * patch's edges are in (0, 1). */
+    double eu[3], ev[3], lu = 0, lv = 0;
+    for (int i = 0; i < 3; i++) {
+        eu[i] = S10[i] - S00[i];
+        ev[i] = S01[i] - S00[i];
+        lu += eu[i] * eu[i];
+        lv += ev[i] * ev[i];
+    }
+    for (int k = 0; k < M; k++) {
+        const double *P = pts + 3 * k;
+        double a = 0, b = 0;
+        for (int i = 0; i < 3; i++) {
+            a += (P[i] - S00[i]) * eu[i] / lu;
+            b += (P[i] - S00[i]) * ev[i] / lv;
+        }
+        assert_true(a > 0 && a < 1 && b > 0 && b < 1);
+    }
+    /* Points on a line give no plane; two points are too few. */
+    nf_base_plane_init(&pl);
+    for (int k = 0; k < 10; k++) {
+        double P[3] = {k, 2.0 * k, -1.0 * k};
+        nf_base_plane_add(&pl, P);
+    }
+    assert_int_equal(nf_base_plane_axes(&pl), NF_ESINGULAR);
+    nf_base_plane_init(&pl);
+    nf_base_plane_add(&pl, c0);
+    nf_base_plane_add(&pl, nrm);
+    assert_int_equal(nf_base_plane_axes(&pl), NF_ENODATA);
+    double bad[3] = {0, NAN, 0};
+    assert_int_equal(nf_base_plane_add(&pl, bad), NF_ENONFINITE);
+    free(pts);
+    free(s.U);
+}
+
+/* ---------------------------------------------------------- IGES 126 */
+
+/* A 128 at DE 1, a rational quarter circle (D exponents, parameters over
+ * four P lines) at DE 3, a line at DE 5. */
+static const char *const fixture[] = {
+    "Hand-written fixture: a 128 and two 126 curves (cellfit test_coons).    S      1",
+    "1H,,1H;,4Hpart,8Hcurv.igs,7HFooCAD,3Hv1,32,38,6,308,15,4Hpart,1.D0,     G      1",
+    "2,2HMM,1,1.,15H20240105.101500,1.0D-08,20.,1Ha,1Hb,11,0,                G      2",
+    "15H20240105.101500;                                                     G      3",
+    "     128       1       0       0       0       0       0       000000000D      1",
+    "     128       0       0       2       0                    SURF       0D      2",
+    "     126       3       0       0       0       0       0       000000000D      3",
+    "     126       0       0       4       0                     ARC       0D      4",
+    "     126       7       0       0       0       0       0       000000000D      5",
+    "     126       0       0       2       0                    LINE       0D      6",
+    "128,1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,             1P      1",
+    "0.,0.,0.,1.,0.,0.,0.,1.,0.,1.,1.,0.,0.,1.,0.,1.;                       1P      2",
+    "126,2,2,1,0,0,0,0.D0,0.D0,0.D0,1.D0,1.D0,1.D0,1.0D0,                   3P      3",
+    "7.0710678118654752D-01,1.0D0,1.0D+01,0.0D+00,0.0D+00,                  3P      4",
+    "1.0D+01,1.0D+01,0.0D+00,0.0D+00,1.0D+01,0.0D+00,0.D0,1.D0,             3P      5",
+    "0.D0,0.D0,1.D0;                                                        3P      6",
+    "126,1,1,0,0,1,0,0.,0.,1.,1.,1.,1.,-1.,2.,3.,4.,5.,                     5P      7",
+    "6.,0.,1.,0.,0.,0.;                                                     5P      8",
+    "S      1G      3D      6P      8                                        T      1",
+    NULL};
+
+static char tmpdir[512];
+
+static void tmp_path(char *buf, size_t n, const char *name)
+{
+    const char *d = getenv("CF_TEST_TMP");
+    snprintf(tmpdir, sizeof tmpdir, "%s", d && *d ? d : "/tmp");
+    for (char *p = tmpdir + 1; *p; p++) /* mkdir -p */
+        if (*p == '/') {
+            *p = '\0';
+            mkdir(tmpdir, 0777);
+            *p = '/';
+        }
+    mkdir(tmpdir, 0777);
+    snprintf(buf, n, "%s/cf_coons_%ld_%s", tmpdir, (long)getpid(), name);
+}
+
+static void test_iges126_read_fixture(void **state)
+{
+    (void)state;
+    char path[600], msg[1024];
+    tmp_path(path, sizeof path, "fix.igs");
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    for (int i = 0; fixture[i]; i++)
+        fprintf(f, "%s\n", fixture[i]);
+    fclose(f);
+    nf_curve_t c;
+    assert_int_equal(cf_iges_read_curve(path, 0, 0, &c, msg, sizeof msg), CF_OK);
+    assert_int_equal(c.p, 2);
+    assert_int_equal(c.n, 3);
+    assert_near(c.w[1], 0.70710678118654752, 0);
+    for (int k = 0; k <= 10; k++) { /* on the circle of radius 10 */
+        double P[3];
+        nf_curve_eval(&c, k / 10.0, P);
+        assert_near(sqrt(P[0] * P[0] + P[1] * P[1]), 10.0, 1e-12);
+        assert_near(P[2], 0.0, 0);
+    }
+    double P[3];
+    nf_curve_eval(&c, 0.5, P); /* the symmetric arc's midpoint: 45 degrees */
+    assert_near(P[0], 10.0 / sqrt(2.0), 1e-12);
+    cf_curve_free(&c);
+    assert_int_equal(cf_iges_read_curve(path, 5, 0, &c, msg, sizeof msg), CF_OK);
+    assert_int_equal(c.p, 1);
+    nf_curve_eval(&c, 1.0, P);
+    assert_near(P[0], 4.0, 0);
+    assert_near(P[2], 6.0, 0);
+    cf_curve_free(&c);
+    assert_int_equal(cf_iges_read_curve(path, 0, 1, &c, msg, sizeof msg), CF_OK);
+    assert_int_equal(c.p, 1);
+    cf_curve_free(&c);
+    assert_int_equal(cf_iges_read_curve(path, 0, 2, &c, msg, sizeof msg), CF_ENOTFOUND);
+    assert_non_null(strstr(msg, "only 2"));
+    assert_int_equal(cf_iges_read_curve(path, 1, 0, &c, msg, sizeof msg), CF_ENOTFOUND);
+    assert_non_null(strstr(msg, "not a rational B-spline curve (126)"));
+    /* The 128 in the same file still reads. */
+    nf_surf_t s;
+    assert_int_equal(cf_iges_read(path, 0, &s, msg, sizeof msg), CF_OK);
+    assert_int_equal(s.nu, 2);
+    cf_surf_free(&s);
+    remove(path);
+}
+
+static void test_iges126_roundtrip(void **state)
+{
+    (void)state;
+    ref_seed(61);
+    char path[600], msg[1024];
+    tmp_path(path, sizeof path, "rt.igs");
+    nf_curve_t c[3];
+    random_curve(&c[0], 3, 40, -1.0, 2.0, 0.3, 3.0); /* parameters over many P lines */
+    random_curve(&c[1], 1, 2, 0.0, 1.0, 1.0, 1.0);
+    random_curve(&c[2], 5, 9, 1e-3, 7.0, 1.0, 1.0);
+    c[0].cp[7] = 1.0 / 3.0;
+    c[0].w[3] = 1e-300 * 1e290; /* a small but positive weight */
+    assert_int_equal(cf_iges_write_curves(path, c, 3, "rt", msg, sizeof msg), CF_OK);
+    for (int k = 0; k < 3; k++) {
+        nf_curve_t r;
+        assert_int_equal(cf_iges_read_curve(path, 2 * k + 1, 0, &r, msg, sizeof msg), CF_OK);
+        assert_int_equal(r.p, c[k].p);
+        assert_int_equal(r.n, c[k].n);
+        assert_memory_equal(r.U, c[k].U, sizeof(double) * (size_t)(r.n + r.p + 1));
+        assert_memory_equal(r.cp, c[k].cp, sizeof(double) * 3 * (size_t)r.n);
+        assert_memory_equal(r.w, c[k].w, sizeof(double) * (size_t)r.n);
+        cf_curve_free(&r);
+    }
+    /* Every line 80 columns, P lines pointing back at their DE. */
+    FILE *f = fopen(path, "r");
+    char line[256];
+    long lines = 0;
+    while (fgets(line, sizeof line, f)) {
+        assert_int_equal(strlen(line), 81);
+        if (line[72] == 'P') {
+            long de = strtol(line + 64, NULL, 10);
+            assert_true(de == 1 || de == 3 || de == 5);
+        }
+        lines++;
+    }
+    fclose(f);
+    assert_true(lines > 20);
+    /* Invalid curves are not written. */
+    c[1].U[1] = 0.5;
+    assert_int_equal(cf_iges_write_curves(path, &c[1], 1, "x", msg, sizeof msg), NF_EKNOTS);
+    remove(path);
+    for (int k = 0; k < 3; k++)
+        curve_free(&c[k]);
+}
+
+/* Bad curves in a file: refused with the nf code, naming file and line. */
+static void test_iges126_bad(void **state)
+{
+    (void)state;
+    char path[600], msg[1024];
+    tmp_path(path, sizeof path, "bad.igs");
+    nf_curve_t c;
+    curve_alloc(&c, 1, 3);
+    double U[5] = {0, 0, 0.5, 1, 1};
+    memcpy(c.U, U, sizeof U);
+    for (int i = 0; i < 9; i++)
+        c.cp[i] = i;
+    assert_int_equal(cf_iges_write_curves(path, &c, 1, "bad", msg, sizeof msg), CF_OK);
+    /* Edit the written file: parameter 13 (weight W(1)) to 0.0, then
+     * parameter 9 (knot T(1) = 0.5) to 2.0 (all on the first P line). */
+    static const int field[2] = {13, 9};
+    static const char *const val[2] = {"0.0,", "2.0,"};
+    for (int what = 0; what < 2; what++) {
+        FILE *f = fopen(path, "r+");
+        char buf[8192];
+        size_t n = fread(buf, 1, sizeof buf - 1, f);
+        buf[n] = 0;
+        char *k = strstr(buf, "126,2,1,");
+        assert_non_null(k);
+        for (int cm = 0; cm < field[what]; cm++)
+            k = strchr(k, ',') + 1;
+        if (what)
+            assert_memory_equal(k, "0.5,", 4);
+        else
+            assert_memory_equal(k, "1.0,", 4);
+        memcpy(k, val[what], 4);
+        if (what) { /* the weight back to 1 first */
+            char *w = strstr(buf, "126,2,1,");
+            for (int cm = 0; cm < field[0]; cm++)
+                w = strchr(w, ',') + 1;
+            memcpy(w, "1.0,", 4);
+        }
+        rewind(f);
+        fwrite(buf, 1, n, f);
+        fclose(f);
+        nf_curve_t r;
+        int rc = cf_iges_read_curve(path, 0, 0, &r, msg, sizeof msg);
+        assert_int_equal(rc, what ? NF_EKNOTS : NF_EWEIGHT);
+        assert_non_null(strstr(msg, "line "));
+        assert_non_null(strstr(msg, what ? "knot vector decreases" : "weight W(1)"));
+    }
+    remove(path);
+    curve_free(&c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -502,6 +917,14 @@ int main(void)
         cmocka_unit_test(test_bilinear_of_lines),
         cmocka_unit_test(test_bicubic_reproduces_bicubic),
         cmocka_unit_test(test_bicubic_beats_bilinear),
+        cmocka_unit_test(test_bicubic_scaled_keeps_boundary),
+        cmocka_unit_test(test_bicubic_refusals),
+        cmocka_unit_test(test_bad_curves_refused),
+        cmocka_unit_test(test_power_closed_form),
+        cmocka_unit_test(test_plane_patch),
+        cmocka_unit_test(test_iges126_read_fixture),
+        cmocka_unit_test(test_iges126_roundtrip),
+        cmocka_unit_test(test_iges126_bad),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,668 @@
+/* cmd_base.c: `cellfit base`: a base surface for parameterising scattered
+ * x y z points (Piegl & Tiller 2001, Section 2), written as IGES 128 for
+ * `cellfit fit --base`: a plane patch over the points' plane (no curves),
+ * or from four boundary curves (IGES 126) the bilinear Coons patch, the
+ * bicubic Coons patch with cross derivatives fitted to a random subset of
+ * the points, or a tensor-product fit to such a subset, the subset's
+ * parameters coming from projection onto the bilinear patch. Points are
+ * streamed (one or two passes); memory is a function of the nets only.
+ * `cellfit base --extract SURF.igs --out CURVES.igs` writes a surface's
+ * four boundary curves as entities 126. */
+#include "cf_cli.h"
+#include "cf_err.h"
+#include "cf_iges.h"
+#include "cf_points.h"
+#include "cf_seedgrid.h"
+#include "cf_surf.h"
+#include "nf_base.h"
+#include "nf_coons.h"
+#include "nf_err.h"
+#include "nf_fit.h"
+#include "nf_project.h"
+#include "nf_refine.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define BATCH 4096
+#define PROJ_TOL 1e-9
+
+enum { M_PLANE, M_BILINEAR, M_BICUBIC, M_TENSOR };
+static const char *const method_name[] = {"plane", "bilinear", "bicubic", "tensor"};
+
+typedef struct base_opts {
+    const char *points, *curves, *out, *extract;
+    int method, json, noscale, have_de;
+    long de[4], nu, nv, degree, seed, entity;
+    double subset, tol, margin;
+} base_opts_t;
+
+static int parse_de(const char *s, long de[4])
+{
+    char buf[128];
+    if (strlen(s) >= sizeof buf)
+        return -1;
+    strcpy(buf, s);
+    char *save = NULL, *tok = strtok_r(buf, ",", &save);
+    for (int k = 0; k < 4; k++, tok = strtok_r(NULL, ",", &save))
+        if (!tok || cli_int(tok, 1, 9999999, &de[k]) || de[k] % 2 == 0)
+            return -1;
+    return tok ? -1 : 0;
+}
+
+static int parse(int argc, char **argv, base_opts_t *o)
+{
+    memset(o, 0, sizeof *o);
+    o->method = -1;
+    o->subset = 30.0;
+    o->seed = 1;
+    o->tol = 1e-3;
+    o->margin = 0.02;
+    for (int i = 1; i < argc;) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int takes = 1;
+        if (!strcmp(a, "--json"))
+            o->json = 1, takes = 0;
+        else if (!strcmp(a, "--no-scale"))
+            o->noscale = 1, takes = 0;
+        else if (!v)
+            return cli_error("base", CLI_USAGE, "option %s needs a value", a);
+        else if (!strcmp(a, "--points"))
+            o->points = v;
+        else if (!strcmp(a, "--curves"))
+            o->curves = v;
+        else if (!strcmp(a, "--out"))
+            o->out = v;
+        else if (!strcmp(a, "--extract"))
+            o->extract = v;
+        else if (!strcmp(a, "--de")) {
+            if (parse_de(v, o->de))
+                return cli_error("base", CLI_USAGE, "--de '%s': need four odd DE numbers a,b,c,d",
+                                 v);
+            o->have_de = 1;
+        } else if (!strcmp(a, "--entity")) {
+            if (cli_int(v, 1, 9999999, &o->entity))
+                return cli_error("base", CLI_USAGE, "--entity '%s': need a DE number", v);
+        } else if (!strcmp(a, "--method")) {
+            o->method = -2;
+            for (int m = 0; m < 4; m++)
+                if (!strcmp(v, method_name[m]))
+                    o->method = m;
+            if (o->method < 0)
+                return cli_error("base", CLI_USAGE,
+                                 "--method '%s': plane, bilinear, bicubic or tensor", v);
+        } else if (!strcmp(a, "--subset")) {
+            if (cli_double(v, &o->subset) || !(o->subset > 0) || o->subset > 100)
+                return cli_error("base", CLI_USAGE, "--subset '%s': percent of the points, 0..100",
+                                 v);
+        } else if (!strcmp(a, "--seed")) {
+            if (cli_int(v, 0, 1L << 62, &o->seed))
+                return cli_error("base", CLI_USAGE, "--seed '%s'", v);
+        } else if (!strcmp(a, "--nu")) {
+            if (cli_int(v, 2, NF_MAX_CP, &o->nu))
+                return cli_error("base", CLI_USAGE, "--nu '%s'", v);
+        } else if (!strcmp(a, "--nv")) {
+            if (cli_int(v, 2, NF_MAX_CP, &o->nv))
+                return cli_error("base", CLI_USAGE, "--nv '%s'", v);
+        } else if (!strcmp(a, "--degree")) {
+            if (cli_int(v, 1, NF_MAX_DEGREE, &o->degree))
+                return cli_error("base", CLI_USAGE, "--degree '%s': 1..%d", v, NF_MAX_DEGREE);
+        } else if (!strcmp(a, "--tol")) {
+            if (cli_double(v, &o->tol) || !(o->tol >= 0))
+                return cli_error("base", CLI_USAGE, "--tol '%s': corner tolerance, mm >= 0", v);
+        } else if (!strcmp(a, "--margin")) {
+            if (cli_double(v, &o->margin) || !(o->margin >= 0) || o->margin > 1)
+                return cli_error("base", CLI_USAGE, "--margin '%s': fraction 0..1", v);
+        } else
+            return cli_error("base", CLI_USAGE, "unknown option '%s'", a);
+        i += 1 + takes;
+    }
+    if (!o->out)
+        return cli_error("base", CLI_USAGE,
+                         "usage: cellfit base --points FILE [--curves CURVES.igs [--de a,b,c,d]] "
+                         "[--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S] "
+                         "[--nu N --nv N --degree P] --out BASE.igs [--json]; or cellfit base "
+                         "--extract SURF.igs --out CURVES.igs");
+    if (o->extract)
+        return CLI_OK;
+    if (o->method < 0)
+        o->method = o->curves ? M_BILINEAR : M_PLANE;
+    if (o->method != M_PLANE && !o->curves)
+        return cli_error("base", CLI_USAGE, "--method %s needs --curves CURVES.igs",
+                         method_name[o->method]);
+    if (o->method == M_PLANE && o->curves)
+        return cli_error("base", CLI_USAGE, "--method plane takes no --curves");
+    if (o->method != M_BILINEAR && !o->points)
+        return cli_error("base", CLI_USAGE, "--method %s needs --points FILE",
+                         method_name[o->method]);
+    if ((o->method == M_BILINEAR || o->method == M_BICUBIC) && o->degree)
+        return cli_error("base", CLI_USAGE,
+                         "--degree applies to plane and tensor; a Coons patch takes the "
+                         "curves' degrees (at least 3 for bicubic)");
+    return CLI_OK;
+}
+
+/* ------------------------------------------------------------ helpers */
+
+static unsigned long long g_rng;
+
+static double urand(void)
+{
+    g_rng ^= g_rng << 13;
+    g_rng ^= g_rng >> 7;
+    g_rng ^= g_rng << 17;
+    return (double)(g_rng >> 11) / 9007199254740992.0;
+}
+
+static int extract(const base_opts_t *o)
+{
+    char msg[512];
+    nf_surf_t s;
+    int rc = cf_iges_read(o->extract, (int)o->entity, &s, msg, sizeof msg);
+    if (rc)
+        return cli_error("base", CLI_USAGE, "%s", msg);
+    nf_curve_t c[4];
+    memset(c, 0, sizeof c);
+    int ec = CLI_OK;
+    /* C0: v = v0, C1: v = v1 (rows), D0: u = u0, D1: u = u1 (columns). */
+    for (int k = 0; k < 4 && !ec; k++) {
+        int col = k >= 2, n = col ? s.nv : s.nu, p = col ? s.q : s.p;
+        int idx = k == 1 ? s.nv - 1 : (k == 3 ? s.nu - 1 : 0);
+        if (cf_curve_alloc(&c[k], p, n)) {
+            ec = cli_error("base", CLI_FAIL, "out of memory");
+            break;
+        }
+        memcpy(c[k].U, col ? s.V : s.U, sizeof(double) * (size_t)(n + p + 1));
+        for (int i = 0; i < n; i++) {
+            long at = col ? idx + (long)i * s.nu : i + (long)idx * s.nu;
+            memcpy(c[k].cp + 3 * i, s.cp + 3 * at, 3 * sizeof(double));
+            c[k].w[i] = s.w[at];
+        }
+    }
+    if (!ec && cf_iges_write_curves(o->out, c, 4, "cellfit boundary curves", msg, sizeof msg))
+        ec = cli_error("base", CLI_FAIL, "%s", msg);
+    if (!ec && !o->json)
+        printf("cellfit base: boundary curves of %s (C0 v=v0, C1 v=v1, D0 u=u0, D1 u=u1) in %s\n",
+               o->extract, o->out);
+    if (!ec && o->json) {
+        cli_json_t j;
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "extract", o->extract);
+        cli_json_int(&j, "curves", 4);
+        cli_json_str(&j, "out", o->out);
+        cli_json_end(&j);
+    }
+    for (int k = 0; k < 4; k++)
+        cf_curve_free(&c[k]);
+    cf_surf_free(&s);
+    return ec;
+}
+
+/* Uniform knot vector on [0, 1]. */
+static void uniform_knots(double *U, int n, int p)
+{
+    for (int i = 0; i <= p; i++) {
+        U[i] = 0.0;
+        U[n + i] = 1.0;
+    }
+    for (int i = p + 1; i < n; i++)
+        U[i] = (double)(i - p) / (n - p);
+}
+
+/* Knots that bring a net of n to want points: midpoints of the widest
+ * spans, split one at a time (sorted on return); r = want - n. */
+static int split_knots(const double *U, int n, int p, int r, double *X)
+{
+    int nd = n - p + 1; /* distinct breakpoints */
+    double *b = malloc(sizeof(double) * (size_t)(nd + r));
+    if (!b)
+        return -1;
+    int m = 0;
+    for (int i = p; i <= n; i++)
+        if (m == 0 || U[i] > b[m - 1])
+            b[m++] = U[i];
+    for (int t = 0; t < r; t++) {
+        int w = 0;
+        for (int i = 1; i + 1 < m; i++)
+            w = b[i + 1] - b[i] > b[w + 1] - b[w] ? i : w;
+        memmove(b + w + 2, b + w + 1, sizeof(double) * (size_t)(m - w - 1));
+        b[w + 1] = 0.5 * (b[w] + b[w + 2]);
+        X[t] = b[w + 1];
+        m++;
+    }
+    free(b);
+    for (int i = 1; i < r; i++) /* insertion sort */
+        for (int j = i; j > 0 && X[j] < X[j - 1]; j--) {
+            double t = X[j];
+            X[j] = X[j - 1];
+            X[j - 1] = t;
+        }
+    return 0;
+}
+
+/* Refine s (heap) in place to at least nu x nv control points. */
+static int refine_to(nf_surf_t *s, int nu, int nv)
+{
+    for (int dir = 0; dir < 2; dir++) {
+        int have = dir ? s->nv : s->nu, want = dir ? nv : nu, r = want - have;
+        if (r <= 0)
+            continue;
+        double *X = malloc(sizeof(double) * (size_t)r);
+        nf_surf_t o;
+        if (!X || split_knots(dir ? s->V : s->U, have, dir ? s->q : s->p, r, X) ||
+            cf_surf_alloc(&o, s->p, s->q, dir ? s->nu : want, dir ? want : s->nv)) {
+            free(X);
+            return CF_ENOMEM;
+        }
+        int rc = dir ? nf_refine_v(s, X, r, &o) : nf_refine_u(s, X, r, &o);
+        free(X);
+        if (rc) {
+            cf_surf_free(&o);
+            return rc;
+        }
+        cf_surf_free(s);
+        *s = o;
+    }
+    return NF_OK;
+}
+
+typedef struct result {
+    long points, used;
+    double gap, normal[3], lam[3], rms;
+    int iters, has_rms;
+} result_t;
+
+/* Stream the points; call fn on each (or on a seeded random subset). */
+typedef int (*point_fn)(void *ctx, const double Q[3], long line);
+
+static int stream(const base_opts_t *o, cf_points_t *r, double frac, point_fn fn, void *ctx,
+                  long *seen, long *used)
+{
+    char msg[512];
+    double *buf = malloc(sizeof(double) * 3 * BATCH);
+    if (!buf)
+        return cli_error("base", CLI_FAIL, "out of memory");
+    if (cf_points_rewind(r)) {
+        free(buf);
+        return cli_error("base", CLI_USAGE, "%s: cannot read the points again", o->points);
+    }
+    g_rng = 0x9E3779B97F4A7C15ull ^ ((unsigned long long)o->seed * 0xD1B54A32D192ED03ull);
+    if (!g_rng)
+        g_rng = 1;
+    long got, n = 0, u = 0;
+    int ec = CLI_OK;
+    while (!ec && (got = cf_points_read(r, buf, BATCH, msg, sizeof msg)) > 0) {
+        for (long k = 0; k < got && !ec; k++) {
+            n++;
+            if (frac < 1.0 && urand() >= frac)
+                continue;
+            u++;
+            ec = fn(ctx, buf + 3 * k, cf_points_line(r));
+        }
+    }
+    free(buf);
+    if (!ec && got < 0)
+        ec = cli_error("base", CLI_USAGE, "%s", msg);
+    if (!ec && n == 0)
+        ec = cli_error("base", CLI_USAGE, "%s: no points", o->points);
+    *seen = n;
+    *used = u;
+    return ec;
+}
+
+/* -------------------------------------------------------------- plane */
+
+typedef struct plane_ctx {
+    nf_base_plane_t pl;
+    const char *path;
+    int pass;
+} plane_ctx_t;
+
+static int plane_point(void *ctx, const double Q[3], long line)
+{
+    plane_ctx_t *c = ctx;
+    if (c->pass == 2) {
+        nf_base_plane_extent(&c->pl, Q);
+        return CLI_OK;
+    }
+    if (nf_base_plane_add(&c->pl, Q))
+        return cli_error("base", CLI_USAGE, "%s:%ld: %s", c->path, line,
+                         nf_strerror(NF_ENONFINITE));
+    return CLI_OK;
+}
+
+static int make_plane(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, result_t *res)
+{
+    plane_ctx_t c;
+    nf_base_plane_init(&c.pl);
+    c.path = o->points;
+    c.pass = 1;
+    int ec = stream(o, r, 1.0, plane_point, &c, &res->points, &res->used);
+    if (ec)
+        return ec;
+    int rc = nf_base_plane_axes(&c.pl);
+    if (rc == NF_ENODATA)
+        return cli_error("base", CLI_USAGE, "%s: %ld points; a plane needs at least 3", o->points,
+                         res->points);
+    if (rc)
+        return cli_error("base", CLI_USAGE, "%s: the points lie on a line: no plane through them",
+                         o->points);
+    c.pass = 2;
+    if ((ec = stream(o, r, 1.0, plane_point, &c, &res->points, &res->used)))
+        return ec;
+    int p = o->degree ? (int)o->degree : 3;
+    int nu = o->nu ? (int)o->nu : 16, nv = o->nv ? (int)o->nv : 16;
+    if (nu <= p || nv <= p)
+        return cli_error("base", CLI_USAGE, "net %d x %d too small for degree %d", nu, nv, p);
+    if ((long)nu * nv > NF_MAX_CP)
+        return cli_error("base", CLI_USAGE, "net %d x %d exceeds the board's %ld control points",
+                         nu, nv, (long)NF_MAX_CP);
+    if (cf_surf_alloc(out, p, p, nu, nv))
+        return cli_error("base", CLI_FAIL, "out of memory");
+    nf_base_plane_patch(&c.pl, o->margin, out);
+    memcpy(res->normal, c.pl.e[2], sizeof res->normal);
+    memcpy(res->lam, c.pl.lam, sizeof res->lam);
+    res->iters = c.pl.iters;
+    return CLI_OK;
+}
+
+/* -------------------------------------------------------------- Coons */
+
+static int read_curves(const base_opts_t *o, nf_curve_t c[4])
+{
+    char msg[512];
+    memset(c, 0, 4 * sizeof *c);
+    for (int k = 0; k < 4; k++) {
+        int rc = cf_iges_read_curve(o->curves, o->have_de ? (int)o->de[k] : 0, o->have_de ? 0 : k,
+                                    &c[k], msg, sizeof msg);
+        if (rc) {
+            for (int j = 0; j < k; j++)
+                cf_curve_free(&c[j]);
+            if (rc == CF_ENOTFOUND && !o->have_de)
+                return cli_error("base", CLI_USAGE, "%s (four boundary curves needed)", msg);
+            return cli_error("base", CLI_USAGE, "%s", msg);
+        }
+    }
+    return CLI_OK;
+}
+
+static int prepare(const base_opts_t *o, const nf_curve_t c[4], int pmin, nf_coons_t *cs,
+                   double **mem)
+{
+    long need = nf_coons_doubles(c, pmin);
+    if (need < 0)
+        return cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror((int)need));
+    *mem = malloc(sizeof(double) * (size_t)need);
+    if (!*mem)
+        return cli_error("base", CLI_FAIL, "out of memory");
+    int rc = nf_coons_prepare(cs, c, pmin, o->tol, *mem, need);
+    if (rc == NF_COONS_ECORNER) {
+        static const char *cn[4] = {"(0,0)", "(1,0)", "(0,1)", "(1,1)"};
+        char which[64] = "curves 1-4";
+        if (o->have_de)
+            snprintf(which, sizeof which, "DE %ld,%ld,%ld,%ld", o->de[0], o->de[1], o->de[2],
+                     o->de[3]);
+        return cli_error("base", CLI_USAGE,
+                         "%s: boundary curves (%s) do not meet at corner (u,v) = %s: gap %.6g mm "
+                         "> --tol %g",
+                         o->curves, which, cn[cs->corner], cs->gap, o->tol);
+    }
+    if (rc)
+        return cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror(rc));
+    return CLI_OK;
+}
+
+/* Projection of points onto the bilinear patch, then a consumer. */
+typedef struct proj_ctx {
+    cf_seedgrid_t g;
+    const char *path;
+    nf_coons3_t *b3; /* bicubic: rows of Q = S(u, v) */
+    nf_fit_t *fit;   /* tensor: rows of the fit */
+    double ss;       /* sum of squared projection distances */
+} proj_ctx_t;
+
+static int proj_point(void *ctx, const double Q[3], long line)
+{
+    proj_ctx_t *c = ctx;
+    if (!(Q[0] - Q[0] == 0.0) || !(Q[1] - Q[1] == 0.0) || !(Q[2] - Q[2] == 0.0))
+        return cli_error("base", CLI_USAGE, "%s:%ld: %s", c->path, line,
+                         nf_strerror(NF_ENONFINITE));
+    double u0, v0;
+    nf_proj_t pr;
+    cf_seedgrid_start(&c->g, Q, &u0, &v0);
+    nf_project(c->g.seed.s, Q, u0, v0, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+    c->ss += pr.dist * pr.dist;
+    int rc = c->b3 ? nf_coons3_add(c->b3, pr.u, pr.v, Q) : nf_fit_add(c->fit, pr.u, pr.v, Q, 1.0);
+    if (rc)
+        return cli_error("base", CLI_USAGE, "%s:%ld: %s", c->path, line, nf_strerror(rc));
+    return CLI_OK;
+}
+
+static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, result_t *res)
+{
+    nf_curve_t c[4];
+    int ec = read_curves(o, c);
+    if (ec)
+        return ec;
+    nf_coons_t cs;
+    double *mem = NULL, *mem3 = NULL, *fmem = NULL;
+    nf_surf_t bil, fb;
+    memset(&bil, 0, sizeof bil);
+    memset(&fb, 0, sizeof fb);
+    proj_ctx_t pc;
+    memset(&pc, 0, sizeof pc);
+    ec = prepare(o, c, o->method == M_BICUBIC ? 3 : 1, &cs, &mem);
+    if (ec)
+        goto done;
+    res->gap = cs.gap;
+    int p, q, nu, nv;
+    nf_coons_size(&cs, &p, &q, &nu, &nv);
+    if ((long)nu * nv > NF_MAX_CP) {
+        ec =
+            cli_error("base", CLI_USAGE, "Coons net %d x %d exceeds the board's %ld control points",
+                      nu, nv, (long)NF_MAX_CP);
+        goto done;
+    }
+    if (cf_surf_alloc(&bil, p, q, nu, nv)) {
+        ec = cli_error("base", CLI_FAIL, "out of memory");
+        goto done;
+    }
+    int rc = nf_coons_bilinear(&cs, &bil);
+    if (rc) {
+        ec = cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror(rc));
+        goto done;
+    }
+    if (o->method == M_BILINEAR) {
+        *out = bil;
+        memset(&bil, 0, sizeof bil);
+        goto refine;
+    }
+    pc.path = o->points;
+    if (cf_seedgrid_init(&pc.g, &bil, 8)) {
+        ec = cli_error("base", CLI_FAIL, "out of memory");
+        goto done;
+    }
+    nf_coons3_t b3;
+    nf_fit_t fit;
+    nf_arena_t ar;
+    if (o->method == M_BICUBIC) {
+        int K = nf_coons3_unknowns(&cs);
+        long need = NF_COONS3_DOUBLES(K, nu, nv);
+        mem3 = malloc(sizeof(double) * (size_t)need);
+        if (!mem3) {
+            ec = cli_error("base", CLI_FAIL, "out of memory");
+            goto done;
+        }
+        if ((rc = nf_coons3_init(&b3, &cs, mem3, need))) {
+            ec = cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror(rc));
+            goto done;
+        }
+        pc.b3 = &b3;
+    } else {
+        /* The fit's space: --nu/--nv/--degree (uniform knots), else the
+         * bilinear patch's; P0 (the beta term's nominal) is the bilinear
+         * patch sampled at the Greville points. */
+        int fp = o->degree ? (int)o->degree : p, fq = o->degree ? (int)o->degree : q;
+        int fnu = o->nu ? (int)o->nu : nu, fnv = o->nv ? (int)o->nv : nv;
+        if (fnu <= fp || fnv <= fq || (long)fnu * fnv > NF_MAX_CP) {
+            ec = cli_error("base", CLI_USAGE, "net %d x %d not usable with degree %d x %d", fnu,
+                           fnv, fp, fq);
+            goto done;
+        }
+        if (o->nu || o->nv || o->degree) {
+            if (cf_surf_alloc(&fb, fp, fq, fnu, fnv)) {
+                ec = cli_error("base", CLI_FAIL, "out of memory");
+                goto done;
+            }
+            uniform_knots(fb.U, fnu, fp);
+            uniform_knots(fb.V, fnv, fq);
+            for (int j = 0; j < fnv; j++)
+                for (int i = 0; i < fnu; i++)
+                    nf_surf_eval(&bil, nf_greville(i, fp, fb.U), nf_greville(j, fq, fb.V),
+                                 fb.cp + 3 * (i + (long)j * fnu));
+        } else if (cf_surf_copy(&fb, &bil)) {
+            ec = cli_error("base", CLI_FAIL, "out of memory");
+            goto done;
+        }
+        long need = nf_fit_bytes(fb.nu, fb.nv, fb.p, fb.q, NF_SOLVER_AUTO);
+        if (need < 0 || need > NF_ARENA_BYTES) {
+            ec = cli_error("base", CLI_USAGE, "a %d x %d fit needs %ld bytes; board %s allows %ld",
+                           fb.nu, fb.nv, need, BOARD_NAME, (long)NF_ARENA_BYTES);
+            goto done;
+        }
+        fmem = malloc((size_t)need);
+        if (!fmem) {
+            ec = cli_error("base", CLI_FAIL, "out of memory");
+            goto done;
+        }
+        nf_arena_init(&ar, fmem, (size_t)need);
+        nf_fit_params_t prm = {NF_ALPHA_DEFAULT, NF_BETA_DEFAULT, NF_SOLVER_AUTO};
+        if ((rc = nf_fit_init(&fit, &fb, &prm, &ar))) {
+            ec = cli_error("base", CLI_USAGE, "tensor fit: %s", nf_strerror(rc));
+            goto done;
+        }
+        pc.fit = &fit;
+    }
+    ec = stream(o, r, o->subset / 100.0, proj_point, &pc, &res->points, &res->used);
+    if (ec)
+        goto done;
+    if (o->method == M_BICUBIC) {
+        rc = nf_coons3_solve(&b3);
+        if (rc) {
+            ec = cli_error("base", CLI_USAGE,
+                           "bicubic Coons: %ld points (%.3g %%) do not determine the %d cross-"
+                           "derivative unknowns: %s (give a larger --subset)",
+                           res->used, o->subset, b3.K, nf_strerror(rc));
+            goto done;
+        }
+        if (!o->noscale)
+            nf_coons3_scale(&b3);
+        if (cf_surf_alloc(out, p, q, nu, nv)) {
+            ec = cli_error("base", CLI_FAIL, "out of memory");
+            goto done;
+        }
+        nf_coons3_surface(&b3, out);
+    } else {
+        nf_solve_opts_t so = NF_SOLVE_OPTS_DEFAULT;
+        nf_solve_stats_t st;
+        rc = nf_fit_finish(&fit);
+        if (!rc)
+            rc = nf_fit_solve(&fit, NF_SOLVER_AUTO, &so, &st);
+        if (rc) {
+            ec = cli_error("base", CLI_USAGE, "tensor fit to %ld points: %s", res->used,
+                           nf_strerror(rc));
+            goto done;
+        }
+        memcpy(fb.cp, fit.P, sizeof(double) * 3 * (size_t)fb.nu * (size_t)fb.nv);
+        *out = fb;
+        memset(&fb, 0, sizeof fb);
+    }
+    res->rms = res->used ? sqrt(pc.ss / (double)res->used) : 0.0;
+    res->has_rms = 1;
+refine:
+    if (o->method != M_TENSOR && (o->nu > out->nu || o->nv > out->nv)) {
+        rc = refine_to(out, (int)o->nu, (int)o->nv);
+        if (rc)
+            ec = cli_error("base", CLI_FAIL, "knot insertion: %s", cf_strerror(rc));
+    }
+done:
+    cf_seedgrid_free(&pc.g);
+    free(mem);
+    free(mem3);
+    free(fmem);
+    cf_surf_free(&bil);
+    cf_surf_free(&fb);
+    for (int k = 0; k < 4; k++)
+        cf_curve_free(&c[k]);
+    if (ec)
+        cf_surf_free(out);
+    return ec;
+}
+
+int cmd_base(int argc, char **argv)
+{
+    base_opts_t o;
+    int ec = parse(argc, argv, &o);
+    if (ec)
+        return ec;
+    if (o.extract)
+        return extract(&o);
+    char msg[512];
+    double t0 = cli_now();
+    cf_points_t *r = NULL;
+    if (o.points && cf_points_open(&r, o.points, 3, msg, sizeof msg))
+        return cli_error("base", CLI_USAGE, "%s", msg);
+    nf_surf_t out;
+    memset(&out, 0, sizeof out);
+    result_t res;
+    memset(&res, 0, sizeof res);
+    ec = o.method == M_PLANE ? make_plane(&o, r, &out, &res) : make_coons(&o, r, &out, &res);
+    cf_points_close(r);
+    if (ec)
+        return ec;
+    if (cf_iges_write(o.out, &out, "cellfit base surface", msg, sizeof msg)) {
+        cf_surf_free(&out);
+        return cli_error("base", CLI_FAIL, "%s", msg);
+    }
+    double t1 = cli_now();
+    if (o.json) {
+        cli_json_t j;
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "method", method_name[o.method]);
+        cli_json_int(&j, "points", res.points);
+        cli_json_int(&j, "used", res.used);
+        cli_json_int(&j, "nu", out.nu);
+        cli_json_int(&j, "nv", out.nv);
+        cli_json_int(&j, "p", out.p);
+        cli_json_int(&j, "q", out.q);
+        if (o.method == M_PLANE) {
+            cli_json_num(&j, "nx", res.normal[0]);
+            cli_json_num(&j, "ny", res.normal[1]);
+            cli_json_num(&j, "nz", res.normal[2]);
+            cli_json_num(&j, "spread_normal", sqrt(res.lam[2] > 0 ? res.lam[2] : 0));
+            cli_json_int(&j, "iterations", res.iters);
+        } else {
+            cli_json_num(&j, "corner_gap", res.gap);
+        }
+        if (res.has_rms)
+            cli_json_num(&j, "rms_to_bilinear", res.rms);
+        cli_json_num(&j, "seconds", t1 - t0);
+        cli_json_str(&j, "out", o.out);
+        cli_json_end(&j);
+    } else {
+        printf("cellfit base: %s base surface, %d x %d control points, degree %d x %d\n",
+               method_name[o.method], out.nu, out.nv, out.p, out.q);
+        if (o.method == M_PLANE)
+            printf("  plane through %ld points: normal (%.6f, %.6f, %.6f), %d power iterations\n",
+                   res.points, res.normal[0], res.normal[1], res.normal[2], res.iters);
+        else
+            printf("  boundary curves from %s, corners within %.3g mm\n", o.curves, res.gap);
+        if (res.has_rms)
+            printf("  %ld of %ld points (%.3g %%, seed %ld) projected onto the bilinear patch, rms "
+                   "distance %.6g\n",
+                   res.used, res.points, o.subset, o.seed, res.rms);
+        printf("  %.3f s, wrote %s\n", t1 - t0, o.out);
+    }
+    cf_surf_free(&out);
+    return CLI_OK;
+}

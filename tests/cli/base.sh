@@ -1,0 +1,117 @@
+#!/bin/sh
+# tests/cli/base.sh CELLFIT: `cellfit base` end to end (issue 3): the
+# synthetic part's x y z points and its boundary curves (IGES 126), every
+# kind of base surface built from them, a fit through each, and the fit
+# checked against the true part; refusals with exit 2 and one line.
+set -u
+CF=$(realpath "$1")
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-base.XXXXXX")
+trap 'rm -rf "$T"' EXIT
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); echo "ok   $1"; }
+no() { fail=$((fail + 1)); echo "FAIL $1"; }
+# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
+expect() {
+    want=$1; name=$2; shift 2
+    "$@" >"$T/out" 2>"$T/err"
+    got=$?
+    if [ "$got" -eq "$want" ]; then ok "$name"; else
+        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
+}
+json() { # json FILE KEY: a number or string field of a one-line JSON object
+    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
+}
+# le A B: A <= B as numbers
+le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
+# maxdiff F G: largest coordinate difference between two x y z files
+maxdiff() { paste "$1" "$2" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3); if (a < 0) a = -a; if (a > m) m = a } } END { printf "%.4g", m }'; }
+# oneline: the error is a single line on stderr
+oneline() { [ "$(wc -l <"$T/err")" -eq 1 ] && ok "$1: one-line error" || no "$1: stderr has $(wc -l <"$T/err") lines"; }
+
+# The part: a 40 x 30 bicubic nominal; the real part has a dent and a warp.
+"$CF" gen --dir "$T" --nu 40 --nv 30 --points 60000 --noise 0.005 >/dev/null
+grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
+expect 0 "boundary curves of the nominal as IGES 126" "$CF" base --extract "$T/nominal.igs" --out "$T/curves.igs"
+[ "$(grep -c '^     126' "$T/curves.igs")" -eq 8 ] && ok "four 126 entities (8 D lines)" || no "curves.igs: $(grep -c '^     126' "$T/curves.igs") 126 D lines"
+
+# The nominal crown is a sum of univariate parts and a bilinear term, which
+# a bilinear Coons patch reproduces: built from its boundary it is the nominal.
+expect 0 "bilinear Coons base" "$CF" base --curves "$T/curves.igs" --out "$T/b-bilinear.igs" --json
+[ "$(json "$T/out" method)" = bilinear ] && [ "$(json "$T/out" nu)" = 40 ] && [ "$(json "$T/out" nv)" = 30 ] &&
+    ok "bilinear base: 40 x 30 (the curves' net)" || no "bilinear JSON: $(cat "$T/out")"
+"$CF" eval "$T/b-bilinear.igs" "$T/check.uv" >"$T/e-bil"
+"$CF" eval "$T/nominal.igs" "$T/check.uv" >"$T/e-nom"
+d=$(maxdiff "$T/e-bil" "$T/e-nom")
+le "$d" 1e-9 && ok "bilinear Coons of the nominal's boundary is the nominal ($d mm)" || no "bilinear Coons differs from the nominal by $d mm"
+
+# Curves given in another order (--de) and direction make the same patch.
+expect 0 "bilinear with --de 7,5,3,1" "$CF" base --curves "$T/curves.igs" --de 7,5,3,1 --out "$T/b-de.igs"
+"$CF" project "$T/b-de.igs" "$T/check.xyz" >"$T/p-de"
+e=$(awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }' "$T/p-de")
+"$CF" project "$T/nominal.igs" "$T/check.xyz" >"$T/p-nom"
+en=$(awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }' "$T/p-nom")
+le "$(awk -v a="$e" -v b="$en" 'BEGIN { d = a - b; if (d < 0) d = -d; print d }')" 1e-9 &&
+    ok "reordered curves give the same surface (true points $e mm from it, $en from the nominal)" ||
+    no "reordered curves: $e vs $en"
+
+expect 0 "bicubic Coons base (30 % subset)" env SOURCE_DATE_EPOCH=0 "$CF" base --points "$T/points.xyz" --curves "$T/curves.igs" \
+    --method bicubic --subset 30 --seed 7 --out "$T/b-bicubic.igs" --json
+cp "$T/out" "$T/bicubic.json"
+u=$(json "$T/bicubic.json" used)
+le 15000 "$u" && le "$u" 21000 && ok "bicubic used about 30 % of 60000 points ($u)" || no "bicubic used $u points"
+expect 0 "bicubic, same seed: same base" env SOURCE_DATE_EPOCH=0 "$CF" base --points "$T/points.xyz" --curves "$T/curves.igs" \
+    --method bicubic --subset 30 --seed 7 --out "$T/b-bicubic2.igs"
+pdata() { awk 'substr($0, 73, 1) == "P"' "$1"; } # parameter data (the G section names the file)
+pdata "$T/b-bicubic.igs" >"$T/pd1"
+pdata "$T/b-bicubic2.igs" >"$T/pd2"
+cmp -s "$T/pd1" "$T/pd2" && [ -s "$T/pd1" ] && ok "seeded subset is reproducible (identical parameter data)" || no "same seed, different base"
+expect 0 "bicubic, another seed" env SOURCE_DATE_EPOCH=0 "$CF" base --points "$T/points.xyz" --curves "$T/curves.igs" \
+    --method bicubic --subset 30 --seed 8 --out "$T/b-bicubic3.igs"
+pdata "$T/b-bicubic3.igs" >"$T/pd3"
+cmp -s "$T/pd1" "$T/pd3" && no "another seed gives the same base" || ok "another seed, another subset"
+expect 0 "tensor-product base (30 % subset, 40 x 30)" "$CF" base --points "$T/points.xyz" --curves "$T/curves.igs" \
+    --method tensor --subset 30 --nu 40 --nv 30 --degree 3 --out "$T/b-tensor.igs" --json
+expect 0 "plane base (40 x 30)" "$CF" base --points "$T/points.xyz" --nu 40 --nv 30 --out "$T/b-plane.igs" --json
+cp "$T/out" "$T/plane.json"
+nz=$(json "$T/plane.json" nz)
+le 0.9999 "$nz" && ok "plane normal along z for a panel measured from above (nz $nz)" || no "plane normal nz = $nz"
+
+# The tensor base follows the real part, so the true points are nearer to
+# it than to the bilinear one (which is the nominal).
+"$CF" project "$T/b-tensor.igs" "$T/check.xyz" >"$T/p-ten"
+et=$(awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }' "$T/p-ten")
+le "$et" "$(awk -v a="$en" 'BEGIN { print a / 4 }')" && ok "tensor base within $et mm of the true part (bilinear: $en)" ||
+    no "tensor base $et mm from the true part, bilinear $en"
+
+# A fit through each base (parameters by projection onto it) recovers the
+# true part to the noise.
+for m in plane bilinear bicubic tensor; do
+    expect 0 "fit through the $m base" "$CF" fit --base "$T/b-$m.igs" --points "$T/points.xyz" --out "$T/f-$m.igs" --json
+    r=$(json "$T/out" rms)
+    "$CF" project "$T/f-$m.igs" "$T/check.xyz" >"$T/p-$m"
+    e=$(awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }' "$T/p-$m")
+    le "$e" 0.01 && ok "fit through the $m base within 0.01 mm of the true part (max $e, rms residual $r)" ||
+        no "fit through the $m base misses the true part by $e mm"
+done
+
+# Refusals: exit 2, one line naming what is wrong.
+expect 2 "curves that do not meet (--de 1,3,5,5)" "$CF" base --curves "$T/curves.igs" --de 1,3,5,5 --out "$T/x.igs"
+oneline "corners"
+grep -q "do not meet at corner" "$T/err" && ok "message names the corner" || no "corner message: $(cat "$T/err")"
+[ ! -e "$T/x.igs" ] && ok "nothing written on refusal" || no "x.igs written"
+expect 2 "a surface is not a curve (--de on a 128)" "$CF" base --curves "$T/nominal.igs" --out "$T/x.igs"
+oneline "no curves"
+expect 2 "--de needs four DE numbers" "$CF" base --curves "$T/curves.igs" --de 1,3,5 --out "$T/x.igs"
+expect 2 "bicubic without curves" "$CF" base --points "$T/points.xyz" --method bicubic --out "$T/x.igs"
+expect 2 "plane without points" "$CF" base --out "$T/x.igs"
+expect 2 "unknown method" "$CF" base --points "$T/points.xyz" --method spline --out "$T/x.igs"
+expect 2 "missing curves file" "$CF" base --curves "$T/none.igs" --out "$T/x.igs"
+oneline "missing file"
+printf '0 0 0\n1 1 1\n2 2 2\n3 3 3\n' >"$T/line.xyz"
+expect 2 "collinear points: no plane" "$CF" base --points "$T/line.xyz" --out "$T/x.igs"
+printf '1 2 3\n4 5\n' >"$T/bad.xyz"
+expect 2 "malformed points file" "$CF" base --points "$T/bad.xyz" --out "$T/x.igs"
+grep -q "bad.xyz:2" "$T/err" && ok "message names file:line" || no "points message: $(cat "$T/err")"
+echo "base: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
