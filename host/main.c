@@ -16,6 +16,10 @@ static int usage(FILE *f, int code)
             "  report SURF.igs POINTS --tol T [--png MAP.png] [--json]\n"
             "        signed normal deviations, statistics, histogram, colour deviation map\n"
             "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
+            "  base  --points FILE [--curves CURVES.igs [--de a,b,c,d]]\n"
+            "        [--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S]\n"
+            "        [--nu N --nv N --degree P] --out BASE.igs [--json]   base surface for fit\n"
+            "        (--extract SURF.igs --out CURVES.igs: its four boundary curves, IGES 126)\n"
             "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
             "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
             "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
@@ -45,6 +49,8 @@ int main(int argc, char **argv)
         return cmd_report(argc - 1, argv + 1);
     if (!strcmp(c, "project"))
         return cmd_project(argc - 1, argv + 1);
+    if (!strcmp(c, "base"))
+        return cmd_base(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);
