@@ -32,7 +32,7 @@ static const char *const method_name[] = {"plane", "bilinear", "bicubic", "tenso
 
 typedef struct base_opts {
     const char *points, *curves, *out, *extract;
-    int method, json, noscale, have_de;
+    int method, json, scale, have_de;
     long de[4], nu, nv, degree, seed, entity;
     double subset, tol, margin;
 } base_opts_t;
@@ -63,8 +63,8 @@ static int parse(int argc, char **argv, base_opts_t *o)
         int takes = 1;
         if (!strcmp(a, "--json"))
             o->json = 1, takes = 0;
-        else if (!strcmp(a, "--no-scale"))
-            o->noscale = 1, takes = 0;
+        else if (!strcmp(a, "--scale"))
+            o->scale = 1, takes = 0;
         else if (!v)
             return cli_error("base", CLI_USAGE, "option %s needs a value", a);
         else if (!strcmp(a, "--points"))
@@ -118,11 +118,12 @@ static int parse(int argc, char **argv, base_opts_t *o)
         i += 1 + takes;
     }
     if (!o->out)
-        return cli_error("base", CLI_USAGE,
-                         "usage: cellfit base --points FILE [--curves CURVES.igs [--de a,b,c,d]] "
-                         "[--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S] "
-                         "[--nu N --nv N --degree P] --out BASE.igs [--json]; or cellfit base "
-                         "--extract SURF.igs --out CURVES.igs");
+        return cli_error(
+            "base", CLI_USAGE,
+            "usage: cellfit base --points FILE [--curves CURVES.igs [--de a,b,c,d]] "
+            "[--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S] [--scale] "
+            "[--nu N --nv N --degree P] --out BASE.igs [--json]; or cellfit base "
+            "--extract SURF.igs --out CURVES.igs");
     if (o->extract)
         return CLI_OK;
     if (o->method < 0)
@@ -555,7 +556,7 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
                            res->used, o->subset, b3.K, nf_strerror(rc));
             goto done;
         }
-        if (!o->noscale)
+        if (o->scale) /* the paper's remedy for overshoot, "if needed" */
             nf_coons3_scale(&b3);
         if (cf_surf_alloc(out, p, q, nu, nv)) {
             ec = cli_error("base", CLI_FAIL, "out of memory");

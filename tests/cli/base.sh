@@ -70,6 +70,20 @@ expect 0 "bicubic, another seed" env SOURCE_DATE_EPOCH=0 "$CF" base --points "$T
     --method bicubic --subset 30 --seed 8 --out "$T/b-bicubic3.igs"
 pdata "$T/b-bicubic3.igs" >"$T/pd3"
 cmp -s "$T/pd1" "$T/pd3" && no "another seed gives the same base" || ok "another seed, another subset"
+# The bicubic patch's fitted cross derivatives carry interior detail the
+# boundary lacks: the true part is nearer to it than to the bilinear patch.
+rmsd() { awk '{ s += $3 * $3; n++ } END { printf "%.4g", sqrt(s / n) }' "$1"; }
+"$CF" project "$T/b-bicubic.igs" "$T/check.xyz" >"$T/p-bic"
+"$CF" project "$T/b-bilinear.igs" "$T/check.xyz" >"$T/p-bil"
+rb=$(rmsd "$T/p-bic")
+rl=$(rmsd "$T/p-bil")
+le "$rb" "$(awk -v a="$rl" 'BEGIN { print a / 2 }')" && ok "bicubic base nearer the true part than bilinear (rms $rb vs $rl mm)" ||
+    no "bicubic base rms $rb mm, bilinear $rl"
+expect 0 "bicubic with the paper's derivative scaling" "$CF" base --points "$T/points.xyz" --curves "$T/curves.igs" \
+    --method bicubic --scale --out "$T/b-scaled.igs"
+"$CF" project "$T/b-scaled.igs" "$T/check.xyz" >"$T/p-sc"
+rs=$(rmsd "$T/p-sc")
+le "$rs" "$rl" && ok "scaled bicubic base still nearer than bilinear (rms $rs)" || no "scaled bicubic rms $rs, bilinear $rl"
 expect 0 "tensor-product base (30 % subset, 40 x 30)" "$CF" base --points "$T/points.xyz" --curves "$T/curves.igs" \
     --method tensor --subset 30 --nu 40 --nv 30 --degree 3 --out "$T/b-tensor.igs" --json
 expect 0 "plane base (40 x 30)" "$CF" base --points "$T/points.xyz" --nu 40 --nv 30 --out "$T/b-plane.igs" --json
