@@ -302,6 +302,12 @@ int nf_coons_bilinear(const nf_coons_t *cs, nf_surf_t *out)
     const nf_curve_t *c = cs->c;
     memcpy(out->U, c[0].U, sizeof(double) * (size_t)(nu + p + 1));
     memcpy(out->V, c[2].U, sizeof(double) * (size_t)(nv + q + 1));
+    /* Polynomial curves give weights 1 exactly (the blend of ones would
+     * round to 1 - 2^-52 here and there, and the file would say rational). */
+    int poly = 1;
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < c[k].n; i++)
+            poly &= c[k].w[i] == 1.0;
     double P00[4], P10[4], P01[4], P11[4];
     hpt(&c[0], 0, P00);
     hpt(&c[0], nu - 1, P10);
@@ -324,6 +330,8 @@ int nf_coons_bilinear(const nf_coons_t *cs, nf_surf_t *out)
                 h[k] = ru + rv - tt;
             }
             long idx = i + (long)j * nu;
+            if (poly)
+                h[3] = 1.0;
             if (!(h[3] > 0.0))
                 return NF_EWEIGHT;
             out->w[idx] = h[3];

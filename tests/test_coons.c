@@ -304,6 +304,8 @@ static void test_bilinear_mixed_curves(void **state)
     assert_int_equal(s.p, 3);
     assert_int_equal(s.q, 3);
     assert_int_equal(nf_coons_bilinear(&cs, &s), NF_OK);
+    for (long i = 0; i < (long)s.nu * s.nv; i++)
+        assert_true(s.w[i] == 1.0); /* polynomial curves: a polynomial patch */
     for (int k = 0; k <= 200; k++) {
         double t = k / 200.0, A[3], B[3];
         static const double a[4] = {0, 0, 0, -2}, len[4] = {1, 4, 1, 2};

@@ -45,6 +45,15 @@ expect 0 "bilinear Coons base" "$CF" base --curves "$T/curves.igs" --out "$T/b-b
 d=$(maxdiff "$T/e-bil" "$T/e-nom")
 le "$d" 1e-9 && ok "bilinear Coons of the nominal's boundary is the nominal ($d mm)" || no "bilinear Coons differs from the nominal by $d mm"
 
+# A finer net on request (knot insertion): the same surface.
+expect 0 "bilinear refined to 50 x 40" "$CF" base --curves "$T/curves.igs" --nu 50 --nv 40 --out "$T/b-fine.igs" --json
+[ "$(json "$T/out" nu)" = 50 ] && [ "$(json "$T/out" nv)" = 40 ] && ok "refined net 50 x 40" || no "refined JSON: $(cat "$T/out")"
+"$CF" eval "$T/b-fine.igs" "$T/check.uv" >"$T/e-fine"
+d=$(maxdiff "$T/e-fine" "$T/e-bil")
+le "$d" 1e-9 && ok "refined bilinear base is the same surface ($d mm)" || no "refined base differs by $d mm"
+"$CF" info "$T/b-bilinear.igs" | grep -q "(polynomial)" && ok "polynomial curves give a polynomial base" || no "bilinear base not polynomial"
+expect 2 "--degree is refused for a Coons patch" "$CF" base --curves "$T/curves.igs" --degree 2 --out "$T/x.igs"
+
 # Curves given in another order (--de) and direction make the same patch.
 expect 0 "bilinear with --de 7,5,3,1" "$CF" base --curves "$T/curves.igs" --de 7,5,3,1 --out "$T/b-de.igs"
 "$CF" project "$T/b-de.igs" "$T/check.xyz" >"$T/p-de"
