@@ -50,7 +50,7 @@ static int do_probe(hal_rig_t *r, long count, int json)
     }
     /* Out of range is a reading, not a failure of the line, but a run
      * that saw nothing else did not measure. */
-    return ok || !nosurf ? CLI_OK : rig_fail(RIG_ENOSURF, "every reading out of range");
+    return ok || !nosurf ? CLI_OK : rig_fail(RIG_ENOSURF, hal_probe_error(r->probe.ctx));
 }
 
 static int do_status(hal_rig_t *r, int json)

@@ -34,6 +34,7 @@ expect() {
     got=$?
     if [ "$got" -eq "$want" ]; then ok "$name"; else
         no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
+    ! grep -q "Sanitizer\|runtime error" "$T/err" || no "$name: sanitizer report"
 }
 json() { # json FILE KEY: a number or string field of a one-line JSON object
     sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
@@ -175,7 +176,169 @@ expect 1 "tcp: move under E-stop" "$CF" rig move 30 30 --stage "$S"
 grep -q -- "-210" "$T/err" && ok "tcp: RIG_EESTOP" || no "tcp: $(cat "$T/err")"
 ctl "estop off"
 expect 0 "tcp: move after E-stop release" "$CF" rig move 30 30 --stage "$S"
+# Several clients at once (one select() loop, a socket per client).
+"$CF" rig probe --probe "$P" --count 300 --json >"$T/c1" 2>&1 &
+c1=$!
+"$CF" rig probe --probe "$P" --count 300 --json >"$T/c2" 2>&1 &
+c2=$!
+expect 0 "tcp: a third client meanwhile" "$CF" rig status --stage "$S"
+wait $c1; r1=$?
+wait $c2; r2=$?
+[ $r1 -eq 0 ] && [ $r2 -eq 0 ] && [ "$(json "$T/c1" readings)" = 300 ] &&
+    [ "$(json "$T/c2" readings)" = 300 ] && ok "tcp: two clients, 300 readings each" ||
+    no "tcp: concurrent clients ($r1, $r2): $(cat "$T/c1" "$T/c2")"
+# Faults with a probability (seeded): every reading still arrives.
+ctl "fault crc@tcp:p0.2"
+expect 0 "tcp: 20% corrupted replies -> all readings" "$CF" rig probe --probe "$P" --count 100 --json
+[ "$(json "$T/out" readings)" = 100 ] && [ "$(json "$T/out" retries)" -ge 1 ] &&
+    ok "tcp: 100 readings through p=0.2 faults ($(json "$T/out" retries) retries)" ||
+    no "tcp: p0.2: $(cat "$T/out")"
+stop_all
+start_sim tcp2 --tcp 0 --noise 0 --homed
+PORT=$(awk '/^cellsim: tcp/ { print $4 }' "$T/tcp2.out")
+S=tcp:127.0.0.1:$PORT
+P=tcp:127.0.0.1:$PORT:2
+# A third-party master moves the stage: slowly, so that it is busy when
+# asked (a 100 mm move at 5 mm/s lasts 20 s); then stop.
+timeout 10 mbpoll -m tcp -p "$PORT" -0 -t 4 -r 18 -1 127.0.0.1 5 >/dev/null 2>&1 &&
+    timeout 10 mbpoll -m tcp -p "$PORT" -0 -t 4 -r 0 -1 127.0.0.1 $(hi 100) $(lo 100) 0 0 1 \
+        >/dev/null 2>&1 && ok "mbpoll writes speed, target and the move command" ||
+    no "mbpoll write failed"
+expect 0 "status during a slow move" "$CF" rig status --stage "$S" --json
+[ "$(json "$T/out" busy)" = 1 ] && [ "$(json "$T/out" inpos)" = 0 ] && ok "busy, not in position" ||
+    no "during the move: $(cat "$T/out")"
+expect 0 "stop" "$CF" rig stop --stage "$S"
+expect 0 "status after stop" "$CF" rig status --stage "$S" --json
+[ "$(json "$T/out" busy)" = 0 ] && [ "$(json "$T/out" inpos)" = 0 ] && ok "stopped short: idle, not in position" ||
+    no "after stop: $(cat "$T/out")"
+x=$(json "$T/out" x)
+awk -v x="$x" 'BEGIN { exit !(x > 0 && x < 100) }' && ok "stopped between start and target (x = $x)" ||
+    no "stopped at x = $x"
+timeout 10 mbpoll -m tcp -p "$PORT" -0 -t 4 -r 18 -1 127.0.0.1 1000 >/dev/null 2>&1
+# Off the part (inside the stage limits): out of range, a reading not a failure.
+expect 0 "tcp: move off the part" "$CF" rig move 205 155 --stage "$S"
+expect 1 "tcp: no surface below the probe" "$CF" rig probe --probe "$P"
+grep -q -- "-208" "$T/err" && ok "tcp: RIG_ENOSURF off the part" || no "tcp: $(cat "$T/err")"
 stop_all
 
+# ---- The same part from an IGES file: the same readings ----
+start_sim iges --tcp 0 --noise 0 --homed --part "$T/part/nominal.igs"
+PORT=$(awk '/^cellsim: tcp/ { print $4 }' "$T/iges.out")
+"$CF" rig move 60.5 110.25 --stage "tcp:127.0.0.1:$PORT" >/dev/null 2>&1
+expect 0 "iges part: probe" "$CF" rig probe --probe "tcp:127.0.0.1:$PORT:2" --json
+d=$(truth_d 60.5 110.25 50)
+near "$(json "$T/out" last_mm)" "$d" 0.0006 && ok "iges part: reads the truth ($d mm)" ||
+    no "iges part: read $(json "$T/out" last_mm), truth $d"
+stop_all
+
+# ---- Modbus RTU and the ASCII probe over socat pty pairs ----
+start_socat rtu
+start_socat asc
+start_sim pty --rtu "$T/rtu.b" --ascii "$T/asc.b" --noise 0 --control "$T/ctl" --verbose \
+    --fault slow@rtu:n1:1
+S=rtu:$T/rtu.a:115200:8N1:1
+P=rtu:$T/rtu.a:115200:8N1:2
+A=tty:$T/asc.a:115200
+expect 0 "rtu: home" "$CF" rig home --stage "$S"
+expect 0 "rtu: move 150.25 33.5" "$CF" rig move 150.25 33.5 --stage "$S" --json
+near "$(json "$T/out" x)" 150.25 1e-9 && near "$(json "$T/out" y)" 33.5 1e-9 &&
+    ok "rtu: position read back" || no "rtu: position $(cat "$T/out")"
+want="5 $(hi 150.25) $(lo 150.25) $(hi 33.5) $(lo 33.5)"
+timeout 10 mbpoll -m rtu -b 115200 -P none -a 1 -0 -r 5 -c 5 -1 "$T/rtu.a" >"$T/mbpoll" 2>&1
+got=$(sed -n 's/^\[\([0-9]*\)\]:[[:space:]]*\([0-9]*\).*/\2/p' "$T/mbpoll" | tr '\n' ' ' | sed 's/ $//')
+[ "$got" = "$want" ] && ok "mbpoll over RTU: status and position ($got)" ||
+    no "mbpoll over RTU read '$got', want '$want'"
+d=$(truth_d 150.25 33.5 50)
+expect 0 "rtu: probe (input registers, slave 2 on the same line)" "$CF" rig probe --probe "$P" --json
+near "$(json "$T/out" last_mm)" "$d" 0.0006 && ok "rtu: probe reads the truth ($d mm)" ||
+    no "rtu: probe read $(json "$T/out" last_mm), truth $d"
+expect 0 "ascii: probe" "$CF" rig probe --probe "$A" --count 3 --json
+near "$(json "$T/out" mean_mm)" "$d" 0.0006 && ok "ascii: probe reads the truth ($d mm)" ||
+    no "ascii: probe read $(json "$T/out" mean_mm), truth $d"
+for f in crc garble drop; do
+    ctl "fault $f@rtu:n2"
+    expect 0 "rtu: $f -> retried" "$CF" rig probe --probe "$P" --count 3 --timeout 200 --json
+    [ "$(json "$T/out" retries)" = 1 ] && near "$(json "$T/out" mean_mm)" "$d" 0.0006 &&
+        ok "rtu: $f cost one retry, readings right" || no "rtu: $f: $(cat "$T/out")"
+done
+# A reply later than the timeout: waited out and dropped, never taken as
+# the answer to the next request (all later readings right, one retry).
+ctl "fault slow@rtu:n2:500"
+expect 0 "rtu: slow reply -> timeout, recovery" "$CF" rig probe --probe "$P" --count 5 \
+    --timeout 200 --late 600 --json
+[ "$(json "$T/out" retries)" = 1 ] && near "$(json "$T/out" mean_mm)" "$d" 0.0006 &&
+    ok "rtu: slow reply: one retry, no reply off by one" || no "rtu: slow: $(cat "$T/out")"
+ctl "fault slow@rtu:n3:500"
+expect 0 "rtu: slow reply between stage requests" "$CF" rig move 150.25 40 --stage "$S" \
+    --timeout 200 --late 600 --json
+near "$(json "$T/out" y)" 40 1e-9 && ok "rtu: the move after a slow reply is right" ||
+    no "rtu: move after slow reply: $(cat "$T/out")"
+ctl "fault disconnect@rtu:n2:300"
+expect 0 "rtu: line silent 300 ms -> recovered" "$CF" rig probe --probe "$P" --count 3 --json
+[ "$(json "$T/out" retries)" -ge 1 ] && ok "rtu: silent line cost retries" || no "rtu: no retry"
+ctl "fault busy@rtu:n1"
+expect 0 "rtu: busy exception retried" "$CF" rig status --stage "$S"
+ctl "fault stagefault:n1"
+expect 1 "rtu: drive fault" "$CF" rig move 10 10 --stage "$S"
+grep -q -- "-209" "$T/err" && ok "rtu: RIG_EFAULT" || no "rtu: $(cat "$T/err")"
+expect 0 "rtu: fault reset" "$CF" rig reset --stage "$S"
+for f in garble drop; do
+    ctl "fault $f@ascii:n2"
+    expect 0 "ascii: $f -> retried" "$CF" rig probe --probe "$A" --count 3 --timeout 200 --json
+    [ "$(json "$T/out" retries)" = 1 ] && ok "ascii: $f cost one retry" ||
+        no "ascii: $f: $(cat "$T/out")"
+done
+expect 0 "rtu: move back" "$CF" rig move 150.25 33.5 --stage "$S"
+ctl "fault slow@ascii:n2:500"
+expect 0 "ascii: slow reply -> timeout, recovery" "$CF" rig probe --probe "$A" --count 5 \
+    --timeout 200 --late 600 --json
+[ "$(json "$T/out" retries)" = 1 ] && near "$(json "$T/out" mean_mm)" "$d" 0.0006 &&
+    ok "ascii: slow reply: one retry, readings right" || no "ascii: slow: $(cat "$T/out")"
+ctl "fault nosurf@ascii:n1"
+expect 1 "ascii: out of range" "$CF" rig probe --probe "$A"
+grep -q "M0,FFFFFFF.*-208" "$T/err" && ok "ascii: RIG_ENOSURF" || no "ascii: $(cat "$T/err")"
+ctl "fault proberr@ascii:n1"
+expect 1 "ascii: sensor error" "$CF" rig probe --probe "$A"
+grep -q "ER,M0,01.*-205" "$T/err" && ok "ascii: ER,M0,01 is RIG_EEXCEPTION" || no "ascii: $(cat "$T/err")"
+# The cable pulled by hand: socat killed and started again with the same
+# links while a client reads; both ends reopen their paths.
+pull() { # pull NAME URI: kill NAME's socat mid-run, restart it, the client must recover
+    ctl "fault slow@$3:n5:1" # a mark in cellsim's log once the client is running
+    n0=$(grep -c "fault slow" "$T/pty.err")
+    "$CF" rig probe --probe "$2" --count 400 --reconnect 5000 --json >"$T/pull" 2>&1 &
+    cl=$!
+    i=0
+    while [ "$(grep -c "fault slow" "$T/pty.err")" -le "$n0" ] && [ $i -lt 200 ]; do
+        sleep 0.05; i=$((i + 1)); done
+    eval "kill \$SOCAT_$1"
+    eval "wait \$SOCAT_$1" 2>/dev/null
+    start_socat "$1"
+    wait $cl
+    rc=$?
+    [ $rc -eq 0 ] && [ "$(json "$T/pull" readings)" = 400 ] && [ "$(json "$T/pull" reconnects)" -ge 1 ] &&
+        ok "$3: socat restarted mid-run: reconnected, 400 readings" ||
+        no "$3: cable pull: exit $rc, $(cat "$T/pull")"
+}
+pull rtu "$P" rtu
+pull asc "$A" ascii
+# Gone for good: a clear error once reconnect_ms is spent.
+ctl "fault slow@rtu:n5:1"
+n0=$(grep -c "fault slow" "$T/pty.err")
+"$CF" rig probe --probe "$P" --count 400 --reconnect 500 >"$T/gone" 2>&1 &
+cl=$!
+i=0
+while [ "$(grep -c "fault slow" "$T/pty.err")" -le "$n0" ] && [ $i -lt 200 ]; do
+    sleep 0.05; i=$((i + 1)); done
+kill $SOCAT_rtu
+wait $cl
+rc=$?
+[ $rc -eq 1 ] && grep -q "line lost, reopening failed for 500 ms.*-206" "$T/gone" &&
+    ok "rtu: line gone: RIG_EDISCONNECT after reconnect_ms" || no "rtu: gone: exit $rc, $(cat "$T/gone")"
+stop_all
+
+# A sanitized build's reports from cellsim (it exits through main on TERM).
+for e in "$T"/*.err; do
+    ! grep -q "Sanitizer\|runtime error" "$e" || { no "$(basename "$e"): sanitizer report"; head -20 "$e"; }
+done
 echo "rig: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
