@@ -114,7 +114,7 @@ static int mb_request(hal_mb_t *m, int op, int addr, int n, uint16_t *regs)
                        : op == MB_RD_I ? "reading input"
                                        : "writing";
     char where[300];
-    int backoff = h->opts.backoff_ms;
+    int backoff = h->opts.backoff_ms, relinks = 0;
     for (int attempt = 0;; attempt++) {
         if (!m->up) {
             int rc = mb_reconnect(h);
@@ -147,6 +147,10 @@ static int mb_request(hal_mb_t *m, int op, int addr, int n, uint16_t *regs)
                 snprintf(lost, sizeof lost, "%s", h->err);
                 return hal_fail(h, rc, "%s after %s", lost, modbus_strerror(e));
             }
+            /* Back on the line: this attempt does not count against the
+             * retries, a few times over (a line that keeps dropping fails). */
+            if (++relinks <= 3)
+                attempt--;
         }
         if (attempt >= h->opts.retries)
             return code;

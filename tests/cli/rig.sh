@@ -221,6 +221,24 @@ expect 1 "tcp: no surface below the probe" "$CF" rig probe --probe "$P"
 grep -q -- "-208" "$T/err" && ok "tcp: RIG_ENOSURF off the part" || no "tcp: $(cat "$T/err")"
 stop_all
 
+# ---- Noise: Gaussian with the asked sigma around the truth, seeded ----
+for seed in 7 7 8; do
+    start_sim "noise$seed" --tcp 0 --noise 0.01 --seed $seed --homed
+    PORT=$(awk '/^cellsim: tcp/ { print $4 }' "$T/noise$seed.out")
+    "$CF" rig move 130 60 --stage "tcp:127.0.0.1:$PORT" >/dev/null 2>&1
+    timeout 60 "$CF" rig probe --probe "tcp:127.0.0.1:$PORT:2" --count 400 >"$T/n$seed.$$" 2>&1
+    mv "$T/n$seed.$$" "$T/n$seed.${seen:-a}"
+    seen=b
+    stop_all
+done
+d=$(truth_d 130 60 50)
+awk -v d="$d" '{ s += $1; ss += ($1 - d) ^ 2; n++ } END { m = s / n; sd = sqrt(ss / n);
+    printf "%.5f %.5f\n", m - d, sd; exit !(n == 400 && (m - d) ^ 2 < 0.0015 ^ 2 && sd > 0.008 && sd < 0.012) }' \
+    "$T/n7.a" >"$T/stat" && ok "noise: mean - truth, sigma = $(cat "$T/stat") (sigma 0.01 asked)" ||
+    no "noise: mean - truth, sigma = $(cat "$T/stat")"
+cmp -s "$T/n7.a" "$T/n7.b" && ok "noise: the same seed, the same readings" || no "noise: seed 7 not reproduced"
+cmp -s "$T/n7.a" "$T/n8.b" && no "noise: seeds 7 and 8 gave the same readings" || ok "noise: another seed, other readings"
+
 # ---- The same part from an IGES file: the same readings ----
 start_sim iges --tcp 0 --noise 0 --homed --part "$T/part/nominal.igs"
 PORT=$(awk '/^cellsim: tcp/ { print $4 }' "$T/iges.out")
