@@ -146,7 +146,7 @@ ctl "fault busy:n1"
 expect 0 "tcp: busy exception retried" "$CF" rig status --stage "$S"
 ctl "fault slow@tcp:n2:600"
 expect 0 "tcp: slow reply: timeout, late reply dropped, retried" "$CF" rig probe --probe "$P" \
-    --count 4 --timeout 200 --late 700 --json
+    --count 4 --timeout 300 --late 1200 --json
 [ "$(json "$T/out" retries)" = 1 ] && ok "tcp: one retry for one slow reply" ||
     no "tcp: retries $(json "$T/out" retries)"
 near "$(json "$T/out" mean_mm)" "$d" 0.0006 && ok "tcp: readings after the slow one are right" ||
@@ -252,8 +252,7 @@ stop_all
 # ---- Modbus RTU and the ASCII probe over socat pty pairs ----
 start_socat rtu
 start_socat asc
-start_sim pty --rtu "$T/rtu.b" --ascii "$T/asc.b" --noise 0 --control "$T/ctl" --verbose \
-    --fault slow@rtu:n1:1
+start_sim pty --rtu "$T/rtu.b" --ascii "$T/asc.b" --noise 0 --control "$T/ctl" --verbose
 S=rtu:$T/rtu.a:115200:8N1:1
 P=rtu:$T/rtu.a:115200:8N1:2
 A=tty:$T/asc.a:115200
@@ -275,7 +274,7 @@ near "$(json "$T/out" mean_mm)" "$d" 0.0006 && ok "ascii: probe reads the truth 
     no "ascii: probe read $(json "$T/out" mean_mm), truth $d"
 for f in crc garble drop; do
     ctl "fault $f@rtu:n2"
-    expect 0 "rtu: $f -> retried" "$CF" rig probe --probe "$P" --count 3 --timeout 200 --json
+    expect 0 "rtu: $f -> retried" "$CF" rig probe --probe "$P" --count 3 --timeout 500 --json
     [ "$(json "$T/out" retries)" = 1 ] && near "$(json "$T/out" mean_mm)" "$d" 0.0006 &&
         ok "rtu: $f cost one retry, readings right" || no "rtu: $f: $(cat "$T/out")"
 done
@@ -283,12 +282,12 @@ done
 # the answer to the next request (all later readings right, one retry).
 ctl "fault slow@rtu:n2:500"
 expect 0 "rtu: slow reply -> timeout, recovery" "$CF" rig probe --probe "$P" --count 5 \
-    --timeout 200 --late 600 --json
+    --timeout 300 --late 1200 --json
 [ "$(json "$T/out" retries)" = 1 ] && near "$(json "$T/out" mean_mm)" "$d" 0.0006 &&
     ok "rtu: slow reply: one retry, no reply off by one" || no "rtu: slow: $(cat "$T/out")"
 ctl "fault slow@rtu:n3:500"
 expect 0 "rtu: slow reply between stage requests" "$CF" rig move 150.25 40 --stage "$S" \
-    --timeout 200 --late 600 --json
+    --timeout 300 --late 1200 --json
 near "$(json "$T/out" y)" 40 1e-9 && ok "rtu: the move after a slow reply is right" ||
     no "rtu: move after slow reply: $(cat "$T/out")"
 ctl "fault disconnect@rtu:n2:300"
@@ -302,14 +301,14 @@ grep -q -- "-209" "$T/err" && ok "rtu: RIG_EFAULT" || no "rtu: $(cat "$T/err")"
 expect 0 "rtu: fault reset" "$CF" rig reset --stage "$S"
 for f in garble drop; do
     ctl "fault $f@ascii:n2"
-    expect 0 "ascii: $f -> retried" "$CF" rig probe --probe "$A" --count 3 --timeout 200 --json
+    expect 0 "ascii: $f -> retried" "$CF" rig probe --probe "$A" --count 3 --timeout 500 --json
     [ "$(json "$T/out" retries)" = 1 ] && ok "ascii: $f cost one retry" ||
         no "ascii: $f: $(cat "$T/out")"
 done
 expect 0 "rtu: move back" "$CF" rig move 150.25 33.5 --stage "$S"
 ctl "fault slow@ascii:n2:500"
 expect 0 "ascii: slow reply -> timeout, recovery" "$CF" rig probe --probe "$A" --count 5 \
-    --timeout 200 --late 600 --json
+    --timeout 300 --late 1200 --json
 [ "$(json "$T/out" retries)" = 1 ] && near "$(json "$T/out" mean_mm)" "$d" 0.0006 &&
     ok "ascii: slow reply: one retry, readings right" || no "ascii: slow: $(cat "$T/out")"
 ctl "fault nosurf@ascii:n1"
@@ -321,7 +320,9 @@ grep -q "ER,M0,01.*-205" "$T/err" && ok "ascii: ER,M0,01 is RIG_EEXCEPTION" || n
 # The cable pulled by hand: socat killed and started again with the same
 # links while a client reads; both ends reopen their paths.
 pull() { # pull NAME URI: kill NAME's socat mid-run, restart it, the client must recover
-    ctl "fault slow@$3:n5:1" # a mark in cellsim's log once the client is running
+    # Request 5's reply is held 1 s: the client is surely mid-run when the
+    # mark shows in cellsim's log and socat goes.
+    ctl "fault slow@$3:n5:1000"
     n0=$(grep -c "fault slow" "$T/pty.err")
     "$CF" rig probe --probe "$2" --count 400 --reconnect 5000 --json >"$T/pull" 2>&1 &
     cl=$!
@@ -340,7 +341,7 @@ pull() { # pull NAME URI: kill NAME's socat mid-run, restart it, the client must
 pull rtu "$P" rtu
 pull asc "$A" ascii
 # Gone for good: a clear error once reconnect_ms is spent.
-ctl "fault slow@rtu:n5:1"
+ctl "fault slow@rtu:n5:1000"
 n0=$(grep -c "fault slow" "$T/pty.err")
 "$CF" rig probe --probe "$P" --count 400 --reconnect 500 >"$T/gone" 2>&1 &
 cl=$!
