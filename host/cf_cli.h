@@ -40,5 +40,6 @@ int cmd_bench(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_project(int argc, char **argv);
 int cmd_base(int argc, char **argv);
+int cmd_rig(int argc, char **argv);
 
 #endif
