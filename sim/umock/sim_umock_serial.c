@@ -1,8 +1,9 @@
 /* sim_umock_serial.c: the FTDI 0403:6001 adapter at /dev/ttyUSB0 with the
  * laser probe behind it. The testbed's pty master plays the probe's ASCII
- * protocol (M0 -> M0,+01.234 / ER,M0,nn / M0,FFFFFFF); an ioctl handler
- * answers the modem-line ioctls a pty lacks (libserialport's sp_open needs
- * TIOCMGET) and passes every other ioctl to the pty. */
+ * protocol (M0 -> M0,+01.234 / ER,M0,nn / M0,FFFFFFF; RG -> RG,-50.000,+50.000,
+ * the measuring range); an ioctl handler answers the modem-line ioctls a
+ * pty lacks (libserialport's sp_open needs TIOCMGET) and passes every
+ * other ioctl to the pty. */
 #include "sim_umock.h"
 #include <errno.h>
 #include <math.h>
@@ -207,6 +208,10 @@ static void reply(const char *s)
 static void command(const char *cmd)
 {
     char out[64];
+    if (!strcmp(cmd, "RG")) { /* measuring range, as hal_probe.c asks */
+        reply("RG,-50.000,+50.000\r\n");
+        return;
+    }
     if (strcmp(cmd, "M0")) {
         sim_log("serial: unknown command '%s'", cmd);
         snprintf(out, sizeof out, "ER,%.8s,00\r\n", cmd[0] ? cmd : "??");
