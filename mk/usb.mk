@@ -1,7 +1,7 @@
 # mk/usb.mk: the USB parts (issue 4): build/sim-umock, the umockdev testbed
 # that plays the FTDI-attached laser probe and the USB trigger box (GLib and
 # libumockdev, so not part of cellsim, whose build links sim/*.c only).
-# `make all` builds it beside cellfit, so tests/cli/usb.sh (run by
+# `make all` builds it beside cellfit (when libumockdev is there), so tests/cli/usb.sh (run by
 # test-cli) finds it there; `make test-usb` runs that script alone.
 UMOCK_PKGS := umockdev-1.0 glib-2.0 gio-2.0
 UMOCK_CFLAGS = $(shell pkg-config --cflags $(UMOCK_PKGS) 2>/dev/null)
@@ -10,8 +10,13 @@ UMOCK_SRC := $(sort $(wildcard sim/umock/*.c))
 UMOCK_OBJ := $(patsubst sim/umock/%.c,$(BUILD)/sim/umock/%.o,$(UMOCK_SRC))
 
 .PHONY: sim-umock test-usb lint-usb
+# Only where libumockdev-dev is installed (scripts/deps.sh test and demo
+# install it; a plain build does not need it).
+UMOCK_HAVE := $(shell pkg-config --exists $(UMOCK_PKGS) 2>/dev/null && echo yes)
 ifneq ($(BOARD_CROSS),1)
+ifeq ($(UMOCK_HAVE),yes)
 all: sim-umock
+endif
 endif
 sim-umock: $(BUILD)/sim-umock
 
