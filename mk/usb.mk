@@ -1,8 +1,8 @@
 # mk/usb.mk: the USB parts (issue 4): build/sim-umock, the umockdev testbed
 # that plays the FTDI-attached laser probe and the USB trigger box (GLib and
 # libumockdev, so not part of cellsim, whose build links sim/*.c only).
-# `make all` builds it beside cellfit (when libumockdev is there), so tests/cli/usb.sh (run by
-# test-cli) finds it there; `make test-usb` runs that script alone.
+# `make all` builds it beside cellfit (when libumockdev is there), so
+# tests/cli/usb.sh (run by test-cli) finds it; `make test-usb` runs it alone.
 UMOCK_PKGS := umockdev-1.0 glib-2.0 gio-2.0
 UMOCK_CFLAGS = $(shell pkg-config --cflags $(UMOCK_PKGS) 2>/dev/null)
 UMOCK_LIBS = $(shell pkg-config --libs $(UMOCK_PKGS) 2>/dev/null)
