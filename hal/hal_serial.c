@@ -195,8 +195,10 @@ static int serial_read(hal_t *h, void *buf, size_t n, int timeout_ms, size_t *go
             return RIG_ETIMEOUT;
         }
         fail(h, "input waiting on", w, 0);
-    } else if (fail(h, "read", rc, 0) != RIG_EDISCONNECT) {
-        return hal_serial_err(rc, errno, 0);
+    } else {
+        int code = fail(h, "read", rc, 0);
+        if (code != RIG_EDISCONNECT)
+            return code;
     }
     /* What was in flight is gone with the line: after a reconnect the
      * caller asks again (a timeout to its protocol layer). */

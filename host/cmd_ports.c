@@ -233,20 +233,26 @@ static int read_trig(const char *id, long count, long period, const hal_opts_t *
     int rc = hal_usb_open(&u, o, &h, msg, sizeof msg);
     if (rc)
         return cli_error("ports", CLI_FAIL, "usb %s: %s (%s)", id, rig_strerror(rc), msg);
-    hal_trig_ident_t ident;
+    hal_trig_ident_t ident = {0};
     hal_trig_seq_t seq = {0};
     long got = 0, crc = 0, first = -1, last = -1;
     const char *step = "identity";
     rc = hal_trig_ident(h, &ident);
-    if (!rc && !json)
+    int have_ident = rc == RIG_OK;
+    if (have_ident && !json)
         printf("trigger box %s: protocol %d, firmware %d.%d.%d, serial %u, %d axes\n", id,
                ident.proto, ident.fw_major, ident.fw_minor, ident.fw_patch, ident.serial,
                ident.axes);
-    if (!rc && (step = "set period", 1))
+    if (!rc) {
+        step = "set period";
         rc = hal_trig_set_period(h, (uint32_t)period);
-    if (!rc && (step = "arm", 1))
+    }
+    if (!rc) {
+        step = "arm";
         rc = hal_trig_arm(h, 1);
-    step = "read packets";
+    }
+    if (!rc)
+        step = "read packets";
     long rearmed = 0;
     while (!rc && got < count) {
         hal_trig_pkt_t p[3];
@@ -284,7 +290,7 @@ static int read_trig(const char *id, long count, long period, const hal_opts_t *
         cli_json_t j;
         cli_json_begin(&j, stdout);
         cli_json_str(&j, "device", id);
-        cli_json_int(&j, "serial", rc && !got ? 0 : (long)ident.serial);
+        cli_json_int(&j, "serial", have_ident ? (long)ident.serial : 0);
         cli_json_int(&j, "packets", got);
         cli_json_int(&j, "lost", (long)seq.lost);
         cli_json_int(&j, "crc_errors", crc);
