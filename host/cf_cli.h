@@ -41,5 +41,6 @@ int cmd_report(int argc, char **argv);
 int cmd_project(int argc, char **argv);
 int cmd_base(int argc, char **argv);
 int cmd_rig(int argc, char **argv);
+int cmd_ports(int argc, char **argv);
 
 #endif

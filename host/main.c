@@ -26,6 +26,11 @@ static int usage(FILE *f, int code)
             "        [--solver S] [--json]   benchmarks on generated data\n"
             "  rig   status|home|move X Y|probe|reset|stop --stage URI --probe URI [--count N]\n"
             "        [--timeout MS] [--retries N] [--json]   the stage and probe by hand (hal.h)\n"
+            "  ports [--json]   serial ports with their USB VID:PID\n"
+            "  ports --probe PORT [--n N] [--baud B] [--retries R] [--timeout MS] [--json]\n"
+            "        read the laser probe (M0) on a serial port\n"
+            "  ports --trig VID:PID[:SERIAL] [--n N] [--period US] [--json]\n"
+            "        identity and encoder packets of the USB trigger box (1209:cf01)\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
             "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
             BOARD_NAME, (long)NF_MAX_CP, NF_MAX_DEGREE, (long)NF_ARENA_BYTES);
@@ -55,6 +60,8 @@ int main(int argc, char **argv)
         return cmd_base(argc - 1, argv + 1);
     if (!strcmp(c, "rig"))
         return cmd_rig(argc - 1, argv + 1);
+    if (!strcmp(c, "ports"))
+        return cmd_ports(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);
