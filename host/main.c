@@ -15,11 +15,13 @@ static int usage(FILE *f, int code)
             "  project SURF.igs XYZFILE [--entity N]  print u v distance for each point\n"
             "  report SURF.igs POINTS --tol T [--png MAP.png] [--json]\n"
             "        signed normal deviations, statistics, histogram, colour deviation map\n"
+            "  thin  SURF.igs POINTS --tol T [--radius R] --out FILE [--json]\n"
+            "        keep the nearest point per vertex of a T-relative quadrilateral blanket\n"
             "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
             "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
             "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
-            "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
-            "        [--solver S] [--json]   benchmarks on generated data\n"
+            "  bench accumulate|solve|fit|export|project [--points M] [--cp N]\n"
+            "        [--order raster|random] [--solver S] [--json]   benchmarks on generated data\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
             "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
             BOARD_NAME, (long)NF_MAX_CP, NF_MAX_DEGREE, (long)NF_ARENA_BYTES);
@@ -45,6 +47,8 @@ int main(int argc, char **argv)
         return cmd_report(argc - 1, argv + 1);
     if (!strcmp(c, "project"))
         return cmd_project(argc - 1, argv + 1);
+    if (!strcmp(c, "thin"))
+        return cmd_thin(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);
