@@ -614,13 +614,15 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->maxq = maxq;
     nf_surf_domain(s, &q->dom[0], &q->dom[1], &q->dom[2], &q->dom[3]);
     /* Carve the storage: doubles first (aligned), then ints. */
-    uintptr_t a = ((uintptr_t)mem + 63) & ~(uintptr_t)63;
-    double *dm = (double *)a;
+    unsigned char *base = (unsigned char *)mem;
+    base += (64 - (uintptr_t)base % 64) % 64;
+    double *dm = (double *)(void *)base;
     q->ul = dm;
     q->vl = q->ul + maxq + 2;
     q->xyz = q->vl + maxq + 2;
     q->qd = q->xyz + 3 * (3 * maxq + 2);
-    int *im = (int *)(q->qd + NF_QUAD_QD * maxq);
+    int *im = (int *)(void *)(base + sizeof(double) * (size_t)(2 * (maxq + 2) + 3 * (3 * maxq + 2) +
+                                                               NF_QUAD_QD * maxq));
     /* Size of the surface: the diagonal of its control net's box. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (long k = 0; k < (long)s->nu * s->nv; k++)
@@ -847,7 +849,7 @@ QINLINE void ders2(int l, double u, const int p, const double *U, double N[3][NF
     for (int a = 0; a <= p; a++)
         N[0][a] = t[a];
     /* D1[r] = N_{l-p+1+r, p-1} / (U[l+r+1] - U[l-p+r+1]), r = 0..p-1 */
-    double D1[NF_MAX_ORDER + 1], C1[NF_MAX_ORDER + 1], D2[NF_MAX_ORDER + 1];
+    double D1[NF_MAX_ORDER + 1] = {0}, C1[NF_MAX_ORDER + 1] = {0}, D2[NF_MAX_ORDER + 1] = {0};
     for (int r = 0; r < p; r++)
         D1[r] = t1[r] / (U[l + r + 1] - U[l - p + r + 1]);
     for (int a = 0; a <= p; a++)
