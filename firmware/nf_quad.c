@@ -607,7 +607,7 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
         return NF_EARG;
     if (!(prm->rel_tol > 0.0 && prm->rel_tol < 1.0))
         return NF_EARG;
-    if (bytes < (size_t)NF_QUAD_BYTES(maxq))
+    if (bytes < (size_t)NF_QUAD_BYTES(maxq, s->nu, s->nv))
         return NF_EARENA;
     memset(q, 0, sizeof *q);
     q->s = s;
@@ -621,8 +621,15 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->vl = q->ul + maxq + 2;
     q->xyz = q->vl + maxq + 2;
     q->qd = q->xyz + 3 * (3 * maxq + 2);
-    int *im = (int *)(void *)(base + sizeof(double) * (size_t)(2 * (maxq + 2) + 3 * (3 * maxq + 2) +
-                                                               NF_QUAD_QD * maxq));
+    q->ru = q->qd + NF_QUAD_QD * maxq;
+    q->rv = q->ru + (long)(s->nu + 1) * NF_RECIP_LEN;
+    int *im = (int *)(void *)(base + sizeof(double) * (size_t)NF_QUAD_DOUBLES_(maxq, s->nu, s->nv));
+    for (int l = s->p; l < s->nu; l++)
+        if (s->U[l] < s->U[l + 1])
+            nf_basis_recip(l, s->p, s->U, q->ru + (long)l * NF_RECIP_LEN);
+    for (int k = s->q; k < s->nv; k++)
+        if (s->V[k] < s->V[k + 1])
+            nf_basis_recip(k, s->q, s->V, q->rv + (long)k * NF_RECIP_LEN);
     /* Size of the surface: the diagonal of its control net's box. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (long k = 0; k < (long)s->nu * s->nv; k++)
@@ -636,6 +643,11 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->limit = prm->limit > 0.0 ? prm->limit : 0.05 * size;
     q->drop_far = prm->drop_far;
     q->creased = has_crease(s->U, s->nu - 1, s->p) || has_crease(s->V, s->nv - 1, s->q);
+    /* Equal weights cancel: the surface is polynomial (the host's surfaces
+     * carry weights 1), and Newton skips the quotient rule. */
+    q->rational = 0;
+    for (long k = 1; s->w && k < (long)s->nu * s->nv; k++)
+        q->rational |= s->w[k] != s->w[0];
     dec_t d;
     d.s = s;
     d.tol = q->tol;
@@ -700,7 +712,9 @@ static double quad_try(const nf_quad_t *q, long k, const double Q[3], double *ps
         double sv = a2 > 0.0 ? ((hx - fx * t) * ax + (hy - fy * t) * ay) / a2 : 0.5;
         if (!(sv - sv == 0.0))
             sv = 0.5;
-        const double viol = fmax(fmax(-sv, sv - 1.0), fmax(-t, t - 1.0));
+        /* How far outside [0, 1]^2 (plain compares: fmax is a libm call). */
+        const double vs = sv < 0.0 ? -sv : sv - 1.0, vt = t < 0.0 ? -t : t - 1.0;
+        const double viol = vs > vt ? vs : vt;
         if (viol < bv) {
             bv = viol;
             bs = sv;
@@ -816,88 +830,134 @@ void nf_quad_start(const nf_quad_t *q, const double Q[3], double *u0, double *v0
  * unrolls the loops (bicubic, the design degree, is the one that counts). */
 #if defined(__GNUC__)
 #define QINLINE static inline __attribute__((always_inline))
+#define QUNROLL _Pragma("GCC unroll 4")
 #else
 #define QINLINE static inline
+#define QUNROLL
 #endif
 
 /* Basis values and first and second derivatives on span l at u, from the
  * degree p-1 and p-2 values (N' of degree p = p (N_{i,p-1} / dU - N_{i+1,p-1}
- * / dU'), applied twice): the divisions of A2.3 without its general loops. */
-QINLINE void ders2(int l, double u, const int p, const double *U, double N[3][NF_MAX_ORDER])
+ * / dU'), applied twice), every knot difference's reciprocal from the
+ * span's table (nf_basis_recip): A2.3 without its divisions. */
+/* Cox-de Boor from degree j - 1 to j on span l (A2.2's inner step). */
+QINLINE void basis_up(double *t, int j, int l, double u, const double *U, const double *rc)
 {
-    double t[NF_MAX_ORDER], t1[NF_MAX_ORDER], t2[NF_MAX_ORDER];
-    double left[NF_MAX_ORDER], right[NF_MAX_ORDER];
-    t[0] = 1.0;
-    t1[0] = t2[0] = 1.0;
-    for (int j = 1; j <= p; j++) {
-        left[j] = u - U[l + 1 - j];
-        right[j] = U[l + j] - u;
-        double saved = 0.0;
-        for (int r = 0; r < j; r++) {
-            const double temp = t[r] / (right[r + 1] + left[j - r]);
-            t[r] = saved + right[r + 1] * temp;
-            saved = left[j - r] * temp;
-        }
-        t[j] = saved;
-        if (j == p - 2)
-            for (int r = 0; r <= j; r++)
-                t2[r] = t[r];
-        if (j == p - 1)
-            for (int r = 0; r <= j; r++)
-                t1[r] = t[r];
+    double saved = 0.0;
+    QUNROLL
+    for (int r = 0; r < j; r++) {
+        const double left = u - U[l + 1 - j + r], right = U[l + r + 1] - u;
+        const double temp = t[r] * rc[j * (j - 1) / 2 + r];
+        t[r] = saved + right * temp;
+        saved = left * temp;
     }
+    t[j] = saved;
+}
+
+QINLINE void ders2(int l, double u, const int p, const double *U, const double *rc,
+                   double N[3][NF_MAX_ORDER])
+{
+    double t[NF_MAX_ORDER], t1[NF_MAX_ORDER] = {0}, t2[NF_MAX_ORDER] = {0};
+    t[0] = 1.0;
+    QUNROLL
+    for (int j = 1; j <= p - 2; j++)
+        basis_up(t, j, l, u, U, rc);
+    QUNROLL
+    for (int r = 0; r <= p - 2; r++) /* degree p - 2 */
+        t2[r] = t[r];
+    if (p >= 2)
+        basis_up(t, p - 1, l, u, U, rc);
+    QUNROLL
+    for (int r = 0; r < p; r++) /* degree p - 1 */
+        t1[r] = t[r];
+    basis_up(t, p, l, u, U, rc);
+    QUNROLL
     for (int a = 0; a <= p; a++)
         N[0][a] = t[a];
     /* D1[r] = N_{l-p+1+r, p-1} / (U[l+r+1] - U[l-p+r+1]), r = 0..p-1 */
     double D1[NF_MAX_ORDER + 1] = {0}, C1[NF_MAX_ORDER + 1] = {0}, D2[NF_MAX_ORDER + 1] = {0};
+    QUNROLL
     for (int r = 0; r < p; r++)
-        D1[r] = t1[r] / (U[l + r + 1] - U[l - p + r + 1]);
+        D1[r] = t1[r] * rc[p * (p - 1) / 2 + r]; /* 1 / (U[l+r+1] - U[l-p+r+1]) */
+    QUNROLL
     for (int a = 0; a <= p; a++)
         N[1][a] = p * ((a >= 1 ? D1[a - 1] : 0.0) - (a < p ? D1[a] : 0.0));
     if (p < 2) {
+        QUNROLL
         for (int a = 0; a <= p; a++)
             N[2][a] = 0.0;
         return;
     }
     /* N'_{l-p+1+r, p-1} = (p-1) (D2[r-1] - D2[r]), D2[r] = N_{l-p+2+r, p-2} /
      * (U[l+r+1] - U[l-p+2+r]), r = 0..p-2. */
+    QUNROLL
     for (int r = 0; r <= p - 2; r++)
-        D2[r] = t2[r] / (U[l + r + 1] - U[l - p + 2 + r]);
+        D2[r] = t2[r] * rc[(p - 1) * (p - 2) / 2 + r]; /* 1 / (U[l+r+1] - U[l-p+2+r]) */
+    QUNROLL
     for (int r = 0; r < p; r++)
-        C1[r] = (p - 1) * ((r >= 1 ? D2[r - 1] : 0.0) - (r <= p - 2 ? D2[r] : 0.0)) /
-                (U[l + r + 1] - U[l - p + r + 1]);
+        C1[r] = (p - 1) * ((r >= 1 ? D2[r - 1] : 0.0) - (r <= p - 2 ? D2[r] : 0.0)) *
+                rc[p * (p - 1) / 2 + r];
+    QUNROLL
     for (int a = 0; a <= p; a++)
         N[2][a] = p * ((a >= 1 ? C1[a - 1] : 0.0) - (a < p ? C1[a] : 0.0));
 }
 
 /* S, Su, Sv, Suu, Suv, Svv on spans (l, k) (quotient rule on the
  * homogeneous derivatives for a rational surface, A4.4 to order 2). */
-QINLINE void derivs_pq(const nf_surf_t *s, int l, int k, double u, double v, const int p,
+QINLINE void derivs_pq(const nf_quad_t *qd, int l, int k, double u, double v, const int p,
                        const int q, double d[6][3])
 {
+    const nf_surf_t *s = qd->s;
     double Nu[3][NF_MAX_ORDER], Nv[3][NF_MAX_ORDER];
-    ders2(l, u, p, s->U, Nu);
-    ders2(k, v, q, s->V, Nv);
+    ders2(l, u, p, s->U, qd->ru + (long)l * NF_RECIP_LEN, Nu);
+    ders2(k, v, q, s->V, qd->rv + (long)k * NF_RECIP_LEN, Nv);
+    if (!qd->rational) { /* polynomial: rows contracted with the u basis, then v */
+        double S[6][3] = {{0}};
+        QUNROLL
+        for (int b = 0; b <= q; b++) {
+            const double *P = s->cp + 3 * ((l - p) + (long)(k - q + b) * s->nu);
+            double r0[3] = {0, 0, 0}, r1[3] = {0, 0, 0}, r2[3] = {0, 0, 0};
+            QUNROLL
+            for (int a = 0; a <= p; a++)
+                QUNROLL
+            for (int c = 0; c < 3; c++) {
+                r0[c] += Nu[0][a] * P[3 * a + c];
+                r1[c] += Nu[1][a] * P[3 * a + c];
+                r2[c] += Nu[2][a] * P[3 * a + c];
+            }
+            QUNROLL
+            for (int c = 0; c < 3; c++) {
+                S[0][c] += Nv[0][b] * r0[c];
+                S[1][c] += Nv[0][b] * r1[c];
+                S[2][c] += Nv[1][b] * r0[c];
+                S[3][c] += Nv[0][b] * r2[c];
+                S[4][c] += Nv[1][b] * r1[c];
+                S[5][c] += Nv[2][b] * r0[c];
+            }
+        }
+        QUNROLL
+        for (int m = 0; m < 6; m++)
+            QUNROLL
+        for (int c = 0; c < 3; c++)
+            d[m][c] = S[m][c];
+        return;
+    }
     double A[6][4] = {{0}};
+    QUNROLL
     for (int b = 0; b <= q; b++) {
         const long row = (l - p) + (long)(k - q + b) * s->nu;
-        const double *P = s->cp + 3 * row;
+        const double *P = s->cp + 3 * row, *w = s->w + row;
         double r[3][4] = {{0}};
-        if (s->w) {
-            const double *w = s->w + row;
-            for (int a = 0; a <= p; a++) {
-                const double h[4] = {P[3 * a] * w[a], P[3 * a + 1] * w[a], P[3 * a + 2] * w[a],
-                                     w[a]};
-                for (int m = 0; m < 3; m++)
-                    for (int c = 0; c < 4; c++)
-                        r[m][c] += Nu[m][a] * h[c];
-            }
-        } else {
-            for (int a = 0; a <= p; a++)
-                for (int m = 0; m < 3; m++)
-                    for (int c = 0; c < 3; c++)
-                        r[m][c] += Nu[m][a] * P[3 * a + c];
+        QUNROLL
+        for (int a = 0; a <= p; a++) {
+            const double h[4] = {P[3 * a] * w[a], P[3 * a + 1] * w[a], P[3 * a + 2] * w[a], w[a]};
+            QUNROLL
+            for (int m = 0; m < 3; m++)
+                QUNROLL
+            for (int c = 0; c < 4; c++)
+                r[m][c] += Nu[m][a] * h[c];
         }
+        QUNROLL
         for (int c = 0; c < 4; c++) {
             A[0][c] += Nv[0][b] * r[0][c];
             A[1][c] += Nv[0][b] * r[1][c]; /* u */
@@ -907,13 +967,8 @@ QINLINE void derivs_pq(const nf_surf_t *s, int l, int k, double u, double v, con
             A[5][c] += Nv[2][b] * r[0][c]; /* vv */
         }
     }
-    if (!s->w) {
-        for (int m = 0; m < 6; m++)
-            for (int c = 0; c < 3; c++)
-                d[m][c] = A[m][c];
-        return;
-    }
     const double iw = 1.0 / A[0][3];
+    QUNROLL
     for (int c = 0; c < 3; c++) {
         const double S = A[0][c] * iw;
         const double Su = (A[1][c] - A[1][3] * S) * iw, Sv = (A[2][c] - A[2][3] * S) * iw;
@@ -936,14 +991,15 @@ static int span_hint(int n, int p, double x, const double *K, int *hint)
     return *hint = nf_find_span(n, p, x, K);
 }
 
-static void derivs(const nf_surf_t *s, double u, double v, int *hl, int *hk, double d[6][3])
+static void derivs(const nf_quad_t *qd, double u, double v, int *hl, int *hk, double d[6][3])
 {
+    const nf_surf_t *s = qd->s;
     const int l = span_hint(s->nu - 1, s->p, u, s->U, hl);
     const int k = span_hint(s->nv - 1, s->q, v, s->V, hk);
     if (s->p == 3 && s->q == 3)
-        derivs_pq(s, l, k, u, v, 3, 3, d);
+        derivs_pq(qd, l, k, u, v, 3, 3, d);
     else
-        derivs_pq(s, l, k, u, v, s->p, s->q, d);
+        derivs_pq(qd, l, k, u, v, s->p, s->q, d);
 }
 
 /* Plain Newton for an interior foot: accepted when a full step below the
@@ -959,10 +1015,11 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
     int hl = -1, hk = -1;
     for (int it = 0; it < 12; it++) {
         double d[6][3];
-        derivs(q->s, cu, cv, &hl, &hk, d);
+        derivs(q, cu, cv, &hl, &hk, d);
         const double r[3] = {d[0][0] - Q[0], d[0][1] - Q[1], d[0][2] - Q[2]};
         const double D = dot3(r, r);
-        double scale = fmax(fmax(fabs(Q[0]), fabs(Q[1])), fabs(Q[2])) + sqrt(D);
+        const double a0 = fabs(Q[0]), a1 = fabs(Q[1]), a2 = fabs(Q[2]);
+        const double scale = (a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2)) + sqrt(D);
         if (D > best + 64.0 * DBL_EPSILON * scale * scale)
             return 0;
         if (D < best) {

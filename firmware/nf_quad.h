@@ -4,11 +4,13 @@
  * grid over the quadrilaterals in it (3.2), the start parameters of a point
  * from the nearest quadrilateral's mid-plane (3.4), then Newton point
  * inversion to 1e-9 of the domain (nf_project); and thinning to the nearest
- * point per vertex (3.3). Memory: caller storage of NF_QUAD_BYTES(maxq)
- * bytes for at most maxq quadrilaterals, whatever the number of points. */
+ * point per vertex (3.3). Memory: caller storage of NF_QUAD_BYTES(maxq, nu,
+ * nv) bytes for at most maxq quadrilaterals of an nu x nv net, whatever the
+ * number of points. */
 #ifndef NF_QUAD_H
 #define NF_QUAD_H
 
+#include "nf_basis.h"
 #include "nf_project.h"
 #include <stddef.h>
 
@@ -21,13 +23,17 @@
 /* Grid entries (quadrilateral references) per quadrilateral at most; the
  * grid is coarsened until the references fit. */
 #define NF_QUAD_ITEMS 12
-/* Bytes for at most maxq quadrilaterals: parameter lists (maxq + 2 each),
- * vertices (at most 3 maxq + 2 of them), per-quadrilateral data, grid cells
- * (at most 2 maxq + 2) and references, alignment slack. */
-#define NF_QUAD_BYTES(maxq)                                                                        \
-    (sizeof(double) * (2L * ((long)(maxq) + 2) + 3L * (3L * (long)(maxq) + 2) +                    \
-                       (long)NF_QUAD_QD * (long)(maxq)) +                                          \
-     sizeof(int) * (2L * (long)(maxq) + 3 + (long)NF_QUAD_ITEMS * (long)(maxq)) + 64)
+/* Bytes for at most maxq quadrilaterals of a surface with nu x nv control
+ * points: parameter lists (maxq + 2 each), vertices (at most 3 maxq + 2 of
+ * them), per-quadrilateral data, the knot reciprocals of every span (so
+ * that Newton's basis functions take no division), grid cells (at most
+ * 2 maxq + 2) and references, alignment slack. */
+#define NF_QUAD_DOUBLES_(maxq, nu, nv)                                                             \
+    (2L * ((long)(maxq) + 2) + 3L * (3L * (long)(maxq) + 2) + (long)NF_QUAD_QD * (long)(maxq) +    \
+     ((long)(nu) + (long)(nv) + 2) * (long)NF_RECIP_LEN)
+#define NF_QUAD_BYTES(maxq, nu, nv)                                                                \
+    (sizeof(double) * (size_t)NF_QUAD_DOUBLES_(maxq, nu, nv) +                                     \
+     sizeof(int) * (size_t)(2L * (long)(maxq) + 3 + (long)NF_QUAD_ITEMS * (long)(maxq)) + 64)
 
 typedef struct nf_quad_params {
     double rel_tol; /* flatness tolerance relative to the bounding-box diagonal of
@@ -48,24 +54,26 @@ typedef struct nf_quad {
     int drop_far;
     int nu, nv; /* parameter lines: (nu - 1)(nv - 1) quadrilaterals */
     long maxq;
-    double *ul, *vl;               /* the sorted parameter lists */
-    double *xyz;                   /* vertex (i, j) at 3 (i + j nu) */
-    double *qd;                    /* NF_QUAD_QD doubles per quadrilateral (i + j (nu - 1)) */
-    double N[3];                   /* normal of the maximum-area plane */
-    double e1[3], e2[3];           /* axes in it */
-    int folded;                    /* 1: some quadrilateral faces away from N (the surface
+    double *ul, *vl;     /* the sorted parameter lists */
+    double *xyz;         /* vertex (i, j) at 3 (i + j nu) */
+    double *qd;          /* NF_QUAD_QD doubles per quadrilateral (i + j (nu - 1)) */
+    double *ru, *rv;     /* knot reciprocals (nf_basis_recip) of span l at l * NF_RECIP_LEN */
+    double N[3];         /* normal of the maximum-area plane */
+    double e1[3], e2[3]; /* axes in it */
+    int folded;          /* 1: some quadrilateral faces away from N (the surface
                         * folds over in the plane, e.g. a cylinder beyond 180
                         * degrees): the plane's 2-D search is not one-to-one */
-    int creased;                   /* a C0 knot line: Newton goes through nf_project alone */
-    double x0, y0, cell;           /* grid origin and cell size in (e1, e2) */
-    int gx, gy;                    /* cells */
-    int *cstart, *citem;           /* cell c holds citem[cstart[c] .. cstart[c + 1]) */
+    int rational;        /* weights not all equal */
+    int creased;         /* a C0 knot line: Newton goes through nf_project alone */
+    double x0, y0, cell; /* grid origin and cell size in (e1, e2) */
+    int gx, gy;          /* cells */
+    int *cstart, *citem; /* cell c holds citem[cstart[c] .. cstart[c + 1]) */
     long n_clamped, n_far, n_slow; /* counts: feet on the boundary, points beyond
                                     * limit, points nf_project had to finish */
 } nf_quad_t;
 
 /* Decompose s (passed nf_surf_check) into at most maxq quadrilaterals in
- * mem (bytes long, at least NF_QUAD_BYTES(maxq)). NF_EARG for null pointers
+ * mem (bytes long, at least NF_QUAD_BYTES(maxq, s->nu, s->nv)). NF_EARG for null pointers
  * or a tolerance outside (0, 1); NF_EARENA when bytes is too small;
  * NF_EBUDGET when the tolerance needs more than maxq quadrilaterals. */
 int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, long maxq,

@@ -130,7 +130,7 @@ int bench_project(int argc, char **argv)
     nf_surf_t s;
     if (make_part(cp, (int)degree, &s))
         return cli_error("bench", CLI_FAIL, "out of memory");
-    const size_t bytes = NF_QUAD_BYTES(maxq);
+    const size_t bytes = NF_QUAD_BYTES(maxq, s.nu, s.nv);
     void *mem = malloc(bytes);
     double *rows = malloc(sizeof(double) * 5 * CHUNK);
     int ec = CLI_OK;

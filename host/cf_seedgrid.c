@@ -22,7 +22,7 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
      * paper's assumption, Section 3.2): over a fold two layers of the
      * surface share the plane's cells and the nearest quadrilateral in the
      * cell need not be the nearest in space, so the 3-D grid is kept. */
-    const size_t qb = NF_QUAD_BYTES(CF_SEEDGRID_MAXQ);
+    const size_t qb = NF_QUAD_BYTES(CF_SEEDGRID_MAXQ, s->nu, s->nv);
     g->qmem = malloc(qb);
     const nf_quad_params_t prm = {NF_QUAD_REL_TOL, 0.0, 0};
     if (g->qmem && nf_quad_init(&g->quad, s, &prm, CF_SEEDGRID_MAXQ, g->qmem, qb) == NF_OK &&

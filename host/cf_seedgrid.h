@@ -13,7 +13,7 @@
 #include "nf_project.h"
 #include "nf_quad.h"
 
-/* Quadrilaterals at most (NF_QUAD_BYTES(CF_SEEDGRID_MAXQ), about 20 MB). */
+/* Quadrilaterals at most (NF_QUAD_BYTES(CF_SEEDGRID_MAXQ, ...), about 20 MB). */
 #define CF_SEEDGRID_MAXQ 65536L
 
 typedef struct cf_seedgrid {

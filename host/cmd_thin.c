@@ -125,7 +125,7 @@ int cmd_thin(int argc, char **argv)
     nf_surf_t s;
     if (cf_iges_read(o.surf, (int)o.entity, &s, msg, sizeof msg))
         return cli_error("thin", CLI_USAGE, "%s", msg);
-    const size_t qb = NF_QUAD_BYTES(THIN_MAXQ);
+    const size_t qb = NF_QUAD_BYTES(THIN_MAXQ, s.nu, s.nv);
     void *qmem = malloc(qb);
     double *best = malloc(sizeof(double) * (size_t)NF_THIN_DOUBLES(THIN_MAXQ));
     long *idx = malloc(sizeof(long) * (size_t)NF_THIN_LONGS(THIN_MAXQ));

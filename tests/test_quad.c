@@ -26,7 +26,7 @@ typedef struct fixture {
 
 static void quad_make(fixture_t *f, const nf_surf_t *s, double rel, long maxq)
 {
-    f->bytes = NF_QUAD_BYTES(maxq);
+    f->bytes = NF_QUAD_BYTES(maxq, s->nu, s->nv);
     f->mem = malloc(f->bytes);
     assert_non_null(f->mem);
     nf_quad_params_t prm = {rel, 0.0, 0};
@@ -367,7 +367,7 @@ static void test_crack_free(void **state)
     ref_surf_free(&s);
 }
 
-/* Memory flat in the points: the storage is NF_QUAD_BYTES(maxq), fixed
+/* Memory flat in the points: the storage is NF_QUAD_BYTES(maxq, nu, nv), fixed
  * before the first point; projecting 10 or 20000 points changes neither the
  * grid nor a byte beyond the storage (canary) nor the decomposition. */
 static void test_memory_flat(void **state)
@@ -377,7 +377,7 @@ static void test_memory_flat(void **state)
     nf_surf_t s;
     ref_surf_random(&s, 3, 3, 8, 8, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
     const long maxq = 4000;
-    const size_t bytes = NF_QUAD_BYTES(maxq);
+    const size_t bytes = NF_QUAD_BYTES(maxq, s.nu, s.nv);
     unsigned char *mem = malloc(bytes + 4096);
     assert_non_null(mem);
     memset(mem + bytes, 0xA5, 4096);
@@ -503,7 +503,7 @@ static void test_flags_and_budget(void **state)
     double mc[NF_SURF_DOUBLES(3, 2, 2, 1)];
     nf_surf_t cyl;
     cylinder(&cyl, 40.0, 100.0, mc);
-    const size_t bytes = NF_QUAD_BYTES(MAXQ);
+    const size_t bytes = NF_QUAD_BYTES(MAXQ, cyl.nu, cyl.nv);
     void *mem = malloc(bytes);
     assert_non_null(mem);
     nf_quad_t q;
