@@ -109,12 +109,16 @@ static int span_end(int n, int p, double b, const double *K)
     return l;
 }
 
-/* One direction of a patch's control net over [a, b] inside knot span l:
- * the Bezier coefficients of the piece, T (o x o, o = p + 1) applied to the
- * control points from index l - p (T = Bernstein inverse times the basis
- * at the nodes a + (b - a) i / p). */
+/* One direction of a patch's control net over [a, b]. Inside knot span l
+ * (bez): the Bezier coefficients of the piece, T (o x o, o = p + 1)
+ * applied to the control points from index l - p (T = Bernstein inverse
+ * times the basis at the nodes a + (b - a) i / p), Greville parameters
+ * a + (b - a) r / p. Over many spans (!bez): the o control points of s from
+ * index first themselves, at their own Greville abscissae. */
 typedef struct dir {
-    int first, o;
+    int first, o, bez, p;
+    double a, b;
+    const double *K;
     double T[NF_MAX_ORDER * NF_MAX_ORDER];
 } dir_t;
 
@@ -123,6 +127,11 @@ static void dir_init(dir_t *d, const double *K, int l, int p, double a, double b
     const int o = p + 1;
     d->first = l - p;
     d->o = o;
+    d->bez = 1;
+    d->p = p;
+    d->a = a;
+    d->b = b;
+    d->K = K;
     double Nn[NF_MAX_ORDER][NF_MAX_ORDER]; /* Nn[i][c]: basis c at node i */
     for (int i = 0; i < o; i++)
         nf_basis_funs(l, a + (b - a) * i / p, p, K, Nn[i]);
@@ -135,14 +144,31 @@ static void dir_init(dir_t *d, const double *K, int l, int p, double a, double b
         }
 }
 
-/* Control point (r, t) of the Bezier piece. */
+static void dir_whole(dir_t *d, const double *K, int la, int lb, int p)
+{
+    d->first = la - p;
+    d->o = lb - la + p + 1;
+    d->bez = 0;
+    d->p = p;
+    d->K = K;
+}
+
+/* Parameter of coefficient r. */
+static double dir_param(const dir_t *d, int r)
+{
+    return d->bez ? d->a + (d->b - d->a) * r / d->p : nf_greville(d->first + r, d->p, d->K);
+}
+
+/* Control point (r, t) of the piece's net. */
 static void net_pt(const nf_surf_t *s, const dir_t *du, const dir_t *dv, int r, int t, double *P)
 {
     double h[4] = {0, 0, 0, 0};
-    for (int c2 = 0; c2 < dv->o; c2++) {
-        const double fv = dv->T[t * dv->o + c2];
-        for (int c1 = 0; c1 < du->o; c1++) {
-            const double f = fv * du->T[r * du->o + c1];
+    const int u0 = du->bez ? 0 : r, u1 = du->bez ? du->o : r + 1;
+    const int v0 = dv->bez ? 0 : t, v1 = dv->bez ? dv->o : t + 1;
+    for (int c2 = v0; c2 < v1; c2++) {
+        const double fv = dv->bez ? dv->T[t * dv->o + c2] : 1.0;
+        for (int c1 = u0; c1 < u1; c1++) {
+            const double f = fv * (du->bez ? du->T[r * du->o + c1] : 1.0);
             const long i = (du->first + c1) + (long)(dv->first + c2) * s->nu;
             const double w = s->w ? s->w[i] : 1.0;
             h[0] += f * w * s->cp[3 * i];
@@ -155,6 +181,12 @@ static void net_pt(const nf_surf_t *s, const dir_t *du, const dir_t *dv, int r, 
         P[c] = h[c] / h[3];
 }
 
+/* Spans a rectangle must cover in a direction for the control points of s
+ * to serve as its net there: their Greville abscissae then lie within a
+ * few spans of it and the bound stays tight; a narrower rectangle is taken
+ * span by span. */
+#define WIDE_SPANS 4
+
 /* Flatness test (Section 3.1) of the patch over r, whose corner points are
  * C: the largest distance of the patch's control points from the bilinear
  * quadrilateral of the corners at the control points' Greville parameters.
@@ -162,9 +194,14 @@ static void net_pt(const nf_surf_t *s, const dir_t *du, const dir_t *dv, int r, 
  * bounds how far the start parameters are off (a flat patch whose
  * parametrisation bends inside the plane passes the plane test whole). For
  * a polynomial patch it bounds |S - B| everywhere: B has the control points
- * B(Greville) in the same basis, and the basis sums to one. The patch is
- * taken piece by piece (one per knot span it meets), each piece's own
- * Bezier net extracted exactly from its values at the nodes.
+ * B(Greville) in the same basis, and the basis sums to one. Per direction,
+ * a rectangle over WIDE_SPANS knot spans or more takes the control points
+ * of s; a narrower one is taken piece by piece (one per knot span it
+ * meets), each piece's own Bezier net extracted exactly from its values at
+ * the nodes.
+ * The scan stops at the first control point beyond the tolerance (then
+ * the value returned is only known to exceed it), so that the large
+ * rectangles at the top of the subdivision cost little.
  * *dirv: 1 to split in v (on a tie the longer side, as the paper). */
 static double flat_dev(const dec_t *d, const rect_t *r, const double *C, int *dirv)
 {
@@ -174,30 +211,38 @@ static double flat_dev(const dec_t *d, const rect_t *r, const double *C, int *di
               lb = span_end(s->nu - 1, p, r->ub, s->U);
     const int ka = nf_find_span(s->nv - 1, q, r->va, s->V),
               kb = span_end(s->nv - 1, q, r->vb, s->V);
+    const int wide_u = lb - la + 1 >= WIDE_SPANS, wide_v = kb - ka + 1 >= WIDE_SPANS;
     double dev = 0.0;
-    for (int k = ka; k <= kb; k++) {
-        if (!(s->V[k] < s->V[k + 1]))
-            continue;
-        const double va = fmax(r->va, s->V[k]), vb = fmin(r->vb, s->V[k + 1]);
+    for (int k = ka; k <= (wide_v ? ka : kb); k++) {
         dir_t dv;
-        dir_init(&dv, s->V, k, q, va, vb, d->iv);
-        for (int l = la; l <= lb; l++) {
-            if (!(s->U[l] < s->U[l + 1]))
-                continue;
-            const double ua = fmax(r->ua, s->U[l]), ub = fmin(r->ub, s->U[l + 1]);
+        if (wide_v)
+            dir_whole(&dv, s->V, ka, kb, q);
+        else if (s->V[k] < s->V[k + 1])
+            dir_init(&dv, s->V, k, q, fmax(r->va, s->V[k]), fmin(r->vb, s->V[k + 1]), d->iv);
+        else
+            continue;
+        for (int l = la; l <= (wide_u ? la : lb); l++) {
             dir_t du;
-            dir_init(&du, s->U, l, p, ua, ub, d->iu);
-            for (int t = 0; t <= q; t++)
-                for (int a = 0; a <= p; a++) {
+            if (wide_u)
+                dir_whole(&du, s->U, la, lb, p);
+            else if (s->U[l] < s->U[l + 1])
+                dir_init(&du, s->U, l, p, fmax(r->ua, s->U[l]), fmin(r->ub, s->U[l + 1]), d->iu);
+            else
+                continue;
+            for (int t = 0; t < dv.o; t++)
+                for (int a = 0; a < du.o; a++) {
                     double P[3], B[3];
                     net_pt(s, &du, &dv, a, t, P);
-                    bilin(C, (ua + (ub - ua) * a / p - r->ua) / (r->ub - r->ua),
-                          (va + (vb - va) * t / q - r->va) / (r->vb - r->va), B);
+                    bilin(C, (dir_param(&du, a) - r->ua) / (r->ub - r->ua),
+                          (dir_param(&dv, t) - r->va) / (r->vb - r->va), B);
                     const double e[3] = {P[0] - B[0], P[1] - B[1], P[2] - B[2]};
                     dev = fmax(dev, sqrt(dot3(e, e)));
+                    if (dev > d->tol) /* not flat: the other pieces cannot change that */
+                        goto direction;
                 }
         }
     }
+direction:
     /* Direction: the larger chord deviation at the midpoints of the sides
      * running that way (curvature and uneven parametric speed alike). */
     const double um = 0.5 * (r->ua + r->ub), vm = 0.5 * (r->va + r->vb);
