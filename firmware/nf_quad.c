@@ -187,6 +187,37 @@ static void net_pt(const nf_surf_t *s, const dir_t *du, const dir_t *dv, int r, 
  * span by span. */
 #define WIDE_SPANS 4
 
+/* Direction to split r in (1: v): the larger chord deviation at the
+ * midpoints of the sides running that way (curvature and uneven parametric
+ * speed alike); on a tie the longer side, as the paper. */
+static int split_dir(const nf_surf_t *s, const rect_t *r, const double *C)
+{
+    const double um = 0.5 * (r->ua + r->ub), vm = 0.5 * (r->va + r->vb);
+    double M[4][3], e2u = 0.0, e2v = 0.0;
+    nf_surf_eval(s, um, r->va, M[0]);
+    nf_surf_eval(s, um, r->vb, M[1]);
+    nf_surf_eval(s, r->ua, vm, M[2]);
+    nf_surf_eval(s, r->ub, vm, M[3]);
+    for (int c = 0; c < 3; c++) {
+        const double a0 = M[0][c] - 0.5 * (C[c] + C[3 + c]),
+                     a1 = M[1][c] - 0.5 * (C[6 + c] + C[9 + c]);
+        const double b0 = M[2][c] - 0.5 * (C[c] + C[6 + c]),
+                     b1 = M[3][c] - 0.5 * (C[3 + c] + C[9 + c]);
+        e2u += fmax(a0 * a0, a1 * a1);
+        e2v += fmax(b0 * b0, b1 * b1);
+    }
+    if (e2u != e2v)
+        return e2v > e2u;
+    else {
+        double eu[3], ev[3];
+        for (int c = 0; c < 3; c++) {
+            eu[c] = C[3 + c] - C[c] + C[9 + c] - C[6 + c];
+            ev[c] = C[6 + c] - C[c] + C[9 + c] - C[3 + c];
+        }
+        return dot3(ev, ev) > dot3(eu, eu);
+    }
+}
+
 /* Flatness test (Section 3.1) of the patch over r, whose corner points are
  * C: the largest distance of the patch's control points from the bilinear
  * quadrilateral of the corners at the control points' Greville parameters.
@@ -243,32 +274,7 @@ static double flat_dev(const dec_t *d, const rect_t *r, const double *C, int *di
         }
     }
 direction:
-    /* Direction: the larger chord deviation at the midpoints of the sides
-     * running that way (curvature and uneven parametric speed alike). */
-    const double um = 0.5 * (r->ua + r->ub), vm = 0.5 * (r->va + r->vb);
-    double M[4][3], e2u = 0.0, e2v = 0.0;
-    nf_surf_eval(s, um, r->va, M[0]);
-    nf_surf_eval(s, um, r->vb, M[1]);
-    nf_surf_eval(s, r->ua, vm, M[2]);
-    nf_surf_eval(s, r->ub, vm, M[3]);
-    for (int c = 0; c < 3; c++) {
-        const double a0 = M[0][c] - 0.5 * (C[c] + C[3 + c]),
-                     a1 = M[1][c] - 0.5 * (C[6 + c] + C[9 + c]);
-        const double b0 = M[2][c] - 0.5 * (C[c] + C[6 + c]),
-                     b1 = M[3][c] - 0.5 * (C[3 + c] + C[9 + c]);
-        e2u += fmax(a0 * a0, a1 * a1);
-        e2v += fmax(b0 * b0, b1 * b1);
-    }
-    if (e2u != e2v)
-        *dirv = e2v > e2u;
-    else {
-        double eu[3], ev[3];
-        for (int c = 0; c < 3; c++) {
-            eu[c] = C[3 + c] - C[c] + C[9 + c] - C[6 + c];
-            ev[c] = C[6 + c] - C[c] + C[9 + c] - C[3 + c];
-        }
-        *dirv = dot3(ev, ev) > dot3(eu, eu);
-    }
+    *dirv = split_dir(s, r, C);
     return dev;
 }
 
