@@ -1,6 +1,8 @@
-/* cf_seedgrid.c: nearest seed sample by a uniform cell grid. */
+/* cf_seedgrid.c: start points for projection: the quadrilateral
+ * decomposition (nf_quad), else the nearest seed sample by a 3-D cell grid. */
 #include "cf_seedgrid.h"
 #include "cf_err.h"
+#include "nf_err.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +17,21 @@ static int clampi(long x, int hi)
 int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
 {
     memset(g, 0, sizeof *g);
+    g->seed.s = s;
+    /* The quadrilaterals when the surface is projectable to a plane (the
+     * paper's assumption, Section 3.2): over a fold two layers of the
+     * surface share the plane's cells and the nearest quadrilateral in the
+     * cell need not be the nearest in space, so the 3-D grid is kept. */
+    const size_t qb = NF_QUAD_BYTES(CF_SEEDGRID_MAXQ, s->nu, s->nv);
+    g->qmem = malloc(qb);
+    const nf_quad_params_t prm = {NF_QUAD_REL_TOL, 0.0, 0};
+    if (g->qmem && nf_quad_init(&g->quad, s, &prm, CF_SEEDGRID_MAXQ, g->qmem, qb) == NF_OK &&
+        !g->quad.folded) {
+        g->use_quad = 1;
+        return CF_OK;
+    }
+    free(g->qmem);
+    g->qmem = NULL;
     int spans = (s->nu - s->p) > (s->nv - s->q) ? (s->nu - s->p) : (s->nv - s->q);
     long ns = (long)per_span * spans + 1;
     ns = ns > 1024 ? 1024 : (ns < 16 ? 16 : ns);
@@ -77,6 +94,10 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
 
 void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, double *v0)
 {
+    if (g->use_quad) {
+        nf_quad_start(&g->quad, Q, u0, v0);
+        return;
+    }
     const long ns = g->seed.ns, n2 = ns * ns;
     const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
     int c0[3];
@@ -126,8 +147,18 @@ void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, do
     *v0 = j == ns - 1 ? vb : va + (vb - va) * (double)j / (double)(ns - 1);
 }
 
+int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj_t *out)
+{
+    if (g->use_quad)
+        return nf_quad_project(&g->quad, Q, tol, out);
+    double u0, v0;
+    cf_seedgrid_start(g, Q, &u0, &v0);
+    return nf_project(g->seed.s, Q, u0, v0, tol, out);
+}
+
 void cf_seedgrid_free(cf_seedgrid_t *g)
 {
+    free(g->qmem);
     free(g->pts);
     free(g->next);
     free(g->head);

@@ -1,15 +1,26 @@
-/* cf_seedgrid.h: start points for projection in O(1) per point: the seed
- * samples of nf_seed (a grid of surface points at uniform parameters) are
- * binned into a uniform 3-D cell grid, and the nearest sample to Q is found
- * by searching cells in growing shells around Q's cell. Host memory: one
- * int per cell and per sample, fixed by the seed, never by the points. */
+/* cf_seedgrid.h: start points for projection in O(1) per point. First
+ * choice: the quadrilateral decomposition of nf_quad (Piegl & Tiller 2001,
+ * Section 3: the nearest quadrilateral by a 2-D grid in the maximum-area
+ * plane). Fallback, where the quadrilaterals cannot serve (the surface
+ * folds over in that plane, or needs more than CF_SEEDGRID_MAXQ of them):
+ * the seed samples of nf_seed (a grid of surface points at uniform
+ * parameters) binned into a uniform 3-D cell grid, the nearest sample to Q
+ * found by searching cells in growing shells around Q's cell. Host memory:
+ * fixed by the surface, never by the points. */
 #ifndef CF_SEEDGRID_H
 #define CF_SEEDGRID_H
 
 #include "nf_project.h"
+#include "nf_quad.h"
+
+/* Quadrilaterals at most (NF_QUAD_BYTES(CF_SEEDGRID_MAXQ, ...), about 20 MB). */
+#define CF_SEEDGRID_MAXQ 65536L
 
 typedef struct cf_seedgrid {
-    nf_seed_t seed;
+    nf_seed_t seed; /* seed.s is the surface in either mode */
+    int use_quad;   /* 1: quad holds the decomposition; the rest is unused */
+    nf_quad_t quad;
+    void *qmem;
     double *pts; /* the seed's samples (owned) */
     int dim[3];
     double lo[3], cell;
@@ -19,8 +30,12 @@ typedef struct cf_seedgrid {
 /* Samples of s (about `per_span` per knot span and direction, capped) and
  * their cells. CF_ENOMEM on allocation failure. */
 int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span);
-/* Parameters of the sample nearest Q (exact nearest among the samples). */
+/* Start parameters for Q: nf_quad_start, or the seed sample nearest Q
+ * (exact nearest among the samples). */
 void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, double *v0);
+/* The whole projection to tol of the domain: nf_quad_project, or
+ * nf_project from cf_seedgrid_start. nf_project's codes. */
+int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj_t *out);
 void cf_seedgrid_free(cf_seedgrid_t *g);
 
 #endif

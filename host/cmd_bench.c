@@ -1,6 +1,7 @@
 /* cmd_bench.c: `cellfit bench accumulate|solve|fit`: single measurements
  * on generated, seeded data streamed without files (issue 6). Prints
  * figures; asserts nothing. Nets are square, bicubic, uniform knots. */
+#include "bench_project.h"
 #include "cf_cli.h"
 #include "cf_surf.h"
 #include "nf_err.h"
@@ -177,6 +178,8 @@ int cmd_bench(int argc, char **argv)
                          "[--points M] [--cp N] [--order raster|random] "
                          "[--solver S] [--json]");
     const char *what = argv[1];
+    if (!strcmp(what, "project")) /* host/bench_project.c */
+        return bench_project(argc, argv);
     int acc = !strcmp(what, "accumulate"), sol = !strcmp(what, "solve"), fit = !strcmp(what, "fit");
     int exp = !strcmp(what, "export");
     sol |= exp; /* export writes the system the solve benchmark solves */

@@ -1,12 +1,14 @@
 /* cmd_project.c: `cellfit project SURF.igs XYZFILE [--entity N]`: for each
  * measured point x y z, the parameters of its closest point on the surface
  * and the signed distance to it (Piegl & Tiller 2001, Section 3; NURBS Book
- * 6.1), one line "u v distance" (%.17g) per point. Start points come from a
- * sample grid of the surface (nf_seed, sized by nf_seed_size); memory is
- * the grid and one read batch, whatever the number of points. */
+ * 6.1), one line "u v distance" (%.17g) per point. Start points come from
+ * the quadrilateral decomposition (nf_quad, Section 3), or a 3-D grid of
+ * seed samples where it cannot serve (cf_seedgrid); memory is that and one
+ * read batch, whatever the number of points. */
 #include "cf_cli.h"
 #include "cf_iges.h"
 #include "cf_points.h"
+#include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "nf_err.h"
 #include "nf_project.h"
@@ -14,8 +16,7 @@
 #include <string.h>
 
 #define BATCH 4096
-#define PROJ_TOL 1e-9          /* parameter accuracy, relative to the domain */
-#define SEED_CAP (256L * 256L) /* samples: 8 per span and direction, at most 256^2 */
+#define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
 
 int cmd_project(int argc, char **argv)
 {
@@ -47,22 +48,19 @@ int cmd_project(int argc, char **argv)
         cf_surf_free(&s);
         return cli_error("project", CLI_USAGE, "%s", msg);
     }
-    int nsu, nsv;
-    nf_seed_size(&s, SEED_CAP, &nsu, &nsv);
-    double *pts = malloc(sizeof(double) * (size_t)NF_SEED_DOUBLES(nsu, nsv));
+    cf_seedgrid_t g;
     double *buf = malloc(sizeof(double) * 3 * BATCH);
     int ec = CLI_OK;
-    if (!pts || !buf) {
+    if (!buf || cf_seedgrid_init(&g, &s, 8)) {
+        memset(&g, 0, sizeof g);
         ec = cli_error("project", CLI_FAIL, "out of memory");
         goto done;
     }
-    nf_seed_t g;
-    nf_seed_init_uv(&g, &s, nsu, nsv, pts);
     long got, n = 0, lost = 0, first_lost = 0;
     while ((got = cf_points_read(r, buf, BATCH, msg, sizeof msg)) > 0) {
         for (long k = 0; k < got; k++) {
             nf_proj_t pr;
-            int rc = nf_project_seeded(&g, buf + 3 * k, PROJ_TOL, &pr);
+            int rc = cf_seedgrid_project(&g, buf + 3 * k, PROJ_TOL, &pr);
             n++;
             if (rc == NF_ENOCONV) { /* the nearest point found is still printed */
                 first_lost = lost++ ? first_lost : n;
@@ -86,7 +84,7 @@ int cmd_project(int argc, char **argv)
     }
 done:
     free(buf);
-    free(pts);
+    cf_seedgrid_free(&g);
     cf_points_close(r);
     cf_surf_free(&s);
     return ec;

@@ -135,10 +135,8 @@ int cmd_report(int argc, char **argv)
         const int cols = cf_points_cols(pr);
         for (long k = 0; k < got; k++) {
             const double *Q = xyz_of(buf, cols, k);
-            double u0, v0;
             nf_proj_t pj;
-            cf_seedgrid_start(&sg, Q, &u0, &v0);
-            nf_project(&s, Q, u0, v0, 1e-9, &pj);
+            cf_seedgrid_project(&sg, Q, 1e-9, &pj); /* best point kept on ENOCONV */
             clamped += pj.clamped;
             cf_stats_add(st, pj.dist);
             if (map)

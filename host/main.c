@@ -15,6 +15,8 @@ static int usage(FILE *f, int code)
             "  project SURF.igs XYZFILE [--entity N]  print u v distance for each point\n"
             "  report SURF.igs POINTS --tol T [--png MAP.png] [--json]\n"
             "        signed normal deviations, statistics, histogram, colour deviation map\n"
+            "  thin  SURF.igs POINTS --tol T [--radius R] --out FILE [--json]\n"
+            "        keep the nearest point per vertex of a T-relative quadrilateral blanket\n"
             "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
             "  base  --points FILE [--curves CURVES.igs [--de a,b,c,d]]\n"
             "        [--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S]\n"
@@ -31,6 +33,8 @@ static int usage(FILE *f, int code)
             "        read the laser probe (M0) on a serial port\n"
             "  ports --trig VID:PID[:SERIAL] [--n N] [--period US] [--json]\n"
             "        identity and encoder packets of the USB trigger box (1209:cf01)\n"
+            "  bench accumulate|solve|fit|export|project [--points M] [--cp N]\n"
+            "        [--order raster|random] [--solver S] [--json]   benchmarks on generated data\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
             "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
             BOARD_NAME, (long)NF_MAX_CP, NF_MAX_DEGREE, (long)NF_ARENA_BYTES);
@@ -62,6 +66,8 @@ int main(int argc, char **argv)
         return cmd_rig(argc - 1, argv + 1);
     if (!strcmp(c, "ports"))
         return cmd_ports(argc - 1, argv + 1);
+    if (!strcmp(c, "thin"))
+        return cmd_thin(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);

@@ -1,0 +1,216 @@
+/* bench_project.c: `cellfit bench project --points M [--cp N] [--degree P]
+ * [--tol REL] [--offset MM] [--order random|raster] [--json]`: projection of
+ * points generated near a known surface (Piegl & Tiller 2001, Section 3:
+ * quadrilateral decomposition, grid search, then Newton, nf_quad) with
+ * their true parameters known: Q = S(u, v) + d n(u, v), |d| <= offset
+ * (1 mm), on a curved bicubic 100 x 100 mm part. Prints the time, points
+ * per second (generation excluded) and the largest parameter error
+ * against the truth, relative to the domain. Measures, asserts nothing. */
+#include "bench_project.h"
+#include "cf_cli.h"
+#include "cf_surf.h"
+#include "nf_err.h"
+#include "nf_quad.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define CHUNK 65536
+#define PROJ_TOL 1e-9
+
+/* CPU seconds of this process: the figure per core, whatever else the
+ * machine runs (wall time is printed beside it). */
+static double cpu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static unsigned long long bp_rng = 0x9E3779B97F4A7C15ull;
+
+static double bp_rand(void)
+{
+    bp_rng ^= bp_rng << 13;
+    bp_rng ^= bp_rng >> 7;
+    bp_rng ^= bp_rng << 17;
+    return (double)(bp_rng >> 11) / 9007199254740992.0;
+}
+
+/* The part: a square bicubic net over 100 x 100 mm whose heights follow a
+ * smooth field with a bump (radius of curvature >= ~30 mm). */
+static int make_part(long cp, int p, nf_surf_t *s)
+{
+    int side = (int)lround(sqrt((double)cp));
+    if (side < p + 1)
+        side = p + 1;
+    if (cf_surf_alloc(s, p, p, side, side))
+        return -1;
+    for (int i = 0; i <= p; i++) {
+        s->U[i] = s->V[i] = 0.0;
+        s->U[side + i] = s->V[side + i] = 1.0;
+    }
+    for (int i = p + 1; i < side; i++)
+        s->U[i] = s->V[i] = (double)(i - p) / (side - p);
+    for (int j = 0; j < side; j++)
+        for (int i = 0; i < side; i++) {
+            double *P = s->cp + 3 * (i + (long)j * side);
+            const double u = (double)i / (side - 1), v = (double)j / (side - 1);
+            P[0] = 100.0 * u;
+            P[1] = 100.0 * v;
+            P[2] = 10.0 * u * (1.0 - u) + 5.0 * v * v + 0.5 * sin(6.0 * u) * cos(4.5 * v);
+        }
+    return 0;
+}
+
+/* n points: rows u v x y z with Q = S + d n, d uniform in [-off, off]. */
+static void gen(const nf_surf_t *s, long k0, long n, long total, int random, double off,
+                double *rows)
+{
+    const long cols = (long)ceil(sqrt((double)total));
+    for (long k = 0; k < n; k++) {
+        double u, v, *r = rows + 5 * k;
+        if (random) {
+            u = bp_rand();
+            v = bp_rand();
+        } else {
+            u = ((double)((k0 + k) % cols) + 0.5) / (double)cols;
+            v = ((double)((k0 + k) / cols) + 0.5) / (double)cols;
+        }
+        double d[27];
+        nf_surf_derivs(s, u, v, 1, d);
+        const double *Su = d + 9, *Sv = d + 3;
+        double nv[3] = {Su[1] * Sv[2] - Su[2] * Sv[1], Su[2] * Sv[0] - Su[0] * Sv[2],
+                        Su[0] * Sv[1] - Su[1] * Sv[0]};
+        const double l = sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
+        const double h = off * (2.0 * bp_rand() - 1.0);
+        r[0] = u;
+        r[1] = v;
+        for (int c = 0; c < 3; c++)
+            r[2 + c] = d[c] + h * nv[c] / l;
+    }
+}
+
+int bench_project(int argc, char **argv)
+{
+    long points = 1000000, cp = 10000, degree = 3, maxq = 200000;
+    double rel = NF_QUAD_REL_TOL, off = 1.0;
+    int json = 0, random = 1;
+    for (int i = 2; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
+        int bad = 0;
+        if (!strcmp(a, "--json")) {
+            json = 1;
+            continue;
+        }
+        if (!strcmp(a, "--points"))
+            bad = cli_int(v, 1, 4000000000L, &points);
+        else if (!strcmp(a, "--cp"))
+            bad = cli_int(v, 4, NF_MAX_CP, &cp);
+        else if (!strcmp(a, "--degree"))
+            bad = cli_int(v, 1, NF_MAX_DEGREE, &degree);
+        else if (!strcmp(a, "--maxq"))
+            bad = cli_int(v, 1, 100000000L, &maxq);
+        else if (!strcmp(a, "--tol"))
+            bad = cli_double(v, &rel) || !(rel > 0 && rel < 1);
+        else if (!strcmp(a, "--offset"))
+            bad = cli_double(v, &off) || !(off >= 0);
+        else if (!strcmp(a, "--order")) {
+            if (!strcmp(v, "raster"))
+                random = 0;
+            else
+                bad = strcmp(v, "random") != 0;
+        } else
+            return cli_error("bench", CLI_USAGE, "unknown option '%s'", a);
+        if (bad)
+            return cli_error("bench", CLI_USAGE, "bad value '%s' for %s", v, a);
+        i++;
+    }
+    nf_surf_t s;
+    if (make_part(cp, (int)degree, &s))
+        return cli_error("bench", CLI_FAIL, "out of memory");
+    const size_t bytes = NF_QUAD_BYTES(maxq, s.nu, s.nv);
+    void *mem = malloc(bytes);
+    double *rows = malloc(sizeof(double) * 5 * CHUNK);
+    int ec = CLI_OK;
+    if (!mem || !rows) {
+        ec = cli_error("bench", CLI_FAIL, "out of memory");
+        goto done;
+    }
+    nf_quad_t q;
+    nf_quad_params_t prm = {rel, 0.0, 0};
+    double t0 = cli_now();
+    int rc = nf_quad_init(&q, &s, &prm, maxq, mem, bytes);
+    const double t_init = cli_now() - t0;
+    if (rc) {
+        ec = cli_error("bench", CLI_FAIL, "decomposition: %s", nf_strerror(rc));
+        goto done;
+    }
+    double t_proj = 0.0, c_proj = 0.0, err = 0.0, dmax = 0.0;
+    long iters = 0, lost = 0;
+    for (long k = 0; k < points; k += CHUNK) {
+        const long n = points - k < CHUNK ? points - k : CHUNK;
+        gen(&s, k, n, points, random, off, rows);
+        double e = 0.0, dm = 0.0;
+        long it = 0, ls = 0;
+        t0 = cli_now();
+        const double c0 = cpu_now();
+        for (long m = 0; m < n; m++) {
+            const double *r = rows + 5 * m;
+            nf_proj_t pr;
+            ls += nf_quad_project(&q, r + 2, PROJ_TOL, &pr) != NF_OK;
+            e = fmax(e, fmax(fabs(pr.u - r[0]), fabs(pr.v - r[1])));
+            dm = fmax(dm, fabs(pr.dist));
+            it += pr.iters;
+        }
+        c_proj += cpu_now() - c0;
+        t_proj += cli_now() - t0;
+        err = fmax(err, e);
+        dmax = fmax(dmax, dm);
+        iters += it;
+        lost += ls;
+    }
+    const long store = (long)bytes;
+    if (json) {
+        cli_json_t j;
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "bench", "project");
+        cli_json_int(&j, "points", points);
+        cli_json_int(&j, "control_points", (long)s.nu * s.nv);
+        cli_json_int(&j, "degree", degree);
+        cli_json_str(&j, "order", random ? "random" : "raster");
+        cli_json_num(&j, "rel_tol", rel);
+        cli_json_int(&j, "quads", nf_quad_count(&q));
+        cli_json_int(&j, "grid_cells", (long)q.gx * q.gy);
+        cli_json_int(&j, "folded", q.folded);
+        cli_json_num(&j, "init_seconds", t_init);
+        cli_json_num(&j, "seconds", c_proj);
+        cli_json_num(&j, "wall_seconds", t_proj);
+        cli_json_num(&j, "points_per_s", (double)points / c_proj);
+        cli_json_num(&j, "max_param_error", err);
+        cli_json_num(&j, "max_distance", dmax);
+        cli_json_num(&j, "mean_newton_iters", (double)iters / (double)points);
+        cli_json_int(&j, "slow_points", q.n_slow);
+        cli_json_int(&j, "clamped", q.n_clamped);
+        cli_json_int(&j, "far", q.n_far);
+        cli_json_int(&j, "not_converged", lost);
+        cli_json_int(&j, "quad_bytes", store);
+        cli_json_end(&j);
+    } else {
+        printf("bench project: %ld points, %ld control points, degree %ld, %s order\n", points,
+               (long)s.nu * s.nv, degree, random ? "random" : "raster");
+        printf("  %ld quadrilaterals (tol %.3g), %d x %d grid, init %.4f s, %ld bytes\n",
+               nf_quad_count(&q), rel, q.gx, q.gy, t_init, store);
+        printf("  project %.4f s CPU (%.4f s wall) = %.3g points/s, max parameter error %.3g, %.2f "
+               "Newton steps, "
+               "%ld slow, %ld clamped, %ld far, %ld not converged\n",
+               c_proj, t_proj, (double)points / c_proj, err, (double)iters / (double)points,
+               q.n_slow, q.n_clamped, q.n_far, lost);
+    }
+done:
+    free(mem);
+    free(rows);
+    cf_surf_free(&s);
+    return ec;
+}

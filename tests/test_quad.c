@@ -1,0 +1,542 @@
+/* test_quad.c: the quadrilateral decomposition and projection of nf_quad
+ * (Piegl & Tiller 2001, Section 3) against independent results: feet by
+ * brute force (400 x 400 samples, Newton from the nearest), chord error by
+ * sampling, shared vertices, exact circle and sphere patches (weights),
+ * storage untouched by the point count, thinning against a full search. */
+
+#include "cf_test.h"
+#include "nf_err.h"
+#include "nf_quad.h"
+#include "nf_surf.h"
+#include "ref_dense.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TOL 1e-9
+#define MAXQ 20000L
+#define NB 400 /* brute-force samples per direction */
+
+typedef struct fixture {
+    nf_quad_t q;
+    void *mem;
+    size_t bytes;
+} fixture_t;
+
+static void quad_make(fixture_t *f, const nf_surf_t *s, double rel, long maxq)
+{
+    f->bytes = NF_QUAD_BYTES(maxq, s->nu, s->nv);
+    f->mem = malloc(f->bytes);
+    assert_non_null(f->mem);
+    nf_quad_params_t prm = {rel, 0.0, 0};
+    int rc = nf_quad_init(&f->q, s, &prm, maxq, f->mem, f->bytes);
+    if (rc != NF_OK)
+        fail_msg("nf_quad_init: %s", nf_strerror(rc));
+}
+
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static double dist3(const double *a, const double *b)
+{
+    const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(dot3(d, d));
+}
+
+/* Dense samples of s for the brute force. */
+typedef struct dense {
+    double *P;
+    double dom[4];
+} dense_t;
+
+static void dense_make(dense_t *d, const nf_surf_t *s)
+{
+    nf_surf_domain(s, &d->dom[0], &d->dom[1], &d->dom[2], &d->dom[3]);
+    d->P = malloc(sizeof(double) * 3 * NB * NB);
+    assert_non_null(d->P);
+    for (int j = 0; j < NB; j++)
+        for (int i = 0; i < NB; i++)
+            nf_surf_eval(s, d->dom[0] + (d->dom[1] - d->dom[0]) * i / (NB - 1),
+                         d->dom[2] + (d->dom[3] - d->dom[2]) * j / (NB - 1),
+                         d->P + 3 * (i + j * NB));
+}
+
+/* The reference foot: the nearest of the dense samples, Newton from it. */
+static void brute(const nf_surf_t *s, const dense_t *d, const double Q[3], nf_proj_t *out)
+{
+    double best = INFINITY;
+    int bi = 0;
+    for (int k = 0; k < NB * NB; k++) {
+        const double e = dist3(d->P + 3 * k, Q);
+        if (e < best) {
+            best = e;
+            bi = k;
+        }
+    }
+    const double u = d->dom[0] + (d->dom[1] - d->dom[0]) * (bi % NB) / (NB - 1);
+    const double v = d->dom[2] + (d->dom[3] - d->dom[2]) * (bi / NB) / (NB - 1);
+    int rc = nf_project(s, Q, u, v, TOL, out);
+    assert_int_equal(rc, NF_OK);
+}
+
+/* Points Q = S(u, v) + h n (|h| <= hmax) and points beyond the boundary
+ * (S at an edge pushed out along the edge's outward tangent). */
+static void random_point(const nf_surf_t *s, double hmax, int k, double Q[3])
+{
+    double u0, u1, v0, v1;
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    double u = ref_rand(u0, u1), v = ref_rand(v0, v1), d[27];
+    double out_u = 0.0, out_v = 0.0;
+    if (k % 10 == 9) { /* beyond an edge */
+        if (ref_rand(0, 1) < 0.5) {
+            u = ref_rand(0, 1) < 0.5 ? u0 : u1;
+            out_u = u == u0 ? -1.0 : 1.0;
+        } else {
+            v = ref_rand(0, 1) < 0.5 ? v0 : v1;
+            out_v = v == v0 ? -1.0 : 1.0;
+        }
+    }
+    nf_surf_derivs(s, u, v, 1, d);
+    const double *Su = d + 9, *Sv = d + 3;
+    double n[3] = {Su[1] * Sv[2] - Su[2] * Sv[1], Su[2] * Sv[0] - Su[0] * Sv[2],
+                   Su[0] * Sv[1] - Su[1] * Sv[0]};
+    const double l = sqrt(dot3(n, n)), h = ref_rand(-hmax, hmax);
+    const double lu = sqrt(dot3(Su, Su)), lv = sqrt(dot3(Sv, Sv));
+    for (int c = 0; c < 3; c++)
+        Q[c] = d[c] + h * n[c] / l + hmax * (out_u * Su[c] / lu + out_v * Sv[c] / lv);
+}
+
+/* nf_quad_project and the brute force give the same foot (parameters to
+ * 1e-9 of the domain, or the same distance where the foot is not unique
+ * to that: both are then nearest points). */
+static void check_against_brute(const nf_surf_t *s, double hmax, int npts)
+{
+    fixture_t f;
+    quad_make(&f, s, NF_QUAD_REL_TOL, MAXQ);
+    dense_t d;
+    dense_make(&d, s);
+    for (int k = 0; k < npts; k++) {
+        double Q[3];
+        random_point(s, hmax, k, Q);
+        nf_proj_t a, b;
+        int rc = nf_quad_project(&f.q, Q, TOL, &a);
+        assert_int_equal(rc, NF_OK);
+        brute(s, &d, Q, &b);
+        const double du = fabs(a.u - b.u) / (d.dom[1] - d.dom[0]);
+        const double dv = fabs(a.v - b.v) / (d.dom[3] - d.dom[2]);
+        if (!(du <= TOL && dv <= TOL))
+            fail_msg("point %d (%.17g %.17g %.17g): quad foot (%.17g, %.17g) dist %.17g, brute "
+                     "(%.17g, %.17g) dist %.17g",
+                     k, Q[0], Q[1], Q[2], a.u, a.v, a.dist, b.u, b.v, b.dist);
+        assert_near(fabs(a.dist), fabs(b.dist), 1e-9 * (1.0 + fabs(b.dist)));
+        assert_int_equal(a.clamped, b.clamped);
+        /* The start itself lies in the foot's quadrilateral or a neighbour
+         * (the range search found the right one, not only Newton). */
+        double u0, v0;
+        nf_quad_start(&f.q, Q, &u0, &v0);
+        int i = 0, j = 0;
+        while (i + 2 < f.q.nu && f.q.ul[i + 1] < b.u)
+            i++;
+        while (j + 2 < f.q.nv && f.q.vl[j + 1] < b.v)
+            j++;
+        const double ulo = f.q.ul[i > 0 ? i - 1 : 0], uhi = f.q.ul[i + 2 < f.q.nu ? i + 2 : i + 1];
+        const double vlo = f.q.vl[j > 0 ? j - 1 : 0], vhi = f.q.vl[j + 2 < f.q.nv ? j + 2 : j + 1];
+        if (!(u0 >= ulo && u0 <= uhi && v0 >= vlo && v0 <= vhi))
+            fail_msg("point %d: start (%.6g, %.6g) outside the foot's quadrilateral's "
+                     "neighbourhood [%.6g, %.6g] x [%.6g, %.6g]",
+                     k, u0, v0, ulo, uhi, vlo, vhi);
+    }
+    free(d.P);
+    free(f.mem);
+}
+
+/* Heights of the random net scaled: waves of +-20 mm on a 10 mm net, so
+ * that the distance has many valleys and a poor start lands in the wrong
+ * one. */
+static void wavy(nf_surf_t *s, double f)
+{
+    for (long k = 0; k < (long)s->nu * s->nv; k++)
+        s->cp[3 * k + 2] *= f;
+}
+
+static void test_curved(void **state)
+{
+    (void)state;
+    ref_seed(11);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 8, 7, 0.0, 1.0, 0.0, 2.0, 1.0, 1.0);
+    wavy(&s, 4.0);
+    check_against_brute(&s, 1.0, 300);
+    ref_surf_free(&s);
+    /* Rational, weights 0.5 .. 2. */
+    ref_surf_random(&s, 3, 2, 6, 6, -1.0, 1.0, 0.0, 1.0, 0.5, 2.0);
+    wavy(&s, 4.0);
+    check_against_brute(&s, 1.0, 300);
+    ref_surf_free(&s);
+}
+
+/* A long narrow strip: 70 mm by 0.07 mm (v pulled in by 1e-3). */
+static void test_thin(void **state)
+{
+    (void)state;
+    ref_seed(12);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 8, 5, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    for (int j = 1; j < s.nv; j++)
+        for (int i = 0; i < s.nu; i++) {
+            double *P = s.cp + 3 * (i + (long)j * s.nu), *P0 = s.cp + 3 * i;
+            for (int c = 0; c < 3; c++)
+                P[c] = P0[c] + 1e-3 * (P[c] - P0[c]);
+        }
+    check_against_brute(&s, 0.01, 300);
+    ref_surf_free(&s);
+}
+
+/* Exact quarter cylinder (radius R, degree 2 x 1, weights 1, 1/sqrt 2, 1)
+ * and sphere patch (a 90-degree meridian arc revolved by 90 degrees). */
+static void cylinder(nf_surf_t *s, double R, double L, double *mem)
+{
+    nf_surf_wire(s, 2, 1, 3, 2, mem);
+    const double U[] = {0, 0, 0, 1, 1, 1}, V[] = {0, 0, 1, 1};
+    memcpy(s->U, U, sizeof U);
+    memcpy(s->V, V, sizeof V);
+    const double P[3][2] = {{R, 0}, {R, R}, {0, R}}, w[3] = {1, sqrt(0.5), 1};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 3; i++) {
+            double *C = s->cp + 3 * (i + 3 * j);
+            C[0] = P[i][0];
+            C[1] = P[i][1];
+            C[2] = L * j;
+            s->w[i + 3 * j] = w[i];
+        }
+}
+
+static void sphere(nf_surf_t *s, double R, double *mem)
+{
+    nf_surf_wire(s, 2, 2, 3, 3, mem);
+    const double K[] = {0, 0, 0, 1, 1, 1};
+    memcpy(s->U, K, sizeof K);
+    memcpy(s->V, K, sizeof K);
+    const double c = sqrt(0.5);
+    /* meridian (radius, height) from -45 to 45 degrees */
+    const double m[3][2] = {{R * c, -R * c}, {R / c, 0}, {R * c, R * c}}, mw[3] = {1, c, 1};
+    const double r[3][2] = {{1, 0}, {1, 1}, {0, 1}}, rw[3] = {1, c, 1};
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 3; i++) {
+            double *C = s->cp + 3 * (i + 3 * j);
+            C[0] = m[j][0] * r[i][0];
+            C[1] = m[j][0] * r[i][1];
+            C[2] = m[j][1];
+            s->w[i + 3 * j] = rw[i] * mw[j];
+        }
+}
+
+static void test_rational_exact(void **state)
+{
+    (void)state;
+    ref_seed(13);
+    double mc[NF_SURF_DOUBLES(3, 2, 2, 1)], ms[NF_SURF_DOUBLES(3, 3, 2, 2)];
+    nf_surf_t cyl, sph;
+    const double R = 40.0;
+    cylinder(&cyl, R, 100.0, mc);
+    sphere(&sph, R, ms);
+    assert_int_equal(nf_surf_check(&cyl), NF_OK);
+    assert_int_equal(nf_surf_check(&sph), NF_OK);
+    check_against_brute(&cyl, 2.0, 200);
+    check_against_brute(&sph, 2.0, 200);
+    /* The distance is exact: |Q - axis| - R, |Q - centre| - R inside. */
+    fixture_t fc, fs;
+    quad_make(&fc, &cyl, NF_QUAD_REL_TOL, MAXQ);
+    quad_make(&fs, &sph, NF_QUAD_REL_TOL, MAXQ);
+    for (int k = 0; k < 200; k++) {
+        const double a = ref_rand(0.05, 1.52), z = ref_rand(1, 99), rr = R + ref_rand(-3, 3);
+        const double Q[3] = {rr * cos(a), rr * sin(a), z};
+        nf_proj_t pr;
+        assert_int_equal(nf_quad_project(&fc.q, Q, TOL, &pr), NF_OK);
+        assert_near(fabs(pr.dist), fabs(rr - R), 1e-9);
+        assert_near(atan2(pr.foot[1], pr.foot[0]), a, 1e-9);
+        const double b = ref_rand(-0.7, 0.7);
+        const double P[3] = {rr * cos(b) * cos(a), rr * cos(b) * sin(a), rr * sin(b)};
+        assert_int_equal(nf_quad_project(&fs.q, P, TOL, &pr), NF_OK);
+        assert_near(fabs(pr.dist), fabs(rr - R), 1e-9);
+        assert_near(sqrt(dot3(pr.foot, pr.foot)), R, 1e-9);
+    }
+    free(fc.mem);
+    free(fs.mem);
+}
+
+/* Every quadrilateral deviates from the surface by at most the tolerance:
+ * |S(u, v) - B(s, t)| sampled 9 x 9 over each (B the bilinear quadrilateral
+ * of its corners, (s, t) the local parameters). */
+static void check_chord(const nf_surf_t *s, double rel)
+{
+    fixture_t f;
+    quad_make(&f, s, rel, MAXQ);
+    const nf_quad_t *q = &f.q;
+    double worst = 0.0;
+    for (int j = 0; j + 1 < q->nv; j++)
+        for (int i = 0; i + 1 < q->nu; i++) {
+            double C[4][3];
+            nf_surf_eval(s, q->ul[i], q->vl[j], C[0]);
+            nf_surf_eval(s, q->ul[i + 1], q->vl[j], C[1]);
+            nf_surf_eval(s, q->ul[i], q->vl[j + 1], C[2]);
+            nf_surf_eval(s, q->ul[i + 1], q->vl[j + 1], C[3]);
+            for (int b = 0; b <= 8; b++)
+                for (int a = 0; a <= 8; a++) {
+                    const double st = a / 8.0, tt = b / 8.0;
+                    double S[3], B[3];
+                    nf_surf_eval(s, q->ul[i] + st * (q->ul[i + 1] - q->ul[i]),
+                                 q->vl[j] + tt * (q->vl[j + 1] - q->vl[j]), S);
+                    for (int c = 0; c < 3; c++)
+                        B[c] = (1 - tt) * ((1 - st) * C[0][c] + st * C[1][c]) +
+                               tt * ((1 - st) * C[2][c] + st * C[3][c]);
+                    worst = fmax(worst, dist3(S, B));
+                }
+        }
+    if (!(worst <= q->tol))
+        fail_msg("chord error %.6g above the tolerance %.6g", worst, q->tol);
+    free(f.mem);
+}
+
+static void test_flatness(void **state)
+{
+    (void)state;
+    ref_seed(14);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 9, 8, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    check_chord(&s, 0.005);
+    check_chord(&s, 0.001);
+    ref_surf_free(&s);
+    ref_surf_random(&s, 2, 3, 7, 6, 0.0, 1.0, 0.0, 1.0, 0.5, 2.0);
+    check_chord(&s, 0.005);
+    ref_surf_free(&s);
+    double ms[NF_SURF_DOUBLES(3, 3, 2, 2)];
+    sphere(&s, 40.0, ms);
+    check_chord(&s, 0.002);
+    /* A finer tolerance gives more quadrilaterals. */
+    fixture_t a, b;
+    quad_make(&a, &s, 0.005, MAXQ);
+    quad_make(&b, &s, 0.0005, MAXQ);
+    assert_true(nf_quad_count(&b.q) > nf_quad_count(&a.q));
+    free(a.mem);
+    free(b.mem);
+}
+
+/* Crack-free: the blanket is the tensor grid of the sorted parameter
+ * lists, every vertex the surface point there, and neighbours' shared
+ * corners the same points (no vertex of one on an edge of another). */
+static void test_crack_free(void **state)
+{
+    (void)state;
+    ref_seed(15);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 10, 6, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    fixture_t f;
+    quad_make(&f, &s, 0.002, MAXQ);
+    const nf_quad_t *q = &f.q;
+    double u0, u1, v0, v1;
+    nf_surf_domain(&s, &u0, &u1, &v0, &v1);
+    assert_true(q->nu > 2 && q->nv > 2);
+    assert_true(q->ul[0] == u0 && q->ul[q->nu - 1] == u1);
+    assert_true(q->vl[0] == v0 && q->vl[q->nv - 1] == v1);
+    for (int i = 0; i + 1 < q->nu; i++)
+        assert_true(q->ul[i] < q->ul[i + 1]);
+    for (int j = 0; j + 1 < q->nv; j++)
+        assert_true(q->vl[j] < q->vl[j + 1]);
+    for (int j = 0; j < q->nv; j++)
+        for (int i = 0; i < q->nu; i++) {
+            double S[3];
+            nf_surf_eval(&s, q->ul[i], q->vl[j], S);
+            assert_true(dist3(S, q->xyz + 3 * (i + (long)j * q->nu)) == 0.0);
+        }
+    /* Refinement happened locally in the lists, yet every quadrilateral's
+     * corners are grid vertices: each quad's right edge is its
+     * neighbour's left edge, point for point, at every subdivision. */
+    for (int j = 0; j + 1 < q->nv; j++)
+        for (int i = 0; i + 2 < q->nu; i++) {
+            double a[3], b[3];
+            nf_surf_eval(&s, q->ul[i + 1], q->vl[j], a); /* quad i's corner 10 */
+            nf_surf_eval(&s, q->ul[i + 1], q->vl[j + 1], b);
+            assert_true(dist3(a, q->xyz + 3 * (i + 1 + (long)j * q->nu)) == 0.0);
+            assert_true(dist3(b, q->xyz + 3 * (i + 1 + (long)(j + 1) * q->nu)) == 0.0);
+        }
+    free(f.mem);
+    ref_surf_free(&s);
+}
+
+/* Memory flat in the points: the storage is NF_QUAD_BYTES(maxq, nu, nv), fixed
+ * before the first point; projecting 10 or 20000 points changes neither the
+ * grid nor a byte beyond the storage (canary) nor the decomposition. */
+static void test_memory_flat(void **state)
+{
+    (void)state;
+    ref_seed(16);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 8, 8, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    const long maxq = 4000;
+    const size_t bytes = NF_QUAD_BYTES(maxq, s.nu, s.nv);
+    unsigned char *mem = malloc(bytes + 4096);
+    assert_non_null(mem);
+    memset(mem + bytes, 0xA5, 4096);
+    nf_quad_t q;
+    nf_quad_params_t prm = {NF_QUAD_REL_TOL, 0.0, 0};
+    assert_int_equal(nf_quad_init(&q, &s, &prm, maxq, mem, bytes), NF_OK);
+    const nf_quad_t before = q;
+    unsigned char *copy = malloc(bytes);
+    assert_non_null(copy);
+    memcpy(copy, mem, bytes);
+    for (int round = 0; round < 2; round++) {
+        const int m = round == 0 ? 10 : 20000;
+        for (int k = 0; k < m; k++) {
+            double Q[3];
+            random_point(&s, 1.0, k, Q);
+            nf_proj_t pr;
+            assert_true(nf_quad_project(&q, Q, TOL, &pr) >= 0);
+        }
+        assert_int_equal(q.gx, before.gx);
+        assert_int_equal(q.gy, before.gy);
+        assert_int_equal(q.nu, before.nu);
+        assert_int_equal(q.nv, before.nv);
+        assert_int_equal(q.cstart[(long)q.gx * q.gy], before.cstart[(long)q.gx * q.gy]);
+        assert_memory_equal(mem, copy, bytes); /* the storage is read only */
+        for (int k = 0; k < 4096; k++)
+            assert_int_equal(mem[bytes + k], 0xA5);
+    }
+    free(copy);
+    free(mem);
+    ref_surf_free(&s);
+}
+
+/* Thinning keeps, per vertex, exactly the nearest point within r: the
+ * brute force over all points and vertices agrees index for index. */
+static void test_thin_nearest(void **state)
+{
+    (void)state;
+    ref_seed(17);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 7, 6, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    fixture_t f;
+    quad_make(&f, &s, 0.002, MAXQ);
+    const long nvx = (long)f.q.nu * f.q.nv;
+    double *best = malloc(sizeof(double) * (size_t)NF_THIN_DOUBLES(MAXQ));
+    long *idx = malloc(sizeof(long) * (size_t)NF_THIN_LONGS(MAXQ));
+    const int M = 3000;
+    double *P = malloc(sizeof(double) * 3 * M);
+    assert_true(best && idx && P);
+    const double r = 0.6; /* about the point spacing: many balls hold one point or none */
+    nf_thin_t t;
+    assert_int_equal(nf_thin_init(&t, &f.q, r, best, idx), NF_OK);
+    assert_int_equal(nf_thin_verts(&t), nvx);
+    for (int k = 0; k < M; k++) {
+        random_point(&s, 1.0, k, P + 3 * k);
+        assert_int_equal(nf_thin_add(&t, P + 3 * k, k), NF_OK);
+    }
+    long kept = 0;
+    for (long v = 0; v < nvx; v++) {
+        const double *V = f.q.xyz + 3 * v;
+        long bk = -1;
+        double bd = INFINITY;
+        for (int k = 0; k < M; k++) {
+            const double d = dist3(P + 3 * k, V);
+            if (d <= r && d < bd) {
+                bd = d;
+                bk = k;
+            }
+        }
+        assert_int_equal(idx[v], bk);
+        if (bk >= 0) {
+            kept++;
+            assert_memory_equal(best + 4 * v + 1, P + 3 * bk, 3 * sizeof(double));
+        }
+    }
+    assert_true(kept > 0 && kept < M);
+    free(P);
+    free(idx);
+    free(best);
+    free(f.mem);
+    ref_surf_free(&s);
+}
+
+/* A cylinder beyond 180 degrees folds over in its maximum-area plane; a
+ * quarter does not. */
+static void test_fold(void **state)
+{
+    (void)state;
+    double mc[NF_SURF_DOUBLES(3, 2, 2, 1)];
+    nf_surf_t cyl;
+    cylinder(&cyl, 40.0, 100.0, mc);
+    fixture_t f;
+    quad_make(&f, &cyl, NF_QUAD_REL_TOL, MAXQ);
+    assert_int_equal(f.q.folded, 0);
+    free(f.mem);
+    /* 270 degrees: three quarter arcs, double knots at 1/3 and 2/3. */
+    double m3[NF_SURF_DOUBLES(7, 2, 2, 1)];
+    nf_surf_t c3;
+    nf_surf_wire(&c3, 2, 1, 7, 2, m3);
+    const double U[] = {0, 0, 0, 1, 1, 2, 2, 3, 3, 3}, V[] = {0, 0, 1, 1};
+    memcpy(c3.U, U, sizeof U);
+    memcpy(c3.V, V, sizeof V);
+    const double P[7][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}};
+    const double c = sqrt(0.5), w[7] = {1, c, 1, c, 1, c, 1};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 7; i++) {
+            double *C = c3.cp + 3 * (i + 7 * j);
+            C[0] = 40 * P[i][0];
+            C[1] = 40 * P[i][1];
+            C[2] = 100.0 * j;
+            c3.w[i + 7 * j] = w[i];
+        }
+    assert_int_equal(nf_surf_check(&c3), NF_OK);
+    quad_make(&f, &c3, NF_QUAD_REL_TOL, MAXQ);
+    assert_int_equal(f.q.folded, 1);
+    free(f.mem);
+}
+
+/* Far points are counted (and dropped on request); feet on the boundary
+ * are counted as clamped; a budget too small is refused. */
+static void test_flags_and_budget(void **state)
+{
+    (void)state;
+    double mc[NF_SURF_DOUBLES(3, 2, 2, 1)];
+    nf_surf_t cyl;
+    cylinder(&cyl, 40.0, 100.0, mc);
+    const size_t bytes = NF_QUAD_BYTES(MAXQ, cyl.nu, cyl.nv);
+    void *mem = malloc(bytes);
+    assert_non_null(mem);
+    nf_quad_t q;
+    nf_quad_params_t prm = {NF_QUAD_REL_TOL, 5.0, 1};
+    assert_int_equal(nf_quad_init(&q, &cyl, &prm, MAXQ, mem, bytes), NF_OK);
+    nf_proj_t pr;
+    const double near[3] = {41 * cos(0.5), 41 * sin(0.5), 50}, far[3] = {50, 30, 50};
+    const double beyond[3] = {40 * cos(0.5), 40 * sin(0.5), 103};
+    assert_int_equal(nf_quad_project(&q, near, TOL, &pr), NF_OK);
+    assert_int_equal(q.n_far, 0);
+    assert_int_equal(nf_quad_project(&q, far, TOL, &pr), NF_QUAD_DROPPED);
+    assert_int_equal(q.n_far, 1);
+    assert_int_equal(nf_quad_project(&q, beyond, TOL, &pr), NF_OK);
+    assert_int_equal(pr.clamped, 1);
+    assert_near(pr.v, 1.0, 0.0);
+    assert_int_equal(q.n_clamped, 1);
+    /* Refusals. */
+    assert_int_equal(nf_quad_init(&q, &cyl, &prm, MAXQ, mem, bytes - 1), NF_EARENA);
+    prm.rel_tol = 1e-5;
+    assert_int_equal(nf_quad_init(&q, &cyl, &prm, 8, mem, bytes), NF_EBUDGET);
+    prm.rel_tol = 0.0;
+    assert_int_equal(nf_quad_init(&q, &cyl, &prm, MAXQ, mem, bytes), NF_EARG);
+    free(mem);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_curved),           cmocka_unit_test(test_thin),
+        cmocka_unit_test(test_rational_exact),   cmocka_unit_test(test_flatness),
+        cmocka_unit_test(test_crack_free),       cmocka_unit_test(test_memory_flat),
+        cmocka_unit_test(test_thin_nearest),     cmocka_unit_test(test_fold),
+        cmocka_unit_test(test_flags_and_budget),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
