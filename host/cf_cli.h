@@ -39,5 +39,6 @@ int cmd_gen(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_project(int argc, char **argv);
+int cmd_serve(int argc, char **argv);
 
 #endif

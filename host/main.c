@@ -18,6 +18,9 @@ static int usage(FILE *f, int code)
             "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
             "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
             "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
+            "  serve --plc tcp:ADDR:PORT [--config FILE] [--word-order lo-hi|hi-lo]\n"
+            "        [--watchdog-ms T] [--port-file F] [--syslog]   the cell headless, driven\n"
+            "        by a PLC over Modbus TCP (docs/plc-register-map.md)\n"
             "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
             "        [--solver S] [--json]   benchmarks on generated data\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
@@ -45,6 +48,8 @@ int main(int argc, char **argv)
         return cmd_report(argc - 1, argv + 1);
     if (!strcmp(c, "project"))
         return cmd_project(argc - 1, argv + 1);
+    if (!strcmp(c, "serve"))
+        return cmd_serve(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);
