@@ -66,23 +66,23 @@ static void log_end(const plc_fsm_t *f, int from)
 }
 
 /* The worker: run the job's phases one after another as the state machine
- * names them; the lock is held only between phases. */
+ * names them; the lock is held only between phases. It follows its own job
+ * only (the state each event returns): once that has ended it returns, even
+ * if a new job has been accepted since (that one gets its own thread). */
 static void *worker_main(void *arg)
 {
     srv_t *s = arg;
     const cf_runner_t *r = s->run;
     cf_job_ctl_t ctl = {job_progress, job_should_stop, s};
-    for (;;) {
-        pthread_mutex_lock(&s->mu);
-        int st = s->fsm.state, job = s->fsm.job;
-        plc_params_t p = s->fsm.job_params;
-        if (st == PLC_S_ABORTING) { /* aborted before this phase began */
-            plc_fsm_event(&s->fsm, PLC_EV_ABORTED, 0, NULL);
-            log_end(&s->fsm, st);
-        }
-        pthread_mutex_unlock(&s->mu);
-        if (st < PLC_S_HOMING || st > PLC_S_EXPORTING)
-            break;
+    pthread_mutex_lock(&s->mu);
+    int st = s->fsm.state, job = s->fsm.job;
+    plc_params_t p = s->fsm.job_params;
+    if (st == PLC_S_ABORTING) { /* aborted before the first phase began */
+        st = plc_fsm_event(&s->fsm, PLC_EV_ABORTED, 0, NULL);
+        log_end(&s->fsm, PLC_S_ABORTING);
+    }
+    pthread_mutex_unlock(&s->mu);
+    while (st >= PLC_S_HOMING && st <= PLC_S_EXPORTING) {
         cf_log(CF_LOG_INFO, "job %s seq %u: %s", plc_cmd_name(job), p.seq, plc_state_name(st));
         plc_results_t res;
         memset(&res, 0, sizeof res);
@@ -94,21 +94,22 @@ static void *worker_main(void *arg)
         case PLC_S_EXPORTING: rc = r->export_result(r->ctx, &p, &ctl); break;
         default: break;
         }
+        int from = st;
         pthread_mutex_lock(&s->mu);
         if (rc == 0)
-            plc_fsm_event(&s->fsm, PLC_EV_OK, 0, st == PLC_S_FITTING ? &res : NULL);
+            st = plc_fsm_event(&s->fsm, PLC_EV_OK, 0, from == PLC_S_FITTING ? &res : NULL);
         else if (rc == CF_PLC_ABORTED)
-            plc_fsm_event(&s->fsm, PLC_EV_ABORTED, 0, NULL);
+            st = plc_fsm_event(&s->fsm, PLC_EV_ABORTED, 0, NULL);
         else
-            plc_fsm_event(&s->fsm, PLC_EV_FAIL, rc, NULL);
-        if (st == PLC_S_FITTING && rc == 0 && s->fsm.results_valid)
+            st = plc_fsm_event(&s->fsm, PLC_EV_FAIL, rc, NULL);
+        if (from == PLC_S_FITTING && rc == 0 && s->fsm.results_valid)
             cf_log(CF_LOG_INFO,
                    "job seq %u: %lu points, %lu control points, rms %.6g max %.6g min %.6g, "
                    "%.2f %% within tolerance: %s",
                    p.seq, (unsigned long)res.points, (unsigned long)res.control_points, res.rms,
                    res.max, res.min, res.within_pct,
                    res.verdict == PLC_VERDICT_PASS ? "pass" : "fail");
-        log_end(&s->fsm, st);
+        log_end(&s->fsm, from);
         pthread_mutex_unlock(&s->mu);
     }
     atomic_store(&s->job_ended, 1);
