@@ -129,6 +129,13 @@ grep -q "info command FIT seq" "$T/a.log" && grep -q "error watchdog: PLC heartb
 [ "$(grep -c 'client .* connected' "$T/a.log")" -ge 8 ] && ok "log: clients came and went" ||
     no "log: few client connections"
 
+# SIGTERM after all that: exit 0 (with ASan: no leak, no error).
+kill -TERM "$pid"
+wait "$pid"
+rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+[ $rc -eq 0 ] && ok "SIGTERM after the jobs: serve exits 0" || no "SIGTERM: serve a exit $rc"
+
 # High word first: mbpoll needs -B, and the identity values say so.
 start b --nominal "$T/nominal.igs" --points "$T/points.xyz" --word-order hi-lo --max-clients 2
 out=$(mb -r 7 -c 1)
@@ -140,6 +147,7 @@ out=$(mb -r 4 -c 1 -t 4:int -B)
 echo "$out" | grep -q '^\[4\]:[[:space:]]*305419896' && ok "mbpoll -B: test uint32 (hi-lo)" ||
     no "mbpoll -B int: $out"
 py identity "$port"
+py limit "$port" 2 "$(command -v mbpoll)"
 
 # SIGTERM: exit 0, port file removed.
 kill -TERM "$pid"
@@ -150,6 +158,11 @@ pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 [ ! -e "$T/b.port" ] && ok "SIGTERM: port file removed" || no "port file left"
 grep -q "info stopping" "$T/b.log" && ok "SIGTERM: logged" || no "SIGTERM not logged"
 
+if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" >/dev/null; then
+    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T/a.log" "$T/b.log" | head -5
+else
+    ok "no sanitizer report in the server logs"
+fi
 stop_all
 echo "plc: $pass passed, $fail failed"
 [ $fail -eq 0 ]

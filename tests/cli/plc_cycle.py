@@ -4,7 +4,7 @@
 # PLC does (docs/plc-register-map.md). Prints "ok ..." / "FAIL ..." lines;
 # tests/cli/plc.sh counts them. Steps: identity PORT; cycle PORT RESULTS_DIR
 # NPOINTS MBPOLL [DIR_OUT]; abort PORT (invalid commands idle and busy, then
-# an abort mid-job); watchdog PORT. Run with /usr/bin/python3 (Debian's python3-pymodbus).
+# an abort mid-job); watchdog PORT; limit PORT MAX_CLIENTS MBPOLL. Run with /usr/bin/python3 (Debian's python3-pymodbus).
 import glob
 import json
 import os
@@ -290,6 +290,21 @@ def watchdog(port):
     check(c.write(WATCHDOG_MS, [0]) == 0, "watchdog: off again")
 
 
+def limit(port, nmax, mbpoll):
+    """nmax clients connected: one more is turned away, the others served."""
+    cells = [Cell(port) for _ in range(nmax)]
+    check(cells[0].read(49, 1)[0] == nmax, "limit: CLIENTS reads %d" % nmax)
+    mb = ["timeout", "10", mbpoll, "-m", "tcp", "-p", str(port), "-0", "-r", "0", "-1", "127.0.0.1"]
+    out = subprocess.run(mb, capture_output=True, text=True).stdout
+    check("[0]: \t17222" not in out, "limit: client %d turned away" % (nmax + 1))
+    check(all(c.read(MAGIC, 1)[0] == 17222 for c in cells), "limit: the %d clients still served"
+          % nmax)
+    cells[-1].c.close()
+    time.sleep(0.2)
+    out = subprocess.run(mb, capture_output=True, text=True).stdout
+    check("[0]: \t17222" in out, "limit: a client served again once one left")
+
+
 if __name__ == "__main__":
     step, port = sys.argv[1], int(sys.argv[2])
     try:
@@ -303,6 +318,8 @@ if __name__ == "__main__":
             abort(port)
         elif step == "watchdog":
             watchdog(port)
+        elif step == "limit":
+            limit(port, int(sys.argv[3]), sys.argv[4])
         else:
             raise SystemExit("unknown step " + step)
     except Exception as e:  # a dead server or a protocol error is a failure, not a crash
