@@ -87,6 +87,7 @@ plc = tcp:127.0.0.1:1
 nominal = $T/nominal.igs
 points = $T/points.xyz
 results_dir = $T/results
+results_dir.1 = $T/missing/results
 word_order = lo-hi
 watchdog_ms = 0
 log_level = info
@@ -122,6 +123,8 @@ else
 fi
 py abort "$port"
 py watchdog "$port"
+py net "$port"
+py errors "$port" folder 305
 grep -q "info command FIT seq" "$T/a.log" && grep -q "error watchdog: PLC heartbeat" "$T/a.log" &&
     ok "log: levelled lines for commands and the watchdog" || no "log lines missing"
 # A job keeps running while clients come and go: mbpoll connects and
@@ -149,17 +152,23 @@ echo "$out" | grep -q '^\[4\]:[[:space:]]*305419896' && ok "mbpoll -B: test uint
 py identity "$port"
 py limit "$port" 2 "$(command -v mbpoll)"
 
+# A points file that is not there: the job fails with 302.
+start c --nominal "$T/nominal.igs" --points "$T/no-such-points.xyz"
+py errors "$port" fit 302
+grep -q "no-such-points.xyz" "$T/c.log" && ok "log names the missing points file" ||
+    no "log lacks the points file"
+
 # SIGTERM: exit 0, port file removed.
 kill -TERM "$pid"
 wait "$pid"
 rc=$?
 pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 [ $rc -eq 0 ] && ok "SIGTERM: serve exits 0" || no "SIGTERM: exit $rc"
-[ ! -e "$T/b.port" ] && ok "SIGTERM: port file removed" || no "port file left"
-grep -q "info stopping" "$T/b.log" && ok "SIGTERM: logged" || no "SIGTERM not logged"
+[ ! -e "$T/$name.port" ] && ok "SIGTERM: port file removed" || no "port file left"
+grep -q "info stopping" "$T/$name.log" && ok "SIGTERM: logged" || no "SIGTERM not logged"
 
-if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" >/dev/null; then
-    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T/a.log" "$T/b.log" | head -5
+if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" "$T/c.log" >/dev/null; then
+    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[abc].log | head -5
 else
     ok "no sanitizer report in the server logs"
 fi

@@ -4,7 +4,8 @@
 # PLC does (docs/plc-register-map.md). Prints "ok ..." / "FAIL ..." lines;
 # tests/cli/plc.sh counts them. Steps: identity PORT; cycle PORT RESULTS_DIR
 # NPOINTS MBPOLL [DIR_OUT]; abort PORT (invalid commands idle and busy, then
-# an abort mid-job); watchdog PORT; limit PORT MAX_CLIENTS MBPOLL. Run with /usr/bin/python3 (Debian's python3-pymodbus).
+# an abort mid-job); watchdog PORT; net PORT; errors PORT folder|fit CODE;
+# limit PORT MAX_CLIENTS MBPOLL. Run with /usr/bin/python3 (Debian's python3-pymodbus).
 import glob
 import json
 import os
@@ -290,6 +291,51 @@ def watchdog(port):
     check(c.write(WATCHDOG_MS, [0]) == 0, "watchdog: off again")
 
 
+def net(port):
+    """NET_U x NET_V: refined nominal (more control points), or refused."""
+    c = Cell(port)
+    check(c.write(NET_U, [20, 16]) == 0, "net: 20 x 16 control points asked")
+    s = c.command(FIT)
+    check(s["result"] == 0, "net: FIT accepted")
+    s = c.wait_done(c.seq)
+    res = results(c)
+    check(s["status"] & RESULTS and res["cps"] == 320,
+          "net: fitted with 320 control points (%d)" % res["cps"])
+    check(c.command(ACK_RESULTS)["result"] == 0, "net: acknowledged")
+    c.write(NET_U, [10, 12])
+    check(c.command(FIT)["result"] == 108, "net: 10 x 12, below the nominal's 16 x 12: 108")
+    c.write(NET_U, [2000, 2000])
+    check(c.command(FIT)["result"] == 110, "net: 2000 x 2000, beyond the budget: 110")
+    check(c.write(NET_U, [0, 0]) == 0 and c.status()["state"] == IDLE, "net: back to the nominal's")
+
+
+def errors(port, missing_folder, code):
+    """A job error (3xx): ERROR with its code until RESET; results kept."""
+    c = Cell(port)
+    if missing_folder:
+        c.write(FOLDER, [1])
+        s = c.command(FIT)
+        s = c.wait_done(c.seq)
+        check(s["status"] & RESULTS, "errors: a fit to export")
+        s = c.command(EXPORT)
+        check(s["result"] == 0, "errors: EXPORT to folder 1 accepted")
+    else:
+        s = c.command(FIT)
+        check(s["result"] == 0, "errors: FIT accepted")
+    s = c.wait_done(c.seq)
+    check(s["state"] == S_ERROR and s["error"] == code and s["status"] & ERROR,
+          "errors: ERROR %d (state %d, error %d)" % (code, s["state"], s["error"]))
+    check(c.command(HOME)["result"] == 103, "errors: commands refused with 103 in ERROR")
+    check(c.command(RESET)["result"] == 0 and c.status()["state"] == IDLE, "errors: RESET: IDLE")
+    if missing_folder:
+        check(c.status()["status"] & RESULTS, "errors: the results stay latched")
+        c.write(FOLDER, [0])
+        s = c.command(EXPORT)
+        s = c.wait_done(c.seq)
+        check(not s["status"] & ERROR, "errors: EXPORT to folder 0 then works")
+        check(c.command(ACK_RESULTS)["result"] == 0, "errors: acknowledged")
+
+
 def limit(port, nmax, mbpoll):
     """nmax clients connected: one more is turned away, the others served."""
     cells = [Cell(port) for _ in range(nmax)]
@@ -318,6 +364,10 @@ if __name__ == "__main__":
             abort(port)
         elif step == "watchdog":
             watchdog(port)
+        elif step == "net":
+            net(port)
+        elif step == "errors":
+            errors(port, sys.argv[3] == "folder", int(sys.argv[4]))
         elif step == "limit":
             limit(port, int(sys.argv[3]), sys.argv[4])
         else:
