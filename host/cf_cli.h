@@ -43,5 +43,6 @@ int cmd_base(int argc, char **argv);
 int cmd_rig(int argc, char **argv);
 int cmd_ports(int argc, char **argv);
 int cmd_thin(int argc, char **argv);
+int cmd_serve(int argc, char **argv);
 
 #endif

@@ -24,6 +24,9 @@ static int usage(FILE *f, int code)
             "        (--extract SURF.igs --out CURVES.igs: its four boundary curves, IGES 126)\n"
             "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
             "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
+            "  serve --plc tcp:ADDR:PORT [--config FILE] [--word-order lo-hi|hi-lo]\n"
+            "        [--watchdog-ms T] [--port-file F] [--syslog]   the cell headless, driven\n"
+            "        by a PLC over Modbus TCP (docs/plc-register-map.md)\n"
             "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
             "        [--solver S] [--json]   benchmarks on generated data\n"
             "  rig   status|home|move X Y|probe|reset|stop --stage URI --probe URI [--count N]\n"
@@ -68,6 +71,8 @@ int main(int argc, char **argv)
         return cmd_ports(argc - 1, argv + 1);
     if (!strcmp(c, "thin"))
         return cmd_thin(argc - 1, argv + 1);
+    if (!strcmp(c, "serve"))
+        return cmd_serve(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);

@@ -1,0 +1,49 @@
+/* cf_plcsrv.h: the cell's Modbus TCP server. Several clients at once (a
+ * PLC and HMIs) are served by one thread with select() over their sockets
+ * (one libmodbus context, modbus_set_socket before each receive); reads and
+ * writes go through the register map and the state machine (plc_map.h,
+ * plc_fsm.h) under one mutex. A job runs in a worker thread behind a job
+ * runner (the table below) and keeps running while clients come and go.
+ * Function codes: 03 read, 06 write single, 16 write multiple holding
+ * registers; anything else is exception 01. */
+#ifndef CF_PLCSRV_H
+#define CF_PLCSRV_H
+
+#include "cf_job.h"
+#include "plc_fsm.h"
+#include <signal.h>
+
+#define CF_PLC_ABORTED (-1) /* a phase's return: it stopped on request */
+
+/* What runs the jobs. Phases run in the worker thread and return 0, a 3xx
+ * PLC code (plc_err.h), or CF_PLC_ABORTED; ctl gives progress and the stop
+ * request. check runs in the server thread before a command is accepted (0
+ * or a 1xx code). abort runs in the server thread when a job must stop (an
+ * abort command, the watchdog, shutdown): stop motion now. */
+typedef struct cf_runner {
+    int (*check)(void *ctx, int cmd, const plc_params_t *p);
+    int (*home)(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl);
+    int (*scan)(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl);
+    int (*fit)(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, plc_results_t *res);
+    int (*export_result)(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl);
+    void (*abort)(void *ctx);
+    void *ctx;
+    int rig; /* 1: a stage and probe are configured (home and scan possible) */
+} cf_runner_t;
+
+typedef struct cf_plcsrv_opts {
+    const char *addr; /* IPv4 address to listen on */
+    int port;         /* 0: the kernel picks one */
+    int max_clients;  /* connections beyond are closed at once */
+    int word_order;   /* PLC_ORDER_* at start */
+    unsigned watchdog_ms;
+    const char *port_file;  /* the port actually bound is written here */
+    float tol, alpha, beta; /* parameter defaults in the registers */
+} cf_plcsrv_opts_t;
+
+/* Serve until *stop becomes non-zero (SIGTERM). Returns 0 after a clean
+ * shutdown (a running job aborted), -1 when the server could not start
+ * (logged). */
+int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_atomic_t *stop);
+
+#endif

@@ -1,0 +1,261 @@
+/* cmd_serve.c: `cellfit serve`: the cell headless, driven by a PLC over
+ * Modbus TCP (docs/plc-register-map.md). Options override the config file
+ * (key = value, cf_conf.h; keys are the long options without "--", '-' as
+ * '_'); logs with levels to stderr or syslog; SIGTERM or SIGINT stops it
+ * cleanly (a running job is aborted). */
+#include "cf_cli.h"
+#include "cf_conf.h"
+#include "cf_err.h"
+#include "cf_log.h"
+#include "cf_plcdoc.h"
+#include "cf_plcrun.h"
+#include "cf_plcsrv.h"
+#include <arpa/inet.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SERVE_MAX_STRS 32
+
+typedef struct serve_conf {
+    char addr[64];
+    long port, watchdog_ms, max_clients;
+    int order, use_syslog, sim;
+    cf_log_level_t level;
+    double tol, alpha, beta;
+    const char *port_file, *stage, *probe, *board;
+    cf_plcrun_t run;
+    char *strs[SERVE_MAX_STRS]; /* copies of string values, freed at the end */
+    int nstrs;
+} serve_conf_t;
+
+static const char *keep(serve_conf_t *c, const char *v)
+{
+    if (c->nstrs >= SERVE_MAX_STRS)
+        return NULL;
+    char *s = strdup(v);
+    if (s)
+        c->strs[c->nstrs++] = s;
+    return s;
+}
+
+static int yesno(const char *v, int *out)
+{
+    if (!strcmp(v, "yes") || !strcmp(v, "1") || !strcmp(v, "true"))
+        return *out = 1, 0;
+    if (!strcmp(v, "no") || !strcmp(v, "0") || !strcmp(v, "false"))
+        return *out = 0, 0;
+    return -1;
+}
+
+/* "tcp:ADDR:PORT", ADDR an IPv4 address. */
+static int parse_plc(serve_conf_t *c, const char *v)
+{
+    const char *colon = strrchr(v, ':');
+    if (strncmp(v, "tcp:", 4) || !colon || colon < v + 4)
+        return -1;
+    size_t n = (size_t)(colon - (v + 4));
+    if (n == 0 || n >= sizeof c->addr)
+        return -1;
+    memcpy(c->addr, v + 4, n);
+    c->addr[n] = 0;
+    struct in_addr ia;
+    if (inet_pton(AF_INET, c->addr, &ia) != 1)
+        return -1;
+    return cli_int(colon + 1, 0, 65535, &c->port);
+}
+
+/* One setting, from the config file or an option. */
+static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
+{
+    serve_conf_t *c = ctx;
+    cf_plcrun_t *r = &c->run;
+    long idx;
+    if (!strcmp(k, "plc")) {
+        if (parse_plc(c, v))
+            return cf_fail(msg, ml, CF_EARG, "plc '%s': need tcp:ADDR:PORT (IPv4, port 0..65535)",
+                           v);
+    } else if (!strcmp(k, "word_order")) {
+        if (!strcmp(v, "lo-hi"))
+            c->order = PLC_ORDER_LO_HI;
+        else if (!strcmp(v, "hi-lo"))
+            c->order = PLC_ORDER_HI_LO;
+        else
+            return cf_fail(msg, ml, CF_EARG, "word_order '%s': lo-hi or hi-lo", v);
+    } else if (!strcmp(k, "watchdog_ms")) {
+        if (cli_int(v, 0, 60000, &c->watchdog_ms))
+            return cf_fail(msg, ml, CF_EARG, "watchdog_ms '%s': need 0 (off) .. 60000", v);
+    } else if (!strcmp(k, "max_clients")) {
+        if (cli_int(v, 1, 64, &c->max_clients))
+            return cf_fail(msg, ml, CF_EARG, "max_clients '%s': need 1 .. 64", v);
+    } else if (!strcmp(k, "log_level")) {
+        if (cf_log_parse_level(v, &c->level))
+            return cf_fail(msg, ml, CF_EARG, "log_level '%s': error, warn, info or debug", v);
+    } else if (!strcmp(k, "syslog")) {
+        if (yesno(v, &c->use_syslog))
+            return cf_fail(msg, ml, CF_EARG, "syslog '%s': yes or no", v);
+    } else if (!strcmp(k, "sim")) {
+        if (yesno(v, &c->sim))
+            return cf_fail(msg, ml, CF_EARG, "sim '%s': yes or no", v);
+    } else if (!strcmp(k, "tolerance") || !strcmp(k, "alpha") || !strcmp(k, "beta")) {
+        double x;
+        int tol = k[0] == 't';
+        if (cli_double(v, &x) || x < (tol ? 0.0001 : 0) || x > (tol ? 100 : 1e6))
+            return cf_fail(msg, ml, CF_EARG, "%s '%s': need %s", k, v,
+                           tol ? "0.0001 .. 100 (mm)" : "0 .. 1e6");
+        *(tol ? &c->tol : k[0] == 'a' ? &c->alpha : &c->beta) = x;
+    } else if (!strncmp(k, "results_dir", 11)) {
+        idx = 0;
+        if (k[11] && (k[11] != '.' || cli_int(k + 12, 0, PLC_MAX_FOLDERS - 1, &idx)))
+            return cf_fail(msg, ml, CF_EARG, "%s: results_dir or results_dir.N, N 0 .. %d", k,
+                           PLC_MAX_FOLDERS - 1);
+        r->results_dir[idx] = keep(c, v);
+    } else if (!strcmp(k, "nominal"))
+        r->nominal = keep(c, v);
+    else if (!strcmp(k, "points"))
+        r->points = keep(c, v);
+    else if (!strcmp(k, "port_file"))
+        c->port_file = keep(c, v);
+    else if (!strcmp(k, "stage"))
+        c->stage = keep(c, v);
+    else if (!strcmp(k, "probe"))
+        c->probe = keep(c, v);
+    else if (!strcmp(k, "board"))
+        c->board = keep(c, v);
+    else
+        return cf_fail(msg, ml, CF_EARG, "unknown setting '%s'", k);
+    return 0;
+}
+
+static const char *const flags[] = {"--syslog", "--sim", "--print-map", NULL};
+
+static int is_flag(const char *a)
+{
+    for (int i = 0; flags[i]; i++)
+        if (!strcmp(a, flags[i]))
+            return 1;
+    return 0;
+}
+
+static int serve_usage(void)
+{
+    return cli_error("serve", CLI_USAGE,
+                     "usage: cellfit serve --plc tcp:ADDR:PORT [--config FILE] [--nominal F "
+                     "--points F] [--results DIR] [--word-order lo-hi|hi-lo] [--watchdog-ms T] "
+                     "[--port-file F] [--max-clients N] [--log-level L] [--syslog] [--board B] "
+                     "[--stage URI --probe URI | --sim] [--print-map]");
+}
+
+static volatile sig_atomic_t stop_flag;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_flag = 1;
+}
+
+static int parse(int argc, char **argv, serve_conf_t *c, int *print_map)
+{
+    char msg[1024];
+    /* The config file first, so that options override it. */
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--config")) {
+            if (i + 1 >= argc)
+                return cli_error("serve", CLI_USAGE, "option --config needs a value");
+            if (cf_conf_read(argv[i + 1], apply, c, msg, sizeof msg))
+                return cli_error("serve", CLI_USAGE, "%s", msg);
+        }
+        if (!is_flag(argv[i]))
+            i++;
+    }
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--print-map")) {
+            *print_map = 1;
+            continue;
+        }
+        if (!strcmp(a, "--syslog") || !strcmp(a, "--sim")) {
+            apply(c, a + 2, "yes", msg, sizeof msg);
+            continue;
+        }
+        if (strncmp(a, "--", 2) || !a[2])
+            return serve_usage();
+        if (!v)
+            return cli_error("serve", CLI_USAGE, "option %s needs a value", a);
+        i++;
+        if (!strcmp(a, "--config"))
+            continue;
+        char key[64];
+        snprintf(key, sizeof key, "%s", !strcmp(a, "--results") ? "--results_dir" : a);
+        for (char *p = key; *p; p++)
+            if (*p == '-')
+                *p = '_';
+        if (apply(c, key + 2, v, msg, sizeof msg))
+            return cli_error("serve", CLI_USAGE, "%s", msg);
+    }
+    return CLI_OK;
+}
+
+int cmd_serve(int argc, char **argv)
+{
+    serve_conf_t c;
+    memset(&c, 0, sizeof c);
+    c.port = -1;
+    c.max_clients = 8;
+    c.level = CF_LOG_INFO;
+    c.tol = 0.05;
+    c.alpha = NF_ALPHA_DEFAULT;
+    c.beta = NF_BETA_DEFAULT;
+    int print_map = 0, ec = parse(argc, argv, &c, &print_map);
+    if (ec)
+        goto done;
+    if (print_map) {
+        cf_plcdoc_print(stdout);
+        goto done;
+    }
+    if (c.port < 0) {
+        ec = cli_error("serve", CLI_USAGE, "need --plc tcp:ADDR:PORT (or plc = in --config)");
+        goto done;
+    }
+    if (c.board && strcmp(c.board, BOARD_NAME)) {
+        ec = cli_error("serve", CLI_USAGE, "--board %s: this cellfit is built for board %s",
+                       c.board, BOARD_NAME);
+        goto done;
+    }
+    /* RIG WIRING (issue 4): build the stage and probe from these URIs (or
+     * cellsim's with --sim) with hal/ once it is merged, and give them to
+     * the runner (cf_runner_t.rig = 1). Until then refuse rather than run
+     * a cell that would pretend to have a rig. */
+    if (c.stage || c.probe || c.sim) {
+        ec = cli_error("serve", CLI_USAGE,
+                       "%s: the rig drivers (hal/, issue 4) are not in this build; serve "
+                       "without --stage/--probe/--sim fits the configured points file",
+                       c.sim     ? "--sim"
+                       : c.stage ? "--stage"
+                                 : "--probe");
+        goto done;
+    }
+    cf_runner_t runner;
+    cf_plcrun_init(&c.run, &runner);
+    cf_log_open(c.level, c.use_syslog);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal; /* no SA_RESTART: select returns EINTR */
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+    signal(SIGPIPE, SIG_IGN);
+    cf_plcsrv_opts_t so = {
+        c.addr,      (int)c.port,  (int)c.max_clients, c.order,      (unsigned)c.watchdog_ms,
+        c.port_file, (float)c.tol, (float)c.alpha,     (float)c.beta};
+    cf_log(CF_LOG_INFO, "cellfit serve: board %s, nominal %s, points %s, results %s", BOARD_NAME,
+           c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
+           c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
+    ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
+    cf_plcrun_free(&c.run);
+    cf_log_close();
+done:
+    for (int i = 0; i < c.nstrs; i++)
+        free(c.strs[i]);
+    return ec;
+}

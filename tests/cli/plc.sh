@@ -1,0 +1,177 @@
+#!/bin/sh
+# tests/cli/plc.sh CELLFIT: `cellfit serve` driven from third-party Modbus
+# TCP clients through its registers only (docs/plc-register-map.md):
+# pymodbus (tests/cli/plc_cycle.py) runs a full fit cycle, invalid commands
+# in each state, an abort mid-job and a watchdog trip, while mbpoll reads
+# identity and status as a second client; both word orders; usage errors;
+# SIGTERM stops the server cleanly. Servers on 127.0.0.1, port 0.
+set -u
+CF=$(realpath "$1")
+HERE=$(cd "$(dirname "$0")" && pwd)
+PY=/usr/bin/python3
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plc.XXXXXX")
+pids=""
+stop_all() { # reverse order: TERM, wait, then KILL
+    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
+    for p in $pids; do
+        i=0
+        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+        kill -KILL "$p" 2>/dev/null
+    done
+    pids=""
+}
+trap 'stop_all; rm -rf "$T"' EXIT
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); echo "ok   $1"; }
+no() { fail=$((fail + 1)); echo "FAIL $1"; }
+expect() {
+    want=$1; name=$2; shift 2
+    "$@" >"$T/out" 2>"$T/err"
+    got=$?
+    if [ "$got" -eq "$want" ]; then ok "$name"; else
+        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
+}
+# py STEP ARGS...: run a client step, count its ok/FAIL lines.
+py() {
+    timeout 300 "$PY" "$HERE/plc_cycle.py" "$@" >"$T/py.out" 2>&1
+    rc=$?
+    cat "$T/py.out"
+    pass=$((pass + $(grep -c '^ok ' "$T/py.out")))
+    fail=$((fail + $(grep -c '^FAIL' "$T/py.out")))
+    [ $rc -eq 0 ] || [ "$(grep -c '^FAIL' "$T/py.out")" -gt 0 ] || no "plc_cycle.py $1 exited $rc"
+}
+# start NAME ARGS...: cellfit serve in the background; sets $port and $pid.
+start() {
+    name=$1; shift
+    rm -f "$T/$name.port"
+    "$CF" serve --plc tcp:127.0.0.1:0 --port-file "$T/$name.port" "$@" 2>"$T/$name.log" &
+    pid=$!
+    pids="$pid $pids"
+    i=0
+    while [ ! -s "$T/$name.port" ] && kill -0 "$pid" 2>/dev/null && [ $i -lt 100 ]; do
+        sleep 0.1; i=$((i + 1))
+    done
+    port=$(cat "$T/$name.port" 2>/dev/null)
+    [ -n "$port" ] && ok "serve $name listening on 127.0.0.1:$port" ||
+        { no "serve $name did not start"; sed 's/^/     /' "$T/$name.log" | head -5; }
+}
+mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
+
+# The part: 200000 x y z points (projected by the fit: a job of seconds).
+"$CF" gen --dir "$T" --nu 16 --nv 12 --points 200000 --noise 0.002 >/dev/null
+grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
+mkdir -p "$T/results"
+
+# Usage errors: exit 2, one line naming what.
+expect 2 "serve without --plc: exit 2" "$CF" serve
+expect 2 "serve --plc udp:...: exit 2" "$CF" serve --plc udp:127.0.0.1:0
+expect 2 "serve --stage without the rig drivers: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 \
+    --stage modbus-rtu:/dev/null
+grep -q "rig drivers" "$T/err" && ok "  ... says the rig drivers are not in this build" ||
+    no "--stage message: $(cat "$T/err")"
+expect 2 "serve --board other: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --board nosuch
+printf 'plc = tcp:127.0.0.1:0\n# comment\nnominal = %s\nwatchdog = 5\n' "$T/nominal.igs" >"$T/bad.conf"
+expect 2 "config with an unknown key: exit 2" "$CF" serve --config "$T/bad.conf"
+grep -q "bad.conf:4: unknown setting 'watchdog'" "$T/err" && ok "  ... names file:line" ||
+    no "config error message: $(cat "$T/err")"
+[ "$(wc -l <"$T/err")" -eq 1 ] && ok "  ... in one line" || no "config error: $(wc -l <"$T/err") lines"
+"$CF" serve --print-map >"$T/map.md"
+grep -q '^| 0 | 40001 | MAGIC | u16 | R |' "$T/map.md" && ok "serve --print-map prints the map" ||
+    no "serve --print-map"
+
+# The cell, configured from a file (and options over it).
+cat >"$T/cell.conf" <<CONF
+# cellfit serve configuration (docs/plc-register-map.md)
+plc = tcp:127.0.0.1:1
+nominal = $T/nominal.igs
+points = $T/points.xyz
+results_dir = $T/results
+results_dir.1 = $T/missing/results
+word_order = lo-hi
+watchdog_ms = 0
+log_level = info
+CONF
+start a --config "$T/cell.conf"
+py identity "$port"
+# mbpoll: identity in the default (low word first) order, no -B needed.
+out=$(mb -r 0 -c 2)
+echo "$out" | grep -q '^\[0\]:[[:space:]]*17222' && ok "mbpoll: magic 17222" || no "mbpoll magic: $out"
+out=$(mb -r 2 -c 1 -t 4:float)
+echo "$out" | grep -q '^\[2\]:[[:space:]]*123.456' && ok "mbpoll: test float 123.456 (lo-hi)" ||
+    no "mbpoll float lo-hi: $out"
+out=$(mb -r 4 -c 1 -t 4:int)
+echo "$out" | grep -q '^\[4\]:[[:space:]]*305419896' && ok "mbpoll: test uint32 305419896 (lo-hi)" ||
+    no "mbpoll int lo-hi: $out"
+# A write to a read-only register: exception 02 ("Illegal data address").
+out=$(timeout 10 mbpoll -m tcp -p "$port" -0 -1 -r 0 127.0.0.1 1 2>&1)
+echo "$out" | grep -qi "illegal data address" && ok "mbpoll: write to MAGIC: exception 02" ||
+    no "mbpoll write to MAGIC: $out"
+npts=$(grep -c . "$T/points.xyz")
+py cycle "$port" "$T/results" "$npts" "$(command -v mbpoll)" "$T/exported"
+d=$(cat "$T/exported" 2>/dev/null)
+# The exported report against `cellfit report` on the exported surface.
+if [ -n "$d" ] && "$CF" report "$d/fitted.igs" "$T/points.xyz" --tol 0.02 --json >"$T/ref.json"; then
+    "$PY" - "$d/report.json" "$T/ref.json" <<'PYEOF' && ok "report.json agrees with cellfit report on fitted.igs" || no "report.json differs from cellfit report"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+keys = ("points", "rms", "min", "max", "within_tol", "p95_abs")
+sys.exit(0 if all(a[k] == b[k] or abs(a[k] - b[k]) <= 1e-12 * abs(b[k]) for k in keys) else 1)
+PYEOF
+else
+    no "cellfit report on the exported fitted.igs"
+fi
+py abort "$port"
+py watchdog "$port"
+py net "$port"
+py errors "$port" folder 305
+grep -q "info command FIT seq" "$T/a.log" && grep -q "error watchdog: PLC heartbeat" "$T/a.log" &&
+    ok "log: levelled lines for commands and the watchdog" || no "log lines missing"
+# A job keeps running while clients come and go: mbpoll connects and
+# leaves during the jobs above; the server saw them.
+[ "$(grep -c 'client .* connected' "$T/a.log")" -ge 8 ] && ok "log: clients came and went" ||
+    no "log: few client connections"
+
+# SIGTERM after all that: exit 0 (with ASan: no leak, no error).
+kill -TERM "$pid"
+wait "$pid"
+rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+[ $rc -eq 0 ] && ok "SIGTERM after the jobs: serve exits 0" || no "SIGTERM: serve a exit $rc"
+
+# High word first: mbpoll needs -B, and the identity values say so.
+start b --nominal "$T/nominal.igs" --points "$T/points.xyz" --word-order hi-lo --max-clients 2
+out=$(mb -r 7 -c 1)
+echo "$out" | grep -q '^\[7\]:[[:space:]]*1' && ok "hi-lo: WORD_ORDER reads 1" || no "hi-lo order: $out"
+out=$(mb -r 2 -c 1 -t 4:float -B)
+echo "$out" | grep -q '^\[2\]:[[:space:]]*123.456' && ok "mbpoll -B: test float 123.456 (hi-lo)" ||
+    no "mbpoll -B float: $out"
+out=$(mb -r 4 -c 1 -t 4:int -B)
+echo "$out" | grep -q '^\[4\]:[[:space:]]*305419896' && ok "mbpoll -B: test uint32 (hi-lo)" ||
+    no "mbpoll -B int: $out"
+py identity "$port"
+py limit "$port" 2 "$(command -v mbpoll)"
+
+# A points file that is not there: the job fails with 302.
+start c --nominal "$T/nominal.igs" --points "$T/no-such-points.xyz"
+py errors "$port" fit 302
+grep -q "no-such-points.xyz" "$T/c.log" && ok "log names the missing points file" ||
+    no "log lacks the points file"
+
+# SIGTERM: exit 0, port file removed.
+kill -TERM "$pid"
+wait "$pid"
+rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+[ $rc -eq 0 ] && ok "SIGTERM: serve exits 0" || no "SIGTERM: exit $rc"
+[ ! -e "$T/$name.port" ] && ok "SIGTERM: port file removed" || no "port file left"
+grep -q "info stopping" "$T/$name.log" && ok "SIGTERM: logged" || no "SIGTERM not logged"
+
+if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" "$T/c.log" >/dev/null; then
+    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[abc].log | head -5
+else
+    ok "no sanitizer report in the server logs"
+fi
+stop_all
+echo "plc: $pass passed, $fail failed"
+[ $fail -eq 0 ]

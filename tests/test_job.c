@@ -1,0 +1,238 @@
+/* test_job.c: the serve job on files (cf_job) by exact reproduction: points
+ * sampled on a nominal surface are fitted with alpha = 0 and come back as
+ * the nominal itself (deviations at rounding level), also after the net is
+ * refined to a size asked for (the refined nominal is the same surface:
+ * checked against the nominal at random parameters); the checks refuse
+ * nets below the nominal's and beyond the board; stop, progress, empty and
+ * missing files; export read back. */
+#include "cf_err.h"
+#include "cf_iges.h"
+#include "cf_job.h"
+#include "cf_surf.h"
+#include "cf_test.h"
+#include "nf_err.h"
+#include "rig_err.h"
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char tmpdir[512], msg[1024];
+static char nominal[600], uvfile[600], xyzfile[600], empty[600];
+static nf_surf_t nom;
+
+static void tmp_path(char *buf, size_t n, const char *name)
+{
+    snprintf(buf, n, "%s/cf_job_%ld_%s", tmpdir, (long)getpid(), name);
+}
+
+/* A bicubic 7 x 6 nominal with uneven interior knots, and 60 x 50 points
+ * on it written as u v x y z and as x y z. */
+static int setup(void **state)
+{
+    (void)state;
+    const char *d = getenv("CF_TEST_TMP");
+    snprintf(tmpdir, sizeof tmpdir, "%s", d && *d ? d : "/tmp");
+    for (char *p = tmpdir + 1; *p; p++)
+        if (*p == '/') {
+            *p = '\0';
+            mkdir(tmpdir, 0777);
+            *p = '/';
+        }
+    mkdir(tmpdir, 0777);
+    if (cf_surf_alloc(&nom, 3, 3, 7, 6))
+        return -1;
+    static const double U[] = {0, 0, 0, 0, 0.2, 0.45, 0.7, 1, 1, 1, 1};
+    static const double V[] = {0, 0, 0, 0, 0.3, 0.55, 1, 1, 1, 1};
+    memcpy(nom.U, U, sizeof U);
+    memcpy(nom.V, V, sizeof V);
+    for (int j = 0; j < 6; j++)
+        for (int i = 0; i < 7; i++) {
+            double *P = nom.cp + 3 * (i + 7 * j);
+            P[0] = 20.0 * i, P[1] = 15.0 * j, P[2] = 3.0 * sin(0.7 * i) * cos(0.5 * j);
+        }
+    tmp_path(nominal, sizeof nominal, "nominal.igs");
+    tmp_path(uvfile, sizeof uvfile, "points.uvxyz");
+    tmp_path(xyzfile, sizeof xyzfile, "points.xyz");
+    tmp_path(empty, sizeof empty, "empty.xyz");
+    if (cf_iges_write_at(nominal, &nom, "test nominal", 1700000000LL, msg, sizeof msg))
+        return -1;
+    FILE *a = fopen(uvfile, "w"), *b = fopen(xyzfile, "w"), *e = fopen(empty, "w");
+    if (!a || !b || !e)
+        return -1;
+    for (int j = 0; j < 50; j++)
+        for (int i = 0; i < 60; i++) {
+            double u = (i + 0.5) / 60.0, v = (j + 0.5) / 50.0, P[3];
+            nf_surf_eval(&nom, u, v, P);
+            fprintf(a, "%.17g %.17g %.17g %.17g %.17g\n", u, v, P[0], P[1], P[2]);
+            fprintf(b, "%.17g %.17g %.17g\n", P[0], P[1], P[2]);
+        }
+    fprintf(e, "# no points\n");
+    fclose(a), fclose(b), fclose(e);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    cf_surf_free(&nom);
+    remove(nominal), remove(uvfile), remove(xyzfile), remove(empty);
+    return 0;
+}
+
+static cf_job_fit_opts_t opts(const char *points, int nu, int nv)
+{
+    cf_job_fit_opts_t o = {nominal, points, 0.0, 0.001, 1e-6, nu, nv};
+    return o;
+}
+
+static int last_pct, pct_calls, pct_backwards, stop_after = -1;
+
+static void on_progress(void *ctx, int pct)
+{
+    (void)ctx;
+    if (pct < last_pct)
+        pct_backwards++;
+    last_pct = pct;
+    pct_calls++;
+}
+
+static int on_stop(void *ctx)
+{
+    (void)ctx;
+    return stop_after >= 0 && pct_calls > stop_after;
+}
+
+static const cf_job_ctl_t ctl = {on_progress, on_stop, NULL};
+
+/* |fitted - nominal| at random parameters. */
+static double surface_gap(const nf_surf_t *s)
+{
+    unsigned long long r = 88172645463325252ULL;
+    double worst = 0;
+    for (int k = 0; k < 2000; k++) {
+        r ^= r << 13, r ^= r >> 7, r ^= r << 17;
+        double u = (double)(r >> 11) * 0x1p-53;
+        r ^= r << 13, r ^= r >> 7, r ^= r << 17;
+        double v = (double)(r >> 11) * 0x1p-53, A[3], B[3];
+        nf_surf_eval(s, u, v, A);
+        nf_surf_eval(&nom, u, v, B);
+        for (int c = 0; c < 3; c++)
+            worst = fmax(worst, fabs(A[c] - B[c]));
+    }
+    return worst;
+}
+
+static void check_exact(const char *points, int nu, int nv)
+{
+    cf_job_fit_opts_t o = opts(points, nu, nv);
+    cf_job_result_t res;
+    last_pct = pct_calls = pct_backwards = 0;
+    int rc = cf_job_fit(&o, &ctl, &res, msg, sizeof msg);
+    if (rc)
+        fail_msg("cf_job_fit: %d %s", rc, msg);
+    assert_int_equal(res.points, 3000);
+    assert_int_equal(res.fitted.nu, nu ? nu : 7);
+    assert_int_equal(res.fitted.nv, nv ? nv : 6);
+    assert_true(res.st->n == 3000);
+    assert_true(res.st->max_abs < 1e-8);          /* deviations: rounding */
+    assert_true(res.st->within == 3000);          /* tol 1e-6 */
+    assert_true(surface_gap(&res.fitted) < 1e-8); /* the nominal itself */
+    assert_int_equal(pct_backwards, 0);
+    assert_int_equal(last_pct, 100);
+    cf_job_result_free(&res);
+}
+
+static void test_fit_reproduces_nominal(void **state)
+{
+    (void)state;
+    check_exact(uvfile, 0, 0);  /* parameters given */
+    check_exact(xyzfile, 0, 0); /* parameters by projection */
+}
+
+static void test_refined_net(void **state)
+{
+    (void)state;
+    check_exact(uvfile, 12, 9);
+    check_exact(uvfile, 7, 10); /* only v refined */
+    cf_job_fit_opts_t o = opts(uvfile, 12, 9);
+    assert_int_equal(cf_job_check(&o, msg, sizeof msg), CF_OK);
+    o.net_u = 6; /* below the nominal's 7 */
+    assert_int_equal(cf_job_check(&o, msg, sizeof msg), CF_EARG);
+    assert_non_null(strstr(msg, "smaller"));
+    o.net_u = o.net_v = 2000; /* beyond the sim board */
+    assert_int_equal(cf_job_check(&o, msg, sizeof msg), NF_EBUDGET);
+}
+
+static void test_stop_and_bad_files(void **state)
+{
+    (void)state;
+    cf_job_result_t res;
+    cf_job_fit_opts_t o = opts(xyzfile, 0, 0);
+    last_pct = pct_calls = 0;
+    stop_after = 1; /* during accumulation */
+    assert_int_equal(cf_job_fit(&o, &ctl, &res, msg, sizeof msg), RIG_EABORTED);
+    assert_null(res.st);
+    assert_null(res.fitted.cp);
+    stop_after = -1;
+    o.points = empty;
+    assert_int_equal(cf_job_fit(&o, &ctl, &res, msg, sizeof msg), CF_EEMPTY);
+    char missing[600];
+    tmp_path(missing, sizeof missing, "missing.xyz");
+    o.points = missing;
+    assert_int_equal(cf_job_fit(&o, &ctl, &res, msg, sizeof msg), CF_EIO);
+    assert_non_null(strstr(msg, "missing.xyz"));
+    o.points = uvfile;
+    o.nominal = missing;
+    assert_int_not_equal(cf_job_fit(&o, &ctl, &res, msg, sizeof msg), CF_OK);
+    assert_int_not_equal(cf_job_check(&o, msg, sizeof msg), CF_OK);
+}
+
+static void test_export(void **state)
+{
+    (void)state;
+    char name[64], dir[700], path[800];
+    cf_job_folder_name(4711, 1700000000LL, name, sizeof name);
+    assert_string_equal(name, "4711_20231114T221320Z");
+    cf_job_fit_opts_t o = opts(uvfile, 0, 0);
+    cf_job_result_t res;
+    assert_int_equal(cf_job_fit(&o, NULL, &res, msg, sizeof msg), CF_OK);
+    tmp_path(dir, sizeof dir, name);
+    cf_job_meta_t meta = {4711, 12, 5, nominal, uvfile, "sim", 1700000000LL};
+    assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_OK);
+    snprintf(path, sizeof path, "%s/fitted.igs", dir);
+    nf_surf_t back;
+    assert_int_equal(cf_iges_read(path, 0, &back, msg, sizeof msg), CF_OK);
+    assert_memory_equal(back.cp, res.fitted.cp, sizeof(double) * 3 * 42);
+    cf_surf_free(&back);
+    remove(path);
+    snprintf(path, sizeof path, "%s/report.json", dir);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    char js[8192];
+    size_t n = fread(js, 1, sizeof js - 1, f);
+    fclose(f);
+    js[n] = 0;
+    assert_non_null(strstr(js, "\"part\": 4711"));
+    assert_non_null(strstr(js, "\"points\": 3000"));
+    assert_non_null(strstr(js, "\"verdict\": \"pass\""));
+    remove(path);
+    rmdir(dir);
+    /* A folder that cannot be made: CF_EIO naming it. */
+    snprintf(path, sizeof path, "%s/no/such", dir);
+    assert_int_equal(cf_job_export(&res, &meta, path, msg, sizeof msg), CF_EIO);
+    assert_non_null(strstr(msg, "no/such"));
+    cf_job_result_free(&res);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_fit_reproduces_nominal),
+        cmocka_unit_test(test_refined_net),
+        cmocka_unit_test(test_stop_and_bad_files),
+        cmocka_unit_test(test_export),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
