@@ -39,5 +39,7 @@ int cmd_gen(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_project(int argc, char **argv);
+int cmd_journal(int argc, char **argv);
+int cmd_scan(int argc, char **argv);
 
 #endif

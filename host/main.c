@@ -18,6 +18,11 @@ static int usage(FILE *f, int code)
             "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
             "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
             "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
+            "  scan  --stage URI --probe URI --nominal N.igs --journal FILE [--fit OUT.igs]\n"
+            "        [--step MM] [--region x0:x1:y0:y1] [--z0 Z --cal cx:cy:cz] [--alpha A]\n"
+            "        [--beta B] [--report REPORT.json] [--json]   measure on the rig\n"
+            "  journal export JOURNAL [--out FILE] | info JOURNAL [--json] | recover JOURNAL\n"
+            "        | fit JOURNAL --nominal N.igs --out OUT.igs   the journal of measured points\n"
             "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
             "        [--solver S] [--json]   benchmarks on generated data\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
@@ -45,6 +50,10 @@ int main(int argc, char **argv)
         return cmd_report(argc - 1, argv + 1);
     if (!strcmp(c, "project"))
         return cmd_project(argc - 1, argv + 1);
+    if (!strcmp(c, "journal"))
+        return cmd_journal(argc - 1, argv + 1);
+    if (!strcmp(c, "scan"))
+        return cmd_scan(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);
