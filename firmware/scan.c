@@ -67,8 +67,9 @@ static double now(const scan_job_t *job)
 
 /* The job ends: motion stopped (best effort: after a disconnect it cannot
  * be), the end record written and synced. Returns code. */
-static int finish(const scan_job_t *job, jnl_t *j, scan_result_t *res, long k, int code)
+static int finish(const scan_job_t *job, jnl_t *j, scan_result_t *res, long k, int code, int where)
 {
+    res->where = code ? where : SCAN_AT_NONE;
     if (code && job->stage.ops->stop)
         job->stage.ops->stop(job->stage.ctx);
     if (j->state == JNL_S_OPEN)
@@ -123,21 +124,21 @@ int scan_run(const scan_job_t *job, jnl_t *j, scan_result_t *res)
         return res->code = RIG_EARG;
     int rc = preflight(job);
     if (rc)
-        return finish(job, j, res, 0, rc);
+        return finish(job, j, res, 0, rc, SCAN_AT_STAGE);
     const rig_stage_ops_t *so = job->stage.ops;
     for (long k = 0; k < planned; k++) {
         if (job->clock.ops && job->clock.ops->should_stop &&
             job->clock.ops->should_stop(job->clock.ctx))
-            return finish(job, j, res, k, RIG_EABORTED);
+            return finish(job, j, res, k, RIG_EABORTED, SCAN_AT_STOP);
         jnl_rec_t r;
         memset(&r, 0, sizeof r);
         int row_end;
         scan_plan_point(&job->plan, k, &r.stage[0], &r.stage[1], &row_end);
         if ((rc = so->move_to(job->stage.ctx, r.stage[0], r.stage[1])) != RIG_OK)
-            return finish(job, j, res, k, rc);
+            return finish(job, j, res, k, rc, SCAN_AT_STAGE);
         /* The point is where the stage says it is, not where it was sent. */
         if (so->position && (rc = so->position(job->stage.ctx, &r.stage[0], &r.stage[1])) != RIG_OK)
-            return finish(job, j, res, k, rc);
+            return finish(job, j, res, k, rc, SCAN_AT_STAGE);
         rc = job->probe.ops->read(job->probe.ctx, &r.dist);
         r.type = JNL_T_POINT;
         r.t = now(job);
@@ -148,23 +149,23 @@ int scan_run(const scan_job_t *job, jnl_t *j, scan_result_t *res)
             r.flags = JNL_F_NOSURF;
             r.dist = r.xyz[0] = r.xyz[1] = r.xyz[2] = NAN;
         } else if (rc)
-            return finish(job, j, res, k, rc);
+            return finish(job, j, res, k, rc, SCAN_AT_PROBE);
         else
             scan_kin_point(&job->kin, r.stage[0], r.stage[1], r.dist, r.xyz);
         if (row_end)
             r.flags |= JNL_F_ROWEND;
         if ((rc = jnl_append(j, &r)) != RIG_OK || (row_end && (rc = jnl_sync(j)) != RIG_OK))
-            return finish(job, j, res, k, rc);
+            return finish(job, j, res, k, rc, SCAN_AT_JOURNAL);
         res->done++;
         if (r.flags & JNL_F_NOSURF)
             res->flagged++;
         else {
             res->points++;
             if (job->cb.point && (rc = job->cb.point(job->cb.ctx, &r)) != 0)
-                return finish(job, j, res, k, rc);
+                return finish(job, j, res, k, rc, SCAN_AT_CALLER);
         }
         if (job->cb.progress)
             job->cb.progress(job->cb.ctx, res->done, planned, jnl_acked(j));
     }
-    return finish(job, j, res, planned, RIG_OK);
+    return finish(job, j, res, planned, RIG_OK, SCAN_AT_NONE);
 }

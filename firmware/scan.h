@@ -71,7 +71,17 @@ typedef struct scan_result {
     long flagged;    /* of which without (RIG_ENOSURF) */
     long fail_index; /* grid point at which the job ended early, -1 */
     int code;        /* the job's result, as returned */
+    int where;       /* SCAN_AT_*: what ended it early */
 } scan_result_t;
+
+enum {
+    SCAN_AT_NONE = 0,
+    SCAN_AT_STAGE = 1,   /* status, home, limits, move or position */
+    SCAN_AT_PROBE = 2,   /* a reading */
+    SCAN_AT_JOURNAL = 3, /* append or sync */
+    SCAN_AT_CALLER = 4,  /* the point callback */
+    SCAN_AT_STOP = 5     /* should_stop */
+};
 
 /* Header fields the job fixes: kinematics and the planned count (the caller
  * sets job id, nominal identity, start time, sync policy). */

@@ -22,12 +22,60 @@
 
 #define CMD "scan"
 
-/* The device drivers of hal/: open a stage and a probe from their URIs
- * (hal.h's forms) into rig.h tables, and close them. Referenced weakly so
- * that cellfit links without them; `cellfit scan` then says so. */
-int hal_rig_open(const char *stage_uri, const char *probe_uri, rig_stage_t *st, rig_probe_t *pr,
-                 char *msg, size_t len) __attribute__((weak));
-void hal_rig_close(rig_stage_t *st, rig_probe_t *pr) __attribute__((weak));
+/* The device drivers of hal/ (hal_rig.h: hal_rig_open opens the stage and
+ * the probe from their URIs into rig.h tables). A build without them still
+ * has `cellfit journal`; `cellfit scan` then says so. */
+#if defined(__has_include)
+#if __has_include("hal_rig.h")
+#include "hal_rig.h"
+#define CF_HAVE_HAL_RIG 1
+#endif
+#endif
+
+static int rig_open(const char *stage, const char *probe, rig_stage_t *st, rig_probe_t *pr,
+                    void **handle, char *msg, size_t len)
+{
+#ifdef CF_HAVE_HAL_RIG
+    hal_opts_t o = HAL_OPTS_DEFAULT;
+    hal_rig_t *r = NULL;
+    int rc = hal_rig_open(stage, probe, &o, &r, msg, len);
+    if (rc)
+        return rc;
+    *st = r->stage;
+    *pr = r->probe;
+    *handle = r;
+    return RIG_OK;
+#else
+    (void)stage, (void)probe, (void)st, (void)pr;
+    *handle = NULL;
+    snprintf(msg, len, "device drivers (hal/hal_rig.h) are not in this build");
+    return RIG_EUNSUPPORTED;
+#endif
+}
+
+/* Detail of a device failure (the driver's last error), "" if none. */
+static const char *rig_detail(const scan_job_t *job, int where)
+{
+#ifdef CF_HAVE_HAL_RIG
+    if (where == SCAN_AT_STAGE)
+        return hal_stage_error(job->stage.ctx);
+    if (where == SCAN_AT_PROBE)
+        return hal_probe_error(job->probe.ctx);
+#else
+    (void)job, (void)where;
+#endif
+    return "";
+}
+
+static void rig_close(void *handle)
+{
+#ifdef CF_HAVE_HAL_RIG
+    if (handle)
+        hal_rig_close(handle);
+#else
+    (void)handle;
+#endif
+}
 
 typedef struct scan_opts {
     const char *stage, *probe, *nominal, *journal, *fit, *report;
@@ -61,7 +109,7 @@ static int parse(int argc, char **argv, scan_opts_t *o)
     o->step = 1.0;
     o->alpha = NF_ALPHA_DEFAULT;
     o->beta = NF_BETA_DEFAULT;
-    o->z0 = 100.0;
+    o->z0 = 50.0; /* cellsim's default beam height */
     o->sync_every = JNL_SYNC_EVERY_DEFAULT;
     o->job_id = (long)time(NULL);
     for (int i = 1; i < argc;) {
@@ -223,7 +271,7 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
     cli_json_int(&js, "done", res->done);
     cli_json_int(&js, "points", res->points);
     cli_json_int(&js, "flagged", res->flagged);
-    cli_json_int(&js, "acknowledged", (long)jnl_acked(j));
+    cli_json_int(&js, "acknowledged_records", (long)jnl_acked(j));
     cli_json_int(&js, "code", res->code);
     cli_json_str(&js, "error", res->code ? rig_strerror(res->code) : "");
     cli_json_int(&js, "fail_index", res->fail_index);
@@ -285,10 +333,8 @@ int cmd_scan(int argc, char **argv)
         ec = cli_error(CMD, CLI_USAGE, "%s (a journal is never overwritten)", msg);
         goto out;
     }
-    int rc = hal_rig_open ? hal_rig_open(o.stage, o.probe, &job.stage, &job.probe, msg, sizeof msg)
-                          : RIG_EUNSUPPORTED;
-    if (!hal_rig_open)
-        snprintf(msg, sizeof msg, "device drivers (hal_rig_open) are not in this build");
+    void *devs = NULL;
+    int rc = rig_open(o.stage, o.probe, &job.stage, &job.probe, &devs, msg, sizeof msg);
     if (rc) {
         cf_store_file_close(&f);
         unlink(o.journal); /* nothing measured: leave no empty journal behind */
@@ -324,12 +370,14 @@ int cmd_scan(int argc, char **argv)
         int end;
         if (res.fail_index >= 0 && res.fail_index < scan_plan_count(&job.plan))
             scan_plan_point(&job.plan, res.fail_index, &x, &y, &end);
-        ec =
-            cli_error(CMD, CLI_FAIL,
-                      "job ended at grid point %ld (x %g, y %g): %s; %s holds %llu acknowledged "
-                      "records",
-                      res.fail_index, x, y, sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc),
-                      o.journal, (unsigned long long)jnl_acked(&j));
+        static const char *const at[] = {"", "stage", "probe", "journal", "fit", "stop"};
+        const char *det = rig_detail(&job, res.where);
+        ec = cli_error(CMD, CLI_FAIL,
+                       "job ended at grid point %ld (x %g, y %g): %s: %s%s%s; %s holds %llu "
+                       "acknowledged records",
+                       res.fail_index, x, y, at[res.where],
+                       sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), *det ? ": " : "",
+                       det, o.journal, (unsigned long long)jnl_acked(&j));
     } else if (o.fit) {
         if (cf_surf_copy(&fit, &nom)) {
             ec = cli_error(CMD, CLI_FAIL, "out of memory");
@@ -377,8 +425,7 @@ int cmd_scan(int argc, char **argv)
                    sqrt(sf.dev_ss / (double)sf.points), o.fit);
     }
 out_dev:
-    if (hal_rig_close)
-        hal_rig_close(&job.stage, &job.probe);
+    rig_close(devs);
     cf_store_file_close(&f);
 out:
     cf_sfit_free(&sf);

@@ -337,6 +337,12 @@ static void test_sync_rows(void **state)
     assert_int_equal(ms.syncs, 1 + 5 + 1); /* header, row ends, end record */
 }
 
+static int refuse_third(void *ctx, const jnl_rec_t *r)
+{
+    (void)ctx;
+    return r->seq == 3 ? -5 : 0;
+}
+
 static void test_faults(void **state)
 {
     (void)state;
@@ -352,6 +358,7 @@ static void test_faults(void **state)
         assert_int_equal(run_mem(&job, &res, &in), faults[f]);
         assert_int_equal(res.done, 17);
         assert_int_equal(res.fail_index, 17);
+        assert_int_equal(res.where, SCAN_AT_STAGE);
         assert_int_equal(rig.stops, 1);
         assert_int_equal(rig.reads, 17);
     }
@@ -362,13 +369,22 @@ static void test_faults(void **state)
     job = job_on(0, 9, 0, 4, 1);
     assert_int_equal(run_mem(&job, &res, &in), RIG_EDISCONNECT);
     assert_int_equal(res.done, 5);
+    assert_int_equal(res.where, SCAN_AT_PROBE);
     assert_int_equal(in.points, 5);
+    /* The fitter refuses point 3: the job ends with its code. */
+    rig_reset();
+    job = job_on(0, 9, 0, 4, 1);
+    job.cb = (scan_cb_t){refuse_third, NULL, NULL};
+    assert_int_equal(run_mem(&job, &res, &in), -5);
+    assert_int_equal(res.where, SCAN_AT_CALLER);
+    assert_int_equal(res.done, 4); /* journalled before the call */
     /* Stop asked before point 9: stage stopped, RIG_EABORTED. */
     rig_reset();
     rig.stop_at = 9;
     job = job_on(0, 9, 0, 4, 1);
     assert_int_equal(run_mem(&job, &res, &in), RIG_EABORTED);
     assert_int_equal(res.done, 9);
+    assert_int_equal(res.where, SCAN_AT_STOP);
     assert_int_equal(rig.moves, 9);
     assert_int_equal(rig.stops, 1);
     /* E-stop or a latched fault before the start: no move at all. */
@@ -413,6 +429,7 @@ static void test_full(void **state)
         assert_int_equal(jnl_create(&j, st, &h), RIG_OK);
         scan_result_t res;
         assert_int_equal(scan_run(&job, &j, &res), RIG_EFULL);
+        assert_int_equal(res.where, SCAN_AT_JOURNAL);
         long whole = (long)((limit - JNL_HDR_BYTES) / JNL_REC_BYTES);
         assert_int_equal(res.done, whole);
         assert_int_equal(rig.stops, 1);
