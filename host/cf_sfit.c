@@ -11,10 +11,12 @@
 
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain (as cmd_fit) */
 
-int cf_sfit_init(cf_sfit_t *s, const nf_surf_t *nominal, double alpha, double beta, const char *cmd)
+int cf_sfit_init(cf_sfit_t *s, const nf_surf_t *nominal, const nf_surf_t *proj, double alpha,
+                 double beta, const char *cmd)
 {
     memset(s, 0, sizeof *s);
     s->nominal = nominal;
+    s->proj = proj ? proj : nominal;
     s->need = nf_fit_bytes(nominal->nu, nominal->nv, nominal->p, nominal->q, NF_SOLVER_AUTO);
     if (s->need < 0 || s->need > NF_ARENA_BYTES)
         return cli_error(cmd, CLI_USAGE,
@@ -23,7 +25,7 @@ int cf_sfit_init(cf_sfit_t *s, const nf_surf_t *nominal, double alpha, double be
                          nominal->nu, nominal->nv, nominal->p, nominal->q, s->need, BOARD_NAME,
                          (long)NF_ARENA_BYTES);
     s->mem = malloc((size_t)s->need);
-    if (!s->mem || cf_seedgrid_init(&s->pj, nominal, 8)) {
+    if (!s->mem || cf_seedgrid_init(&s->pj, s->proj, 8)) {
         cf_sfit_free(s);
         return cli_error(cmd, CLI_FAIL, "cannot allocate %ld bytes", s->need);
     }
@@ -42,7 +44,7 @@ int cf_sfit_add(cf_sfit_t *s, const double xyz[3])
     double u0, v0;
     nf_proj_t pr;
     cf_seedgrid_start(&s->pj, xyz, &u0, &v0);
-    int rc = nf_project(s->nominal, xyz, u0, v0, PROJ_TOL, &pr);
+    int rc = nf_project(s->proj, xyz, u0, v0, PROJ_TOL, &pr);
     if (rc && rc != NF_ENOCONV) /* the best point is kept on ENOCONV, as cmd_fit does */
         return rc;
     rc = nf_fit_add(&s->f, pr.u, pr.v, xyz, 1.0);

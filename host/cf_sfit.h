@@ -15,20 +15,23 @@
 #include <stdint.h>
 
 typedef struct cf_sfit {
-    const nf_surf_t *nominal;
+    const nf_surf_t *nominal; /* the space (knots, weights) and P0 */
+    const nf_surf_t *proj;    /* parameters by projection onto this (nominal, or a fit) */
     cf_seedgrid_t pj;
     nf_arena_t ar;
     nf_fit_t f;
     void *mem;
     long need;
     long points;
-    double dev_ss, dev_max; /* normal distances to the nominal (|deviation|) */
+    double dev_ss, dev_max; /* normal distances to proj (|deviation|) */
 } cf_sfit_t;
 
-/* A job on nominal's space (knots, weights, P0). Exit-code style errors:
- * returns 0, or CLI_USAGE / CLI_FAIL after printing one line for cmd. */
-int cf_sfit_init(cf_sfit_t *s, const nf_surf_t *nominal, double alpha, double beta,
-                 const char *cmd);
+/* A job on nominal's space (knots, weights, P0), parameters by projection
+ * onto proj (NULL: the nominal; a previous fit for a reparameterisation
+ * pass, Section 2.2). Exit-code style errors: returns 0, or CLI_USAGE /
+ * CLI_FAIL after printing one line for cmd. */
+int cf_sfit_init(cf_sfit_t *s, const nf_surf_t *nominal, const nf_surf_t *proj, double alpha,
+                 double beta, const char *cmd);
 /* One point: 0, or an nf_err_t. */
 int cf_sfit_add(cf_sfit_t *s, const double xyz[3]);
 /* Solve into out->cp (out has nominal's shape). 0 or an exit code (message printed). */

@@ -322,7 +322,7 @@ int cmd_scan(int argc, char **argv)
     job.home = o.home;
     cf_sfit_t sf;
     memset(&sf, 0, sizeof sf);
-    if (o.fit && (ec = cf_sfit_init(&sf, &nom, o.alpha, o.beta, CMD)) != 0) {
+    if (o.fit && (ec = cf_sfit_init(&sf, &nom, NULL, o.alpha, o.beta, CMD)) != 0) {
         cf_surf_free(&nom);
         return ec;
     }
