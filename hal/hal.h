@@ -50,11 +50,16 @@ typedef struct hal_opts {
     int retries;      /* extra attempts after a timeout or bad frame (default 3) */
     int backoff_ms;   /* first wait before a retry, doubled each time (default 20) */
     int reconnect_ms; /* how long to keep reopening a lost line (default 3000) */
+    /* Appended fields: 0 (or absent from an older initializer) takes the default. */
+    int byte_timeout_ms; /* silence allowed between bytes of one frame (default 50) */
+    int late_ms; /* a device's worst-case reply delay: after a timeout the backend waits this
+                  * long and drops what came late, so a late reply is never taken as the answer
+                  * to the next request (default timeout_ms) */
 } hal_opts_t;
 
 #define HAL_OPTS_DEFAULT                                                                           \
     {                                                                                              \
-        500, 3, 20, 3000                                                                           \
+        500, 3, 20, 3000, 50, 0                                                                    \
     }
 
 typedef struct hal hal_t; /* an open transport; backends define it */
@@ -102,11 +107,20 @@ int hal_write_regs(hal_t *h, int addr, int n, const uint16_t *src);
 int hal_control(hal_t *h, uint8_t req_type, uint8_t req, uint16_t val, uint16_t idx, void *data,
                 uint16_t len, size_t *got);
 int hal_bulk(hal_t *h, uint8_t ep, void *data, size_t len, size_t *got);
+/* Close and reopen the line now (a backend also does it by itself when a
+ * request finds the line gone); RIG_EDISCONNECT if it stays away for
+ * reconnect_ms. */
+int hal_reconnect(hal_t *h);
 
 /* Backend constructors (one file each). hal_open dispatches on the URI. */
 int hal_modbus_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **h, char *msg, size_t len);
 int hal_tty_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **h, char *msg, size_t len);
 int hal_serial_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **h, char *msg, size_t len);
 int hal_usb_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **h, char *msg, size_t len);
+
+/* The rig_err_t a libmodbus errno stands for (hal_modbus.c): ETIMEDOUT
+ * RIG_ETIMEOUT, EMBBADCRC RIG_ECRC, EMBX* RIG_EEXCEPTION, malformed replies
+ * RIG_EPROTO, a lost line (EIO, ECONNRESET, EBADF, ...) RIG_EDISCONNECT. */
+int hal_modbus_errcode(int err);
 
 #endif

@@ -41,5 +41,6 @@ int cmd_report(int argc, char **argv);
 int cmd_project(int argc, char **argv);
 int cmd_journal(int argc, char **argv);
 int cmd_scan(int argc, char **argv);
+int cmd_rig(int argc, char **argv);
 
 #endif

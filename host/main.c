@@ -26,6 +26,8 @@ static int usage(FILE *f, int code)
             "points\n"
             "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
             "        [--solver S] [--json]   benchmarks on generated data\n"
+            "  rig   status|home|move X Y|probe|reset|stop --stage URI --probe URI [--count N]\n"
+            "        [--timeout MS] [--retries N] [--json]   the stage and probe by hand (hal.h)\n"
             "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
             "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
             BOARD_NAME, (long)NF_MAX_CP, NF_MAX_DEGREE, (long)NF_ARENA_BYTES);
@@ -55,6 +57,8 @@ int main(int argc, char **argv)
         return cmd_journal(argc - 1, argv + 1);
     if (!strcmp(c, "scan"))
         return cmd_scan(argc - 1, argv + 1);
+    if (!strcmp(c, "rig"))
+        return cmd_rig(argc - 1, argv + 1);
     if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
         return usage(stdout, CLI_OK);
     fprintf(stderr, "cellfit: unknown command '%s'\n", c);

@@ -1,0 +1,23 @@
+/* hal_priv.h: what the hal/ backends and drivers share and nothing else
+ * includes: the detail buffer, monotonic time and sleeping. */
+#ifndef HAL_PRIV_H
+#define HAL_PRIV_H
+
+#include "hal.h"
+#include "hal_rig.h"
+
+/* printf into h->err (the detail hal_last_error returns); returns code. */
+int hal_fail(hal_t *h, int code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+double hal_now_ms(void); /* monotonic milliseconds */
+void hal_sleep_ms(double ms);
+
+/* Fill o from in (NULL: defaults), a field left 0 taking its default. */
+void hal_opts_fill(hal_opts_t *o, const hal_opts_t *in);
+
+/* The probe drivers' detail (hal_probe.c) and range query (hal_probe_mb.c). */
+int hal_probe_pfail(hal_probe_t *p, int code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+int hal_probe_modbus_range(hal_probe_t *p);
+
+#endif

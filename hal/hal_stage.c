@@ -1,0 +1,274 @@
+/* hal_stage.c: the Modbus motion stage driver (rig_stage_ops_t): a move
+ * is one write of target and command (registers 0-4, so it is atomic), a
+ * check that the stage took it (move counter, result register), then
+ * status polling until in position, a fault, or the move timeout. */
+#include "hal_priv.h"
+#include "hal_regmap.h"
+#include "hal_rig.h"
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+static int sfail(hal_stage_t *s, int code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static int sfail(hal_stage_t *s, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(s->err, sizeof s->err, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+/* A transport failure: its detail becomes ours. */
+static int tfail(hal_stage_t *s, int code, const char *what)
+{
+    return sfail(s, code, "stage %s: %s", what, hal_last_error(s->h));
+}
+
+static int32_t get32(const uint16_t *r)
+{
+    return (int32_t)(((uint32_t)r[0] << 16) | r[1]); /* high word first */
+}
+
+static void put32(uint16_t *r, int32_t v)
+{
+    r[0] = (uint16_t)((uint32_t)v >> 16);
+    r[1] = (uint16_t)((uint32_t)v & 0xFFFFu);
+}
+
+static int rd(hal_stage_t *s, int addr, int n, uint16_t *r, const char *what)
+{
+    int rc = hal_read_regs(s->h, 'h', addr, n, r);
+    return rc ? tfail(s, rc, what) : RIG_OK;
+}
+
+static int wr(hal_stage_t *s, int addr, int n, const uint16_t *r, const char *what)
+{
+    int rc = hal_write_regs(s->h, addr, n, r);
+    return rc ? tfail(s, rc, what) : RIG_OK;
+}
+
+const char *hal_stage_error(const void *ctx)
+{
+    return ctx ? ((const hal_stage_t *)ctx)->err : "no stage";
+}
+
+int hal_stage_init(hal_stage_t *s, hal_t *h)
+{
+    if (!s || !h)
+        return RIG_EARG;
+    memset(s, 0, sizeof *s);
+    s->h = h;
+    s->home_timeout_ms = 60000;
+    s->poll_ms = 5;
+    s->tol_mm = 0.002;
+    uint16_t r[9];
+    int rc = rd(s, STG_LIM_XLO, 9, r, "reading limits and speed");
+    if (rc)
+        return rc;
+    s->lo[0] = get32(r) * 1e-3;
+    s->hi[0] = get32(r + 2) * 1e-3;
+    s->lo[1] = get32(r + 4) * 1e-3;
+    s->hi[1] = get32(r + 6) * 1e-3;
+    s->speed = r[8] ? r[8] : 1;
+    if (!(s->lo[0] < s->hi[0] && s->lo[1] < s->hi[1]))
+        return sfail(s, RIG_EPROTO, "stage reports empty soft limits [%g, %g] x [%g, %g]", s->lo[0],
+                     s->hi[0], s->lo[1], s->hi[1]);
+    return RIG_OK;
+}
+
+/* Status bits that stop any motion call, as errors. */
+static int status_error(hal_stage_t *s, unsigned st, const char *when)
+{
+    if (st & RIG_ST_ESTOP)
+        return sfail(s, RIG_EESTOP, "stage: emergency stop active (%s)", when);
+    if (st & RIG_ST_FAULT) {
+        uint16_t fc = 0;
+        hal_read_regs(s->h, 'h', STG_FAULT, 1, &fc);
+        return sfail(s, RIG_EFAULT, "stage: drive fault latched, fault code %u (%s)", fc, when);
+    }
+    return RIG_OK;
+}
+
+static int result_error(hal_stage_t *s, unsigned res, const char *cmd)
+{
+    switch (res) {
+    case STG_RES_OK: return RIG_OK;
+    case STG_RES_NOTHOMED: return sfail(s, RIG_ENOTHOMED, "stage refused %s: not homed", cmd);
+    case STG_RES_LIMIT: return sfail(s, RIG_ELIMIT, "stage refused %s: outside soft limits", cmd);
+    case STG_RES_FAULT: return sfail(s, RIG_EFAULT, "stage refused %s: fault latched", cmd);
+    case STG_RES_ESTOP: return sfail(s, RIG_EESTOP, "stage refused %s: emergency stop", cmd);
+    default: return sfail(s, RIG_EPROTO, "stage refused %s: result code %u", cmd, res);
+    }
+}
+
+/* Write a command (with the target first for a move) and check it was
+ * taken: the move counter advanced (a retried write may count twice) and
+ * the result register says so. */
+static int command(hal_stage_t *s, uint16_t cmd, const int32_t *tgt, const char *name)
+{
+    uint16_t before[2], after[2], w[5];
+    int rc = rd(s, STG_MOVES, 2, before, "reading the move counter");
+    if (rc)
+        return rc;
+    if (tgt) {
+        put32(w + STG_TARGET_X, tgt[0]);
+        put32(w + STG_TARGET_Y, tgt[1]);
+        w[STG_COMMAND] = cmd;
+        rc = wr(s, STG_TARGET_X, 5, w, "writing target and move command");
+    } else
+        rc = wr(s, STG_COMMAND, 1, &cmd, "writing a command");
+    if (rc)
+        return rc;
+    if ((rc = rd(s, STG_MOVES, 2, after, "reading the command result")))
+        return rc;
+    if ((rc = result_error(s, after[1], name)))
+        return rc;
+    if ((cmd == STG_CMD_MOVE || cmd == STG_CMD_HOME) && after[0] == before[0])
+        return sfail(s, RIG_EPROTO, "stage did not take %s (move counter stays %u)", name,
+                     after[0]);
+    return RIG_OK;
+}
+
+/* Poll until the bits in want are set and BUSY clear, a fault, or timeout. */
+static int wait_for(hal_stage_t *s, unsigned want, double first_wait_ms, int timeout_ms,
+                    const char *what)
+{
+    double t_end = hal_now_ms() + timeout_ms;
+    hal_sleep_ms(first_wait_ms);
+    for (;;) {
+        uint16_t st;
+        int rc = rd(s, STG_STATUS, 1, &st, "reading status");
+        if (rc)
+            return rc;
+        if ((rc = status_error(s, st, what)))
+            return rc;
+        if ((st & want) == want && !(st & RIG_ST_BUSY))
+            return RIG_OK;
+        if (hal_now_ms() >= t_end) {
+            uint16_t stop = STG_CMD_STOP;
+            hal_write_regs(s->h, STG_COMMAND, 1, &stop);
+            return sfail(s, RIG_ETIMEOUT, "stage: %s not done in %d ms (status 0x%02x); stopped",
+                         what, timeout_ms, st);
+        }
+        hal_sleep_ms(s->poll_ms);
+    }
+}
+
+static int st_status(void *ctx, uint32_t *bits)
+{
+    hal_stage_t *s = ctx;
+    uint16_t st;
+    if (!s || !bits)
+        return RIG_EARG;
+    int rc = rd(s, STG_STATUS, 1, &st, "reading status");
+    if (!rc)
+        *bits = st;
+    return rc;
+}
+
+static int st_position(void *ctx, double *x, double *y)
+{
+    hal_stage_t *s = ctx;
+    uint16_t r[4];
+    if (!s || !x || !y)
+        return RIG_EARG;
+    int rc = rd(s, STG_POS_X, 4, r, "reading position");
+    if (rc)
+        return rc;
+    *x = get32(r) * 1e-3;
+    *y = get32(r + 2) * 1e-3;
+    return RIG_OK;
+}
+
+static int st_home(void *ctx)
+{
+    hal_stage_t *s = ctx;
+    if (!s)
+        return RIG_EARG;
+    uint16_t st;
+    int rc = rd(s, STG_STATUS, 1, &st, "reading status");
+    if (rc || (rc = status_error(s, st, "before homing")))
+        return rc;
+    if ((rc = command(s, STG_CMD_HOME, NULL, "homing")))
+        return rc;
+    return wait_for(s, RIG_ST_HOMED | RIG_ST_INPOS, 0, s->home_timeout_ms, "homing");
+}
+
+static int st_move_to(void *ctx, double x, double y)
+{
+    hal_stage_t *s = ctx;
+    if (!s || !isfinite(x) || !isfinite(y))
+        return s ? sfail(s, RIG_EARG, "stage: target not finite") : RIG_EARG;
+    if (x < s->lo[0] || x > s->hi[0] || y < s->lo[1] || y > s->hi[1])
+        return sfail(s, RIG_ELIMIT,
+                     "stage: target (%g, %g) outside soft limits [%g, %g] x [%g, %g]", x, y,
+                     s->lo[0], s->hi[0], s->lo[1], s->hi[1]);
+    uint16_t r[5];
+    int rc = rd(s, STG_STATUS, 5, r, "reading status and position");
+    if (rc || (rc = status_error(s, r[0], "before the move")))
+        return rc;
+    if (!(r[0] & RIG_ST_HOMED))
+        return sfail(s, RIG_ENOTHOMED, "stage: move to (%g, %g) asked before homing", x, y);
+    double px = get32(r + 1) * 1e-3, py = get32(r + 3) * 1e-3;
+    int32_t tgt[2] = {(int32_t)lround(x * 1e3), (int32_t)lround(y * 1e3)};
+    if ((rc = command(s, STG_CMD_MOVE, tgt, "the move")))
+        return rc;
+    /* Sleep through most of the expected travel, then poll. */
+    double est = 1e3 * fmax(fabs(x - px), fabs(y - py)) / s->speed;
+    int tmo = s->move_timeout_ms > 0 ? s->move_timeout_ms : (int)(3 * est) + 2000;
+    if ((rc = wait_for(s, RIG_ST_INPOS, 0.8 * est, tmo, "move")))
+        return rc;
+    double ax, ay;
+    if ((rc = st_position(s, &ax, &ay)))
+        return rc;
+    if (fabs(ax - x) > s->tol_mm || fabs(ay - y) > s->tol_mm)
+        return sfail(s, RIG_EPROTO, "stage: in position at (%.4f, %.4f), asked (%.4f, %.4f)", ax,
+                     ay, x, y);
+    return RIG_OK;
+}
+
+static int st_stop(void *ctx)
+{
+    hal_stage_t *s = ctx;
+    uint16_t c = STG_CMD_STOP;
+    return s ? wr(s, STG_COMMAND, 1, &c, "writing stop") : RIG_EARG;
+}
+
+static int st_reset_fault(void *ctx)
+{
+    hal_stage_t *s = ctx;
+    if (!s)
+        return RIG_EARG;
+    uint16_t c = STG_CMD_RESET, res;
+    int rc = wr(s, STG_COMMAND, 1, &c, "writing fault reset");
+    if (rc || (rc = rd(s, STG_RESULT, 1, &res, "reading the reset result")))
+        return rc;
+    return result_error(s, res, "the fault reset");
+}
+
+static int st_limits(void *ctx, double lo[2], double hi[2])
+{
+    hal_stage_t *s = ctx;
+    if (!s || !lo || !hi)
+        return RIG_EARG;
+    lo[0] = s->lo[0];
+    lo[1] = s->lo[1];
+    hi[0] = s->hi[0];
+    hi[1] = s->hi[1];
+    return RIG_OK;
+}
+
+const rig_stage_ops_t hal_stage_ops = {
+    .version = RIG_OPS_VERSION,
+    .home = st_home,
+    .move_to = st_move_to,
+    .position = st_position,
+    .status = st_status,
+    .stop = st_stop,
+    .reset_fault = st_reset_fault,
+    .limits = st_limits,
+};
