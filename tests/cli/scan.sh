@@ -4,8 +4,8 @@
 # kinematic model against the simulator's offset and the nominal, the
 # streamed fit equal to a fit replayed from the journal, and what the job
 # does with faults: a probe seeing no surface (flagged, scan goes on), a
-# drive fault and an abort (job ends with the code, journal consistent and
-# synced). Without cellsim (a build without sim/) there is nothing to run.
+# drive fault, a lost line, an e-stop and an abort (job ends with the code,
+# journal consistent and synced). Without cellsim (a build without sim/) there is nothing to run.
 set -u
 CF=$(realpath "$1")
 SIM=$(dirname "$CF")/cellsim
@@ -117,6 +117,33 @@ tail -1 "$T/err" | grep -q "^cellfit scan: job ended at grid point 19 (x 20, y 1
     [ "$(json "$T/c.info" records)" = $(($(json "$T/c.info" points) + 1)) ] && le "$(json "$T/c.info" points)" 20 &&
     ok "journal ended with RIG_EFAULT after $(json "$T/c.info" points) points, synced, no torn tail" ||
     no "fault journal: $(cat "$T/c.info")"
+
+# The line is lost for longer than the HAL reconnects (3 s): the job ends
+# RIG_EDISCONNECT (-206), the journal consistent and synced.
+SCAN_NAME="scan with the line lost: exit 1" SCAN_WANT=1
+start_sim e --fault disconnect@tcp:n60:6000
+scan "$T/e.jnl"
+tail -1 "$T/err" | grep -q "line or connection lost" && ok "says the line was lost" || no "disconnect message: $(tail -1 "$T/err")"
+"$CF" journal info "$T/e.jnl" --json >"$T/e.info"
+[ "$(json "$T/e.info" end_code)" = -206 ] && [ "$(json "$T/e.info" torn_tail)" = 0 ] &&
+    [ "$(json "$T/e.info" records)" = $(($(json "$T/e.info" points) + 1)) ] &&
+    ok "journal ended RIG_EDISCONNECT after $(json "$T/e.info" points) points, no torn tail" ||
+    no "disconnect journal: $(cat "$T/e.info")"
+
+# E-stop pressed during the scan (cellsim's control file): RIG_EESTOP (-210).
+start_sim f --control "$T/f.ctl"
+timeout 120 "$CF" scan --stage "tcp:127.0.0.1:$PORT:1" --probe "tcp:127.0.0.1:$PORT:2" --nominal "$T/part/nominal.igs" \
+    --journal "$T/f.jnl" --region 0:100:0:50 --step 10 >"$T/f.out" 2>"$T/f.err" &
+spid=$!
+wait_for "$T/f.err" "scan: [0-9]*/[0-9]* points (10%)" || no "scan made no progress"
+echo "estop on" >"$T/f.ctl"
+wait "$spid"
+rc=$?
+[ $rc -eq 1 ] && tail -1 "$T/f.err" | grep -q "emergency stop active" && ok "e-stop: exit 1, says so" ||
+    no "e-stop: exit $rc, $(tail -1 "$T/f.err")"
+"$CF" journal info "$T/f.jnl" --json >"$T/f.info"
+[ "$(json "$T/f.info" end_code)" = -210 ] && [ "$(json "$T/f.info" torn_tail)" = 0 ] &&
+    ok "journal ended RIG_EESTOP after $(json "$T/f.info" points) points" || no "e-stop journal: $(cat "$T/f.info")"
 
 # SIGTERM during a scan: the stage is stopped, the job ends RIG_EABORTED (-217).
 start_sim d
