@@ -40,6 +40,8 @@ int cmd_bench(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_project(int argc, char **argv);
 int cmd_base(int argc, char **argv);
+int cmd_journal(int argc, char **argv);
+int cmd_scan(int argc, char **argv);
 int cmd_rig(int argc, char **argv);
 int cmd_ports(int argc, char **argv);
 int cmd_thin(int argc, char **argv);

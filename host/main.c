@@ -27,6 +27,12 @@ static int usage(FILE *f, int code)
             "  serve --plc tcp:ADDR:PORT [--config FILE] [--word-order lo-hi|hi-lo]\n"
             "        [--watchdog-ms T] [--port-file F] [--syslog]   the cell headless, driven\n"
             "        by a PLC over Modbus TCP (docs/plc-register-map.md)\n"
+            "  scan  --stage URI --probe URI --nominal N.igs --journal FILE [--fit OUT.igs]\n"
+            "        [--step MM] [--region x0:x1:y0:y1] [--z0 Z --cal cx:cy:cz] [--alpha A]\n"
+            "        [--beta B] [--report REPORT.json] [--json]   measure on the rig\n"
+            "  journal export JOURNAL [--out FILE] | info JOURNAL [--json] | recover JOURNAL\n"
+            "        | fit JOURNAL --nominal N.igs --out OUT.igs [--reparam K]   the journal of "
+            "points\n"
             "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
             "        [--solver S] [--json]   benchmarks on generated data\n"
             "  rig   status|home|move X Y|probe|reset|stop --stage URI --probe URI [--count N]\n"
@@ -65,6 +71,10 @@ int main(int argc, char **argv)
         return cmd_project(argc - 1, argv + 1);
     if (!strcmp(c, "base"))
         return cmd_base(argc - 1, argv + 1);
+    if (!strcmp(c, "journal"))
+        return cmd_journal(argc - 1, argv + 1);
+    if (!strcmp(c, "scan"))
+        return cmd_scan(argc - 1, argv + 1);
     if (!strcmp(c, "rig"))
         return cmd_rig(argc - 1, argv + 1);
     if (!strcmp(c, "ports"))

@@ -1,0 +1,30 @@
+/* cf_store_file.h: the journal's storage (rig_store_t) on a file of the
+ * cell controller: appends with O_APPEND, sync is fsync, reads are pread,
+ * truncate is ftruncate. A full disk (ENOSPC, EDQUOT, EFBIG) is RIG_EFULL,
+ * other failures RIG_EIO with the errno text in the store's err. */
+#ifndef CF_STORE_FILE_H
+#define CF_STORE_FILE_H
+
+#include "rig.h"
+#include <stddef.h>
+
+enum {
+    CF_STORE_READ = 0,  /* existing file, read only */
+    CF_STORE_WRITE = 1, /* existing file, read and append (recovery) */
+    CF_STORE_CREATE = 2 /* new file; fails if it exists (never overwrite a journal) */
+};
+
+typedef struct cf_store_file {
+    int fd;
+    int mode;
+    char err[256]; /* detail of the last failure */
+} cf_store_file_t;
+
+/* Open path in mode; *st then uses f (which must outlive it). CREATE also
+ * fsyncs the directory so that the new name survives a power cut. RIG_EOPEN
+ * with "path: reason" in msg. */
+int cf_store_file_open(cf_store_file_t *f, const char *path, int mode, rig_store_t *st, char *msg,
+                       size_t len);
+void cf_store_file_close(cf_store_file_t *f);
+
+#endif

@@ -1,0 +1,435 @@
+/* cmd_scan.c: `cellfit scan`: measure a part on the rig: open the stage and
+ * the probe (hal/), plan a serpentine raster over the nominal's extent in
+ * x y (or --region), run the scan job (firmware/scan.c) journalling every
+ * point to a file, and with --fit stream the points into the fitter as they
+ * arrive (projection onto the nominal) and write the fitted surface. A
+ * progress bar on a terminal, progress lines otherwise; SIGINT/SIGTERM stop
+ * the job cleanly (stage stopped, journal synced). */
+#include "cf_cli.h"
+#include "cf_iges.h"
+#include "cf_sfit.h"
+#include "cf_store_file.h"
+#include "cf_surf.h"
+#include "nf_err.h"
+#include "rig_err.h"
+#include "scan.h"
+#include <math.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#define CMD "scan"
+
+/* The device drivers of hal/ (hal_rig.h: hal_rig_open opens the stage and
+ * the probe from their URIs into rig.h tables). A build without them still
+ * has `cellfit journal`; `cellfit scan` then says so. */
+#if defined(__has_include)
+#if __has_include("hal_rig.h")
+#include "hal_rig.h"
+#define CF_HAVE_HAL_RIG 1
+#endif
+#endif
+
+static int rig_open(const char *stage, const char *probe, rig_stage_t *st, rig_probe_t *pr,
+                    void **handle, char *msg, size_t len)
+{
+#ifdef CF_HAVE_HAL_RIG
+    hal_opts_t o = HAL_OPTS_DEFAULT;
+    hal_rig_t *r = NULL;
+    int rc = hal_rig_open(stage, probe, &o, &r, msg, len);
+    if (rc)
+        return rc;
+    *st = r->stage;
+    *pr = r->probe;
+    *handle = r;
+    return RIG_OK;
+#else
+    (void)stage, (void)probe, (void)st, (void)pr;
+    *handle = NULL;
+    snprintf(msg, len, "device drivers (hal/hal_rig.h) are not in this build");
+    return RIG_EUNSUPPORTED;
+#endif
+}
+
+/* Detail of a device failure (the driver's last error), "" if none. */
+static const char *rig_detail(const scan_job_t *job, int where)
+{
+#ifdef CF_HAVE_HAL_RIG
+    if (where == SCAN_AT_STAGE)
+        return hal_stage_error(job->stage.ctx);
+    if (where == SCAN_AT_PROBE)
+        return hal_probe_error(job->probe.ctx);
+#else
+    (void)job, (void)where;
+#endif
+    return "";
+}
+
+static void rig_close(void *handle)
+{
+#ifdef CF_HAVE_HAL_RIG
+    if (handle)
+        hal_rig_close(handle);
+#else
+    (void)handle;
+#endif
+}
+
+typedef struct scan_opts {
+    const char *stage, *probe, *nominal, *journal, *fit, *report;
+    double step, region[4], alpha, beta, z0, cal[3];
+    int have_region, json, home;
+    long entity, sync_every, job_id;
+} scan_opts_t;
+
+/* "a:b:c..." into n doubles. */
+static int parse_list(const char *s, double *out, int n)
+{
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", s);
+    char *p = buf;
+    for (int i = 0; i < n; i++) {
+        char *c = i + 1 < n ? strchr(p, ':') : NULL;
+        if (i + 1 < n && !c)
+            return -1;
+        if (c)
+            *c = 0;
+        if (cli_double(p, &out[i]))
+            return -1;
+        p = c ? c + 1 : p;
+    }
+    return 0;
+}
+
+static int parse(int argc, char **argv, scan_opts_t *o)
+{
+    memset(o, 0, sizeof *o);
+    o->step = 1.0;
+    o->alpha = NF_ALPHA_DEFAULT;
+    o->beta = NF_BETA_DEFAULT;
+    o->z0 = 50.0; /* cellsim's default beam height */
+    o->sync_every = JNL_SYNC_EVERY_DEFAULT;
+    o->job_id = (long)time(NULL);
+    for (int i = 1; i < argc;) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int takes = 1;
+        if (!strcmp(a, "--json"))
+            o->json = 1, takes = 0;
+        else if (!strcmp(a, "--home"))
+            o->home = 1, takes = 0;
+        else if (!v)
+            return cli_error(CMD, CLI_USAGE, "option %s needs a value", a);
+        else if (!strcmp(a, "--stage"))
+            o->stage = v;
+        else if (!strcmp(a, "--probe"))
+            o->probe = v;
+        else if (!strcmp(a, "--nominal"))
+            o->nominal = v;
+        else if (!strcmp(a, "--journal"))
+            o->journal = v;
+        else if (!strcmp(a, "--fit"))
+            o->fit = v;
+        else if (!strcmp(a, "--report"))
+            o->report = v;
+        else if (!strcmp(a, "--step")) {
+            if (cli_double(v, &o->step) || !(o->step > 0))
+                return cli_error(CMD, CLI_USAGE, "--step '%s': need a length > 0 (mm)", v);
+        } else if (!strcmp(a, "--region")) {
+            if (parse_list(v, o->region, 4) || o->region[1] < o->region[0] ||
+                o->region[3] < o->region[2])
+                return cli_error(CMD, CLI_USAGE,
+                                 "--region '%s': need x0:x1:y0:y1, x0 <= x1, y0 <= y1", v);
+            o->have_region = 1;
+        } else if (!strcmp(a, "--alpha")) {
+            if (cli_double(v, &o->alpha) || o->alpha < 0)
+                return cli_error(CMD, CLI_USAGE, "--alpha '%s': need a number >= 0", v);
+        } else if (!strcmp(a, "--beta")) {
+            if (cli_double(v, &o->beta) || o->beta < 0)
+                return cli_error(CMD, CLI_USAGE, "--beta '%s': need a number >= 0", v);
+        } else if (!strcmp(a, "--z0")) {
+            if (cli_double(v, &o->z0))
+                return cli_error(CMD, CLI_USAGE, "--z0 '%s': need a height (mm)", v);
+        } else if (!strcmp(a, "--cal")) {
+            if (parse_list(v, o->cal, 3))
+                return cli_error(CMD, CLI_USAGE, "--cal '%s': need cx:cy:cz (mm)", v);
+        } else if (!strcmp(a, "--sync-every")) {
+            if (cli_int(v, 1, 1000000, &o->sync_every))
+                return cli_error(CMD, CLI_USAGE, "--sync-every '%s': need 1..1000000", v);
+        } else if (!strcmp(a, "--job-id")) {
+            if (cli_int(v, 0, 2147483647L, &o->job_id))
+                return cli_error(CMD, CLI_USAGE, "--job-id '%s': need 0..2^31-1", v);
+        } else if (!strcmp(a, "--entity")) {
+            if (cli_int(v, 1, 9999999, &o->entity))
+                return cli_error(CMD, CLI_USAGE, "--entity '%s': need a DE number", v);
+        } else
+            return cli_error(CMD, CLI_USAGE, "unknown option '%s'", a);
+        i += 1 + takes;
+    }
+    if (!o->stage || !o->probe || !o->nominal || !o->journal)
+        return cli_error(CMD, CLI_USAGE,
+                         "need --stage URI --probe URI --nominal NOMINAL.igs --journal FILE");
+    return CLI_OK;
+}
+
+/* The nominal's extent in x y, from a 65 x 65 sampling of the surface. */
+static void nominal_extent(const nf_surf_t *s, double r[4])
+{
+    double u0, u1, v0, v1;
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    r[0] = r[2] = INFINITY;
+    r[1] = r[3] = -INFINITY;
+    for (int i = 0; i <= 64; i++)
+        for (int j = 0; j <= 64; j++) {
+            double P[3];
+            nf_surf_eval(s, u0 + (u1 - u0) * i / 64.0, v0 + (v1 - v0) * j / 64.0, P);
+            r[0] = fmin(r[0], P[0]);
+            r[1] = fmax(r[1], P[0]);
+            r[2] = fmin(r[2], P[1]);
+            r[3] = fmax(r[3], P[1]);
+        }
+}
+
+static volatile sig_atomic_t stop_flag;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_flag = 1;
+}
+
+static double clk_now(void *ctx)
+{
+    (void)ctx;
+    return cli_now();
+}
+
+static int clk_should_stop(void *ctx)
+{
+    (void)ctx;
+    return stop_flag != 0;
+}
+
+static const rig_clock_ops_t host_clock = {RIG_OPS_VERSION, clk_now, clk_should_stop};
+
+typedef struct scan_ctx {
+    cf_sfit_t *sf;
+    int tty;
+    long last_tenth;
+    int fit_err; /* the nf_err_t that ended the job, 0 */
+} scan_ctx_t;
+
+static int on_point(void *ctx, const jnl_rec_t *r)
+{
+    scan_ctx_t *c = ctx;
+    if (!c->sf)
+        return 0;
+    int rc = cf_sfit_add(c->sf, r->xyz);
+    if (rc)
+        c->fit_err = rc;
+    return rc;
+}
+
+static void on_progress(void *ctx, long done, long planned, uint64_t acked)
+{
+    scan_ctx_t *c = ctx;
+    if (c->tty) {
+        if (done % 16 && done != planned)
+            return;
+        int w = (int)(40.0 * (double)done / (double)planned);
+        fprintf(stderr, "\rscan [%.*s%*s] %ld/%ld points, %llu acknowledged", w,
+                "########################################", 40 - w, "", done, planned,
+                (unsigned long long)acked);
+        if (done == planned)
+            fputc('\n', stderr);
+        return;
+    }
+    long tenth = 10 * done / planned;
+    if (tenth != c->last_tenth) {
+        c->last_tenth = tenth;
+        fprintf(stderr, "scan: %ld/%ld points (%ld%%), %llu acknowledged\n", done, planned,
+                100 * done / planned, (unsigned long long)acked);
+    }
+}
+
+static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const scan_result_t *res,
+                    const jnl_t *j, const cf_sfit_t *sf, const cf_sfit_resid_t *rs,
+                    const nf_solve_stats_t *sst, double secs)
+{
+    cli_json_t js;
+    cli_json_begin(&js, f);
+    cli_json_str(&js, "journal", o->journal);
+    cli_json_int(&js, "job_id", o->job_id);
+    cli_json_str(&js, "nominal", o->nominal);
+    cli_json_num(&js, "x0", pl->x0);
+    cli_json_num(&js, "y0", pl->y0);
+    cli_json_num(&js, "step", o->step);
+    cli_json_int(&js, "nx", pl->nx);
+    cli_json_int(&js, "ny", pl->ny);
+    cli_json_int(&js, "planned", scan_plan_count(pl));
+    cli_json_int(&js, "done", res->done);
+    cli_json_int(&js, "points", res->points);
+    cli_json_int(&js, "flagged", res->flagged);
+    cli_json_int(&js, "acknowledged_records", (long)jnl_acked(j));
+    cli_json_int(&js, "code", res->code);
+    cli_json_str(&js, "error", res->code ? rig_strerror(res->code) : "");
+    cli_json_int(&js, "fail_index", res->fail_index);
+    if (sf && rs) {
+        cli_json_str(&js, "fit", o->fit);
+        cli_json_str(&js, "solver", nf_solver_name(sst->solver));
+        cli_json_int(&js, "iterations", sst->iterations);
+        cli_json_num(&js, "rms", rs->rms);
+        cli_json_num(&js, "max_abs", rs->max);
+        cli_json_num(&js, "nominal_rms", sqrt(sf->dev_ss / (double)sf->points));
+        cli_json_num(&js, "nominal_max_abs", sf->dev_max);
+    }
+    cli_json_num(&js, "seconds", secs);
+    cli_json_end(&js);
+}
+
+int cmd_scan(int argc, char **argv)
+{
+    scan_opts_t o;
+    int ec = parse(argc, argv, &o);
+    if (ec)
+        return ec;
+    double t0 = cli_now();
+    char msg[512];
+    nf_surf_t nom, fit;
+    memset(&fit, 0, sizeof fit);
+    if (cf_iges_read(o.nominal, (int)o.entity, &nom, msg, sizeof msg))
+        return cli_error(CMD, CLI_USAGE, "%s", msg);
+    jnl_header_t h;
+    memset(&h, 0, sizeof h);
+    if (cf_sfit_nominal_id(o.nominal, &h.nominal_hash, h.nominal_name)) {
+        cf_surf_free(&nom);
+        return cli_error(CMD, CLI_USAGE, "%s: cannot read", o.nominal);
+    }
+    scan_job_t job;
+    memset(&job, 0, sizeof job);
+    if (!o.have_region)
+        nominal_extent(&nom, o.region);
+    if (scan_plan_init(&job.plan, o.region[0], o.region[1], o.region[2], o.region[3], o.step,
+                       o.step)) {
+        cf_surf_free(&nom);
+        return cli_error(
+            CMD, CLI_USAGE, "region %g:%g:%g:%g with step %g: no plan (at most %ld points)",
+            o.region[0], o.region[1], o.region[2], o.region[3], o.step, SCAN_MAX_POINTS);
+    }
+    job.kin.z0 = o.z0;
+    memcpy(job.kin.cal, o.cal, sizeof o.cal);
+    job.home = o.home;
+    cf_sfit_t sf;
+    memset(&sf, 0, sizeof sf);
+    if (o.fit && (ec = cf_sfit_init(&sf, &nom, NULL, o.alpha, o.beta, CMD)) != 0) {
+        cf_surf_free(&nom);
+        return ec;
+    }
+    cf_store_file_t f;
+    rig_store_t st;
+    f.fd = -1;
+    if (cf_store_file_open(&f, o.journal, CF_STORE_CREATE, &st, msg, sizeof msg)) {
+        ec = cli_error(CMD, CLI_USAGE, "%s (a journal is never overwritten)", msg);
+        goto out;
+    }
+    void *devs = NULL;
+    int rc = rig_open(o.stage, o.probe, &job.stage, &job.probe, &devs, msg, sizeof msg);
+    if (rc) {
+        cf_store_file_close(&f);
+        unlink(o.journal); /* nothing measured: leave no empty journal behind */
+        ec = cli_error(CMD, rc == RIG_EARG ? CLI_USAGE : CLI_FAIL, "%s", msg);
+        goto out;
+    }
+    h.sync_every = (uint32_t)o.sync_every;
+    h.job_id = (uint64_t)o.job_id;
+    h.t_start = cli_now();
+    scan_header(&job, &h);
+    jnl_t j;
+    if ((rc = jnl_create(&j, st, &h)) != RIG_OK) {
+        ec = cli_error(CMD, CLI_FAIL, "%s: %s (%s)", o.journal, rig_strerror(rc), f.err);
+        goto out_dev;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    scan_ctx_t sc = {o.fit ? &sf : NULL, isatty(2), -1, 0};
+    job.clock = (rig_clock_t){&host_clock, NULL};
+    job.cb = (scan_cb_t){on_point, on_progress, &sc};
+    scan_result_t res;
+    rc = scan_run(&job, &j, &res);
+    if (sc.tty && rc)
+        fputc('\n', stderr);
+    cf_sfit_resid_t rs = {0, 0.0, 0.0};
+    nf_solve_stats_t sst = {NF_SOLVER_AUTO, 0, 0.0};
+    int fitted = 0;
+    if (rc) {
+        double x = NAN, y = NAN;
+        int end;
+        if (res.fail_index >= 0 && res.fail_index < scan_plan_count(&job.plan))
+            scan_plan_point(&job.plan, res.fail_index, &x, &y, &end);
+        static const char *const at[] = {"", "stage", "probe", "journal", "fit", "stop"};
+        const char *det = rig_detail(&job, res.where);
+        ec = cli_error(CMD, CLI_FAIL,
+                       "job ended at grid point %ld (x %g, y %g): %s: %s%s%s; %s holds %llu "
+                       "acknowledged records",
+                       res.fail_index, x, y, at[res.where],
+                       sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), *det ? ": " : "",
+                       det, o.journal, (unsigned long long)jnl_acked(&j));
+    } else if (o.fit) {
+        if (cf_surf_copy(&fit, &nom)) {
+            ec = cli_error(CMD, CLI_FAIL, "out of memory");
+            goto out_dev;
+        }
+        if ((ec = cf_sfit_solve(&sf, &fit, &sst, CMD)) != 0)
+            goto out_dev;
+        /* The residual pass reads the points back from the journal (they
+         * are not in memory). */
+        jnl_reader_t rd;
+        jnl_header_t h2;
+        jnl_info_t in;
+        if ((rc = jnl_reader_open(&rd, st, &h2, &in)) != 0 ||
+            (rc = cf_sfit_residuals(&fit, &rd, &rs)) != 0) {
+            ec = cli_error(CMD, CLI_FAIL, "%s: cannot read the journal back: %d", o.journal, rc);
+            goto out_dev;
+        }
+        if (cf_iges_write(o.fit, &fit, "cellfit scan", msg, sizeof msg)) {
+            ec = cli_error(CMD, CLI_FAIL, "%s", msg);
+            goto out_dev;
+        }
+        fitted = 1;
+    }
+    double secs = cli_now() - t0;
+    if (o.report) {
+        FILE *rf = fopen(o.report, "w");
+        if (rf) {
+            summary(rf, &o, &job.plan, &res, &j, fitted ? &sf : NULL, fitted ? &rs : NULL, &sst,
+                    secs);
+            if (fclose(rf))
+                rf = NULL;
+        }
+        if (!rf && !ec)
+            ec = cli_error(CMD, CLI_FAIL, "%s: cannot write the report", o.report);
+    }
+    if (o.json)
+        summary(stdout, &o, &job.plan, &res, &j, fitted ? &sf : NULL, fitted ? &rs : NULL, &sst,
+                secs);
+    else if (!rc) {
+        printf("cellfit scan: %ld points (%ld x %ld grid, step %g), %ld without a surface; "
+               "journal %s\n",
+               res.done, job.plan.nx, job.plan.ny, o.step, res.flagged, o.journal);
+        if (fitted)
+            printf("  fit: rms %.6g  max %.6g (vs nominal rms %.6g); wrote %s\n", rs.rms, rs.max,
+                   sqrt(sf.dev_ss / (double)sf.points), o.fit);
+    }
+out_dev:
+    rig_close(devs);
+    cf_store_file_close(&f);
+out:
+    cf_sfit_free(&sf);
+    cf_surf_free(&fit);
+    cf_surf_free(&nom);
+    return ec;
+}
