@@ -1,0 +1,117 @@
+/* nf_knots.c: residual-driven knot choice (per-span excess, worst spans split). */
+#include "nf_knots.h"
+#include "nf_basis.h"
+#include "nf_err.h"
+#include <math.h>
+#include <stddef.h>
+
+int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem)
+{
+    if (!r || !s || !mem || !(tol > 0.0))
+        return NF_EARG;
+    r->s = s;
+    r->tol = tol;
+    r->su = mem;
+    r->sv = mem + NF_SPANRES_SLOT * (long)(s->nu - s->p);
+    for (long i = 0; i < NF_SPANRES_DOUBLES(s->nu, s->nv, s->p, s->q); i++)
+        mem[i] = 0.0;
+    r->out = 0;
+    r->e2 = 0.0;
+    return NF_OK;
+}
+
+void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
+{
+    const nf_surf_t *s = r->s;
+    double e = fabs(d) - r->tol;
+    if (!(e > 0.0) || !isfinite(e) || !isfinite(u) || !isfinite(v))
+        return;
+    double u0, u1, v0, v1;
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    u = u < u0 ? u0 : (u > u1 ? u1 : u);
+    v = v < v0 ? v0 : (v > v1 ? v1 : v);
+    const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
+              k = nf_find_span(s->nv - 1, s->q, v, s->V);
+    double *a = r->su + NF_SPANRES_SLOT * (l - s->p), *b = r->sv + NF_SPANRES_SLOT * (k - s->q);
+    const double e2 = e * e;
+    a[0] += 1.0;
+    a[1] += e2;
+    a[2] += e2 * u;
+    b[0] += 1.0;
+    b[1] += e2;
+    b[2] += e2 * v;
+    r->out++;
+    r->e2 += e2;
+}
+
+/* Span i ranks before span j: more excess, or as much and a lower index
+ * (a strict total order, so picks can be found again without marks). */
+static int before(const double *slot, int i, int j)
+{
+    double a = slot[NF_SPANRES_SLOT * i + 1], b = slot[NF_SPANRES_SLOT * j + 1];
+    return a > b || (a == b && i < j);
+}
+
+int nf_spanres_pick(const nf_spanres_t *r, int dir, int max, double *X, int *spread)
+{
+    const nf_surf_t *s = r->s;
+    const int deg = dir ? s->q : s->p, n = dir ? s->nv : s->nu;
+    const double *T = dir ? s->V : s->U, *slot = dir ? r->sv : r->su;
+    const int ns = n - deg;
+    double total = 0.0, got = 0.0;
+    int nonempty = 0, m = 0, last = -1;
+    if (spread)
+        *spread = 0;
+    for (int i = 0; i < ns; i++) {
+        total += slot[NF_SPANRES_SLOT * i + 1];
+        nonempty += T[deg + i] < T[deg + i + 1];
+    }
+    if (!(total > 0.0) || max <= 0 || !X)
+        return 0;
+    /* Selection by rank, O(spans) per pick: the next span is the best one
+     * ranked after the last pick. */
+    while (m < max && got < NF_KNOTS_SHARE * total) {
+        int best = -1;
+        for (int i = 0; i < ns; i++) {
+            if (!(slot[NF_SPANRES_SLOT * i + 1] > 0.0) || !(T[deg + i] < T[deg + i + 1]))
+                continue;
+            if (last >= 0 && !before(slot, last, i))
+                continue;
+            if (best < 0 || before(slot, i, best))
+                best = i;
+        }
+        if (best < 0)
+            break;
+        const double *c = slot + NF_SPANRES_SLOT * best;
+        const double a = T[deg + best], b = T[deg + best + 1], h = b - a;
+        double x = c[2] / c[1];
+        x = x < a + 0.25 * h ? a + 0.25 * h : (x > b - 0.25 * h ? b - 0.25 * h : x);
+        /* Insertion sort: the picks are few. */
+        int j = m;
+        while (j > 0 && X[j - 1] > x) {
+            X[j] = X[j - 1];
+            j--;
+        }
+        X[j] = x;
+        m++;
+        got += c[1];
+        last = best;
+    }
+    if (spread)
+        *spread = (double)m > NF_KNOTS_SPREAD * (double)nonempty;
+    return m;
+}
+
+void nf_spanres_choose(const nf_spanres_t *r, int maxu, double *Xu, int *ru, int maxv, double *Xv,
+                       int *rv)
+{
+    int su = 0, sv = 0;
+    *ru = nf_spanres_pick(r, 0, maxu, Xu, &su);
+    *rv = nf_spanres_pick(r, 1, maxv, Xv, &sv);
+    if (*ru > 0 && *rv > 0 && su != sv) {
+        if (su)
+            *ru = 0;
+        else
+            *rv = 0;
+    }
+}

@@ -1,0 +1,63 @@
+/* nf_knots.h: where to insert knots in the fitting loop (Brujic et al. 2010,
+ * Section 2.2: fit, reparameterise, insert knots until the tolerance holds).
+ * Residual-driven refinement: per knot span in u and per span in v, the
+ * points out of tolerance and their squared excess (|d| - tol)^2 are
+ * accumulated while the points stream by (O(spans) memory, never O(points));
+ * the spans holding most of the excess are then split, at the
+ * excess-weighted mean parameter, so that control points go where the fit
+ * misses instead of everywhere (uniform refinement, nf_refine_uniform).
+ * Storage is the caller's: NF_SPANRES_DOUBLES(nu, nv, p, q) doubles. */
+#ifndef NF_KNOTS_H
+#define NF_KNOTS_H
+
+#include "nf_surf.h"
+
+/* Share of the total squared excess the chosen spans of one direction hold
+ * (the worst spans first), and the largest share of its spans a direction
+ * may pick and still count as concentrated (see nf_spanres_pick). */
+#define NF_KNOTS_SHARE 0.8
+#define NF_KNOTS_SPREAD 0.5
+
+/* Per span slot: points out of tolerance, sum of e^2, sum of e^2 t
+ * (e = |d| - tol, t the point's parameter in that direction). */
+#define NF_SPANRES_SLOT 3
+#define NF_SPANRES_DOUBLES(nu, nv, p, q) (NF_SPANRES_SLOT * ((long)(nu) - (p) + (long)(nv) - (q)))
+
+typedef struct nf_spanres {
+    const nf_surf_t *s; /* the surface whose knot spans are counted */
+    double tol;         /* |d| above tol is out of tolerance */
+    double *su, *sv;    /* slots of spans l = p .. nu-1 (index l - p), k = q .. nv-1 */
+    long out;           /* points out of tolerance */
+    double e2;          /* their total squared excess */
+} nf_spanres_t;
+
+/* Clear the counts for s (after nf_surf_check) and tolerance tol > 0;
+ * mem holds NF_SPANRES_DOUBLES(s->nu, s->nv, s->p, s->q) doubles.
+ * NF_EARG for a null pointer or tol not > 0. */
+int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem);
+
+/* One point at parameters (u, v) (clamped to the domain) with distance d
+ * to the surface: counted when |d| > tol. Non-finite d or parameters are
+ * ignored (the caller reports them). */
+void nf_spanres_add(nf_spanres_t *r, double u, double v, double d);
+
+/* Knots to insert in one direction (dir 0: u, 1: v) into X (room for max),
+ * ascending; returns how many (0 .. max). The non-empty spans with excess
+ * are taken worst first until they hold NF_KNOTS_SHARE of the direction's
+ * excess (or max are taken); each gets one knot at the excess-weighted
+ * mean parameter of its points, kept in the middle half of the span so
+ * that spans shrink by at least a quarter. *spread (if not NULL) is 1 when
+ * the pick took more than NF_KNOTS_SPREAD of the direction's non-empty
+ * spans: the excess is spread along that direction, which then says little
+ * about where knots help. */
+int nf_spanres_pick(const nf_spanres_t *r, int dir, int max, double *X, int *spread);
+
+/* Both directions: picks in u and v (X room for maxu, maxv). When one
+ * direction is concentrated and the other spread (a ridge across the
+ * spread direction: its excess repeats along it), only the concentrated one
+ * is refined; otherwise both. *ru, *rv: the knot counts (0 when the points
+ * are all within tolerance). */
+void nf_spanres_choose(const nf_spanres_t *r, int maxu, double *Xu, int *ru, int maxv, double *Xv,
+                       int *rv);
+
+#endif
