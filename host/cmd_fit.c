@@ -8,6 +8,7 @@
 #include "cf_cli.h"
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_loop.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
@@ -15,7 +16,6 @@
 #include "nf_fit.h"
 #include "nf_knots.h"
 #include "nf_project.h"
-#include "nf_refine.h"
 #include "nf_robust.h"
 #include <math.h>
 #include <stdlib.h>
@@ -55,7 +55,6 @@ static void project_rows(const projector_t *pj, const double *xyz, long n, doubl
     }
 }
 
-enum { REFINE_UNIFORM, REFINE_RESIDUAL };
 #define MAX_ROUNDS 64
 
 typedef struct fit_opts {
@@ -67,7 +66,7 @@ typedef struct fit_opts {
     nf_solver_t solver;
     double dtol, within; /* --tol (mm, 0: no loop) and --within (percent) */
     long max_cp, max_rounds;
-    int refine;
+    cf_refine_t refine;
     int robust;
     long robust_iters;
 } fit_opts_t;
@@ -83,7 +82,7 @@ static int parse(int argc, char **argv, fit_opts_t *o)
     o->within = 100.0;
     o->max_cp = NF_MAX_CP;
     o->max_rounds = 12;
-    o->refine = REFINE_RESIDUAL;
+    o->refine = CF_REFINE_RESIDUAL;
     o->robust_iters = 3;
     int loop_opt = 0;
     for (int i = 1; i < argc;) {
@@ -137,9 +136,9 @@ static int parse(int argc, char **argv, fit_opts_t *o)
             loop_opt = 1;
         } else if (!strcmp(a, "--refine")) {
             if (!strcmp(v, "uniform"))
-                o->refine = REFINE_UNIFORM;
+                o->refine = CF_REFINE_UNIFORM;
             else if (!strcmp(v, "residual"))
-                o->refine = REFINE_RESIDUAL;
+                o->refine = CF_REFINE_RESIDUAL;
             else
                 return cli_error("fit", CLI_USAGE, "--refine '%s': uniform or residual", v);
             loop_opt = 1;
@@ -368,122 +367,6 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
     return CLI_OK;
 }
 
-/* One round of the loop, as reported. */
-typedef struct round {
-    int nu, nv;
-    double within_pct, rms, mx, sigma;
-    long rejected; /* robust: points of weight 0 in the round's last pass */
-    double seconds;
-} round_t;
-
-static void json_key(cli_json_t *j, const char *k)
-{
-    fprintf(j->f, "%s\"%s\": ", j->n++ ? ", " : "", k);
-}
-
-static void json_rounds(cli_json_t *j, const round_t *r, int n, int robust)
-{
-    json_key(j, "rounds");
-    fputc('[', j->f);
-    for (int i = 0; i < n; i++) {
-        fprintf(j->f,
-                "%s{\"round\": %d, \"nu\": %d, \"nv\": %d, \"control_points\": %ld, "
-                "\"within_tol_pct\": %.17g, \"rms\": %.17g, \"max_abs\": %.17g",
-                i ? ", " : "", i, r[i].nu, r[i].nv, (long)r[i].nu * r[i].nv, r[i].within_pct,
-                r[i].rms, r[i].mx);
-        if (robust)
-            fprintf(j->f, ", \"sigma\": %.17g, \"rejected\": %ld", r[i].sigma, r[i].rejected);
-        fprintf(j->f, ", \"seconds\": %.6g}", r[i].seconds);
-    }
-    fputc(']', j->f);
-}
-
-static void print_round(const fit_opts_t *o, int i, const round_t *r)
-{
-    printf("  round %d: %d x %d net (%ld control points)", i, r->nu, r->nv, (long)r->nu * r->nv);
-    if (o->dtol > 0)
-        printf(", %.3f %% within %g mm", r->within_pct, o->dtol);
-    printf(", rms %.6g, max %.6g", r->rms, r->mx);
-    if (o->robust)
-        printf(", sigma %.3g, %ld rejected", r->sigma, r->rejected);
-    printf(" (%.2f s)\n", r->seconds);
-    fflush(stdout);
-}
-
-/* The next net of the loop from the fit: every span halved (uniform, the
- * paper's refinement) or the worst spans split (nf_spanres_choose). The
- * refined surface is the fit exactly (Boehm), so it is the next base and
- * its net the next P0. *nxt is allocated here; 1 with why[] set when the
- * loop must stop (no span to split, over --max-cp or the board budget). */
-static int next_net(const fit_opts_t *o, const nf_surf_t *fit, const nf_spanres_t *sr,
-                    nf_surf_t *nxt, char *why, size_t wl)
-{
-    int nu2, nv2, ru = 0, rv = 0, rc;
-    double *Xu = NULL, *Xv = NULL;
-    if (o->refine == REFINE_UNIFORM) {
-        rc = nf_refine_uniform_size(fit, &nu2, &nv2);
-        if (rc == NF_EBUDGET) {
-            snprintf(why, wl, "the next net would exceed the board's %ld control points",
-                     (long)NF_MAX_CP);
-            return 1;
-        }
-        if (rc)
-            return cli_error("fit", CLI_FAIL, "refinement: %s", nf_strerror(rc));
-    } else {
-        Xu = malloc(sizeof(double) * (size_t)fit->nu);
-        Xv = malloc(sizeof(double) * (size_t)fit->nv);
-        if (!Xu || !Xv) {
-            free(Xu);
-            free(Xv);
-            return cli_error("fit", CLI_FAIL, "out of memory");
-        }
-        nf_spanres_choose(sr, fit->nu - fit->p, Xu, &ru, fit->nv - fit->q, Xv, &rv);
-        nu2 = fit->nu + ru;
-        nv2 = fit->nv + rv;
-        if (ru + rv == 0) {
-            snprintf(why, wl, "no knot span left to split");
-            free(Xu);
-            free(Xv);
-            return 1;
-        }
-    }
-    long ncp = (long)nu2 * nv2, need = nf_fit_bytes(nu2, nv2, fit->p, fit->q, o->solver);
-    int stop = 0;
-    if (ncp > o->max_cp || ncp > NF_MAX_CP)
-        stop = snprintf(why, wl, "the next net (%d x %d = %ld control points) would exceed %s %ld",
-                        nu2, nv2, ncp, ncp > o->max_cp ? "--max-cp" : "the board's",
-                        ncp > o->max_cp ? o->max_cp : (long)NF_MAX_CP) > 0;
-    else if (need < 0 || need > NF_ARENA_BYTES)
-        stop = snprintf(why, wl, "the next net (%d x %d) would need %ld bytes, board %s allows %ld",
-                        nu2, nv2, need, BOARD_NAME, (long)NF_ARENA_BYTES) > 0;
-    if (stop) {
-        free(Xu);
-        free(Xv);
-        return 1;
-    }
-    nf_surf_t tmp;
-    memset(&tmp, 0, sizeof tmp);
-    if (cf_surf_alloc(nxt, fit->p, fit->q, nu2, nv2) ||
-        (o->refine == REFINE_RESIDUAL && cf_surf_alloc(&tmp, fit->p, fit->q, nu2, fit->nv))) {
-        free(Xu);
-        free(Xv);
-        cf_surf_free(nxt);
-        return cli_error("fit", CLI_FAIL, "out of memory");
-    }
-    if (o->refine == REFINE_UNIFORM)
-        rc = nf_refine_uniform(fit, nxt);
-    else if (!(rc = nf_refine_u(fit, Xu, ru, &tmp)))
-        rc = nf_refine_v(&tmp, Xv, rv, nxt);
-    free(Xu);
-    free(Xv);
-    cf_surf_free(&tmp);
-    if (rc) {
-        cf_surf_free(nxt);
-        return cli_error("fit", CLI_FAIL, "knot insertion: %s", nf_strerror(rc));
-    }
-    return CLI_OK;
-}
-
 static int replace_copy(nf_surf_t *dst, const nf_surf_t *src)
 {
     cf_surf_free(dst);
@@ -534,7 +417,7 @@ int cmd_fit(int argc, char **argv)
     double *buf = malloc(sizeof(double) * 5 * BATCH), *rows = malloc(sizeof(double) * 5 * BATCH);
     double *srmem = NULL;
     int ec = CLI_OK, met = 0, nr = 0;
-    round_t rounds[MAX_ROUNDS];
+    cf_round_t rounds[MAX_ROUNDS];
     pass_out_t po = {0, 0, {NF_SOLVER_AUTO, 0, 0.0}, 0.0, 0.0};
     double t_acc = 0.0, t_solve = 0.0, best_within = -1.0, best_rms = 0.0, c = 0.0;
     resid_t res, best_res;
@@ -598,7 +481,7 @@ int cmd_fit(int argc, char **argv)
         nf_spanres_t sr, *srp = NULL;
         free(srmem);
         srmem = NULL;
-        if (o.dtol > 0 && o.refine == REFINE_RESIDUAL) {
+        if (o.dtol > 0 && o.refine == CF_REFINE_RESIDUAL) {
             srmem =
                 malloc(sizeof(double) * (size_t)NF_SPANRES_DOUBLES(fit.nu, fit.nv, fit.p, fit.q));
             if (!srmem) {
@@ -618,7 +501,7 @@ int cmd_fit(int argc, char **argv)
         cf_seedgrid_free(&pj);
         if (ec)
             goto done;
-        round_t *rd = &rounds[nr++];
+        cf_round_t *rd = &rounds[nr++];
         rd->nu = fit.nu;
         rd->nv = fit.nv;
         rd->within_pct = 100.0 * (double)res.within / (double)res.n;
@@ -628,7 +511,7 @@ int cmd_fit(int argc, char **argv)
         rd->rejected = rejected;
         rd->seconds = cli_now() - tr;
         if (o.dtol > 0 && !o.json)
-            print_round(&o, round, rd);
+            cf_round_print(stdout, round, rd, o.dtol, o.robust);
         /* Keep the best fit: most points within tolerance, then lowest rms. */
         if (rd->within_pct > best_within || (rd->within_pct == best_within && rd->rms < best_rms)) {
             if (replace_copy(&best, &fit)) {
@@ -651,13 +534,14 @@ int cmd_fit(int argc, char **argv)
             snprintf(why, sizeof why, "after %ld rounds (--max-rounds)", o.max_rounds);
             break;
         }
-        ec = next_net(&o, &fit, srp, &nxt, why, sizeof why);
-        if (ec == 1) {
-            ec = CLI_OK;
-            break;
-        }
-        if (ec)
+        int stop = 0;
+        rc = cf_loop_next(&fit, srp, o.refine, o.max_cp, o.solver, &nxt, &stop, why, sizeof why);
+        if (rc) {
+            ec = cli_error("fit", CLI_FAIL, "%s", why);
             goto done;
+        }
+        if (stop)
+            break;
         cf_surf_free(&cur);
         cur = nxt;
         memset(&nxt, 0, sizeof nxt);
@@ -694,12 +578,12 @@ int cmd_fit(int argc, char **argv)
             cli_json_num(&j, "tol", o.dtol);
             cli_json_num(&j, "within", o.within);
             cli_json_num(&j, "within_tol_pct", best_within);
-            json_key(&j, "tol_met");
-            fputs(met ? "true" : "false", j.f);
-            cli_json_str(&j, "refine", o.refine == REFINE_UNIFORM ? "uniform" : "residual");
+            /* cli_json has no booleans: the key written as cli_json does. */
+            fprintf(j.f, "%s\"tol_met\": %s", j.n++ ? ", " : "", met ? "true" : "false");
+            cli_json_str(&j, "refine", o.refine == CF_REFINE_UNIFORM ? "uniform" : "residual");
             if (!met)
                 cli_json_str(&j, "stopped", why);
-            json_rounds(&j, rounds, nr, o.robust);
+            cf_rounds_json(&j, rounds, nr, o.robust);
         }
         if (o.robust) {
             cli_json_int(&j, "robust_iters", o.robust_iters);
