@@ -1,4 +1,4 @@
-/* nf_knots.c: residual-driven knot choice (per-span excess, worst spans split). */
+/* nf_knots.c: residual-driven knot choice (per-span excess, worst spans halved). */
 #include "nf_knots.h"
 #include "nf_basis.h"
 #include "nf_err.h"
@@ -13,8 +13,11 @@ int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem
     r->tol = tol;
     r->su = mem;
     r->sv = mem + NF_SPANRES_SLOT * (long)(s->nu - s->p);
-    for (long i = 0; i < NF_SPANRES_DOUBLES(s->nu, s->nv, s->p, s->q); i++)
-        mem[i] = 0.0;
+    for (long i = 0; i < NF_SPANRES_DOUBLES(s->nu, s->nv, s->p, s->q); i += NF_SPANRES_SLOT) {
+        mem[i] = mem[i + 1] = 0.0;
+        mem[i + 2] = HUGE_VAL;
+        mem[i + 3] = -HUGE_VAL;
+    }
     r->out = 0;
     r->e2 = 0.0;
     return NF_OK;
@@ -23,8 +26,7 @@ int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem
 void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
 {
     const nf_surf_t *s = r->s;
-    double e = fabs(d) - r->tol;
-    if (!(e > 0.0) || !isfinite(e) || !isfinite(u) || !isfinite(v))
+    if (!isfinite(u) || !isfinite(v))
         return;
     double u0, u1, v0, v1;
     nf_surf_domain(s, &u0, &u1, &v0, &v1);
@@ -33,13 +35,17 @@ void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
     const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
               k = nf_find_span(s->nv - 1, s->q, v, s->V);
     double *a = r->su + NF_SPANRES_SLOT * (l - s->p), *b = r->sv + NF_SPANRES_SLOT * (k - s->q);
-    const double e2 = e * e;
+    a[2] = u < a[2] ? u : a[2];
+    a[3] = u > a[3] ? u : a[3];
+    b[2] = v < b[2] ? v : b[2];
+    b[3] = v > b[3] ? v : b[3];
+    const double e = fabs(d) - r->tol, e2 = e * e;
+    if (!(e > 0.0) || !isfinite(e))
+        return;
     a[0] += 1.0;
     a[1] += e2;
-    a[2] += e2 * u;
     b[0] += 1.0;
     b[1] += e2;
-    b[2] += e2 * v;
     r->out++;
     r->e2 += e2;
 }
@@ -68,12 +74,14 @@ int nf_spanres_pick(const nf_spanres_t *r, int dir, int max, double *X, int *spr
     }
     if (!(total > 0.0) || max <= 0 || !X)
         return 0;
-    /* Selection by rank, O(spans) per pick: the next span is the best one
-     * ranked after the last pick. */
+    /* Selection by rank, O(spans) per pick: the next span is the best
+     * eligible one ranked after the last pick. */
     while (m < max && got < NF_KNOTS_SHARE * total) {
         int best = -1;
         for (int i = 0; i < ns; i++) {
-            if (!(slot[NF_SPANRES_SLOT * i + 1] > 0.0) || !(T[deg + i] < T[deg + i + 1]))
+            const double *c = slot + NF_SPANRES_SLOT * i;
+            const double mid = 0.5 * (T[deg + i] + T[deg + i + 1]);
+            if (!(c[1] > 0.0) || !(T[deg + i] < T[deg + i + 1]) || !(c[2] < mid && mid < c[3]))
                 continue;
             if (last >= 0 && !before(slot, last, i))
                 continue;
@@ -82,10 +90,7 @@ int nf_spanres_pick(const nf_spanres_t *r, int dir, int max, double *X, int *spr
         }
         if (best < 0)
             break;
-        const double *c = slot + NF_SPANRES_SLOT * best;
-        const double a = T[deg + best], b = T[deg + best + 1], h = b - a;
-        double x = c[2] / c[1];
-        x = x < a + 0.25 * h ? a + 0.25 * h : (x > b - 0.25 * h ? b - 0.25 * h : x);
+        const double x = 0.5 * (T[deg + best] + T[deg + best + 1]);
         /* Insertion sort: the picks are few. */
         int j = m;
         while (j > 0 && X[j - 1] > x) {
@@ -94,7 +99,7 @@ int nf_spanres_pick(const nf_spanres_t *r, int dir, int max, double *X, int *spr
         }
         X[j] = x;
         m++;
-        got += c[1];
+        got += slot[NF_SPANRES_SLOT * best + 1];
         last = best;
     }
     if (spread)

@@ -3,9 +3,12 @@
  * Residual-driven refinement: per knot span in u and per span in v, the
  * points out of tolerance and their squared excess (|d| - tol)^2 are
  * accumulated while the points stream by (O(spans) memory, never O(points));
- * the spans holding most of the excess are then split, at the
- * excess-weighted mean parameter, so that control points go where the fit
- * misses instead of everywhere (uniform refinement, nf_refine_uniform).
+ * the spans holding most of the excess are then halved, so that control
+ * points go where the fit misses instead of everywhere (uniform
+ * refinement, nf_refine_uniform). A span is split only when measured
+ * points lie on both sides of its midpoint: a span narrower than the
+ * spacing of the data would leave control points that no point determines,
+ * free to wiggle between the scan lines.
  * Storage is the caller's: NF_SPANRES_DOUBLES(nu, nv, p, q) doubles. */
 #ifndef NF_KNOTS_H
 #define NF_KNOTS_H
@@ -18,9 +21,9 @@
 #define NF_KNOTS_SHARE 0.8
 #define NF_KNOTS_SPREAD 0.5
 
-/* Per span slot: points out of tolerance, sum of e^2, sum of e^2 t
- * (e = |d| - tol, t the point's parameter in that direction). */
-#define NF_SPANRES_SLOT 3
+/* Per span slot: points out of tolerance, their sum of e^2 (e = |d| - tol),
+ * and the smallest and largest parameter of all points in the span. */
+#define NF_SPANRES_SLOT 4
 #define NF_SPANRES_DOUBLES(nu, nv, p, q) (NF_SPANRES_SLOT * ((long)(nu) - (p) + (long)(nv) - (q)))
 
 typedef struct nf_spanres {
@@ -37,16 +40,16 @@ typedef struct nf_spanres {
 int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem);
 
 /* One point at parameters (u, v) (clamped to the domain) with distance d
- * to the surface: counted when |d| > tol. Non-finite d or parameters are
- * ignored (the caller reports them). */
+ * to the surface: its parameters widen the data range of its spans, and it
+ * is counted out of tolerance when |d| > tol. Non-finite parameters are
+ * ignored; so is a non-finite d, except for the data range. */
 void nf_spanres_add(nf_spanres_t *r, double u, double v, double d);
 
 /* Knots to insert in one direction (dir 0: u, 1: v) into X (room for max),
  * ascending; returns how many (0 .. max). The non-empty spans with excess
  * are taken worst first until they hold NF_KNOTS_SHARE of the direction's
- * excess (or max are taken); each gets one knot at the excess-weighted
- * mean parameter of its points, kept in the middle half of the span so
- * that spans shrink by at least a quarter. *spread (if not NULL) is 1 when
+ * excess (or max are taken), among the spans whose data lie on both
+ * sides of the midpoint; each gets one knot at its midpoint. *spread (if not NULL) is 1 when
  * the pick took more than NF_KNOTS_SPREAD of the direction's non-empty
  * spans: the excess is spread along that direction, which then says little
  * about where knots help. */

@@ -50,6 +50,14 @@ static void add_all(nf_spanres_t *r, const pt_t *p, int n)
         nf_spanres_add(r, p[k].u, p[k].v, p[k].d);
 }
 
+/* Points within tolerance on a grid over the domain (the data range). */
+static void add_background(nf_spanres_t *r)
+{
+    for (int j = 0; j < 60; j++)
+        for (int i = 0; i < 60; i++)
+            nf_spanres_add(r, (i + 0.5) / 60, (j + 0.5) / 60, 0.0);
+}
+
 static void test_spanres_counts(void **state)
 {
     (void)state;
@@ -64,32 +72,42 @@ static void test_spanres_counts(void **state)
     assert_int_equal(nf_spanres_init(&r, &s, tol, mem), NF_OK);
     enum { M = 3000 };
     static pt_t p[M];
-    double bu[7][3] = {{0}}, bv[5][3] = {{0}}, e2tot = 0.0;
+    double bu[7][4], bv[5][4], e2tot = 0.0;
+    for (int i = 0; i < 7; i++)
+        bu[i][0] = bu[i][1] = 0, bu[i][2] = HUGE_VAL, bu[i][3] = -HUGE_VAL;
+    for (int i = 0; i < 5; i++)
+        bv[i][0] = bv[i][1] = 0, bv[i][2] = HUGE_VAL, bv[i][3] = -HUGE_VAL;
     long out = 0;
     for (int k = 0; k < M; k++) {
         p[k].u = k == 0 ? 1.0 : ref_rand(0, 1); /* the domain's end too */
         p[k].v = k == 1 ? 0.0 : ref_rand(0, 1);
         p[k].d = ref_rand(-0.2, 0.2);
         double e = fabs(p[k].d) - tol;
+        int a = brute_span(s.U, 3, 10, p[k].u), b = brute_span(s.V, 3, 8, p[k].v);
+        bu[a][2] = fmin(bu[a][2], p[k].u), bu[a][3] = fmax(bu[a][3], p[k].u);
+        bv[b][2] = fmin(bv[b][2], p[k].v), bv[b][3] = fmax(bv[b][3], p[k].v);
         if (e > 0) {
-            int a = brute_span(s.U, 3, 10, p[k].u), b = brute_span(s.V, 3, 8, p[k].v);
-            bu[a][0] += 1, bu[a][1] += e * e, bu[a][2] += e * e * p[k].u;
-            bv[b][0] += 1, bv[b][1] += e * e, bv[b][2] += e * e * p[k].v;
+            bu[a][0] += 1, bu[a][1] += e * e;
+            bv[b][0] += 1, bv[b][1] += e * e;
             e2tot += e * e;
             out++;
         }
     }
     add_all(&r, p, M);
-    nf_spanres_add(&r, 0.5, 0.5, NAN); /* ignored */
+    nf_spanres_add(&r, NAN, 0.5, 1.0); /* ignored */
     assert_int_equal(r.out, out);
     assert_near(r.e2, e2tot, 1e-12 * e2tot);
     for (int i = 0; i < 7; i++)
-        for (int c = 0; c < 3; c++)
-            assert_near(r.su[3 * i + c], bu[i][c], 1e-12 * (1 + fabs(bu[i][c])));
+        for (int c = 0; c < 4; c++)
+            assert_true(r.su[4 * i + c] == bu[i][c] ||
+                        fabs(r.su[4 * i + c] - bu[i][c]) <= 1e-12 * fabs(bu[i][c]));
     for (int i = 0; i < 5; i++)
-        for (int c = 0; c < 3; c++)
-            assert_near(r.sv[3 * i + c], bv[i][c], 1e-12 * (1 + fabs(bv[i][c])));
-    assert_true(r.su[3 * 2] == 0.0 && r.su[3 * 2 + 1] == 0.0); /* the empty span [0.25, 0.25) */
+        for (int c = 0; c < 4; c++)
+            assert_true(r.sv[4 * i + c] == bv[i][c] ||
+                        fabs(r.sv[4 * i + c] - bv[i][c]) <= 1e-12 * fabs(bv[i][c]));
+    /* The empty span [0.25, 0.25) gets nothing; u = 1 counts in the last span. */
+    assert_true(r.su[4 * 2] == 0.0 && r.su[4 * 2 + 1] == 0.0 && r.su[4 * 2 + 2] == HUGE_VAL);
+    assert_true(r.su[4 * 6 + 3] == 1.0);
     ref_surf_free(&s);
 }
 
@@ -97,7 +115,7 @@ static const double *g_slot;
 static int by_excess(const void *a, const void *b)
 {
     int i = *(const int *)a, j = *(const int *)b;
-    double x = g_slot[3 * i + 1], y = g_slot[3 * j + 1];
+    double x = g_slot[4 * i + 1], y = g_slot[4 * j + 1];
     return x < y ? 1 : x > y ? -1 : (i > j) - (i < j);
 }
 
@@ -107,23 +125,26 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Expected picks: the spans sorted by excess (qsort), taken until they hold
- * NF_KNOTS_SHARE of it; each split at its weighted mean, clamped. */
+/* Expected picks: the spans sorted by excess (qsort), those with data on
+ * both sides of their midpoint taken until they hold NF_KNOTS_SHARE of the
+ * excess; each halved. */
 static int brute_pick(const double *slot, const double *T, int deg, int n, int max, double *X)
 {
     int idx[64] = {0}, m = 0, ns = n - deg;
     double total = 0, got = 0;
     for (int i = 0; i < ns; i++)
-        idx[i] = i, total += slot[3 * i + 1];
+        idx[i] = i, total += slot[4 * i + 1];
     g_slot = slot;
     qsort(idx, (size_t)ns, sizeof idx[0], by_excess);
     for (int t = 0; t < ns && m < max && got < NF_KNOTS_SHARE * total; t++) {
         int i = idx[t];
-        if (!(slot[3 * i + 1] > 0))
+        if (!(slot[4 * i + 1] > 0))
             break;
-        double a = T[deg + i], b = T[deg + i + 1], h = b - a, x = slot[3 * i + 2] / slot[3 * i + 1];
-        X[m++] = fmin(fmax(x, a + 0.25 * h), b - 0.25 * h);
-        got += slot[3 * i + 1];
+        double mid = 0.5 * (T[deg + i] + T[deg + i + 1]);
+        if (!(slot[4 * i + 2] < mid && mid < slot[4 * i + 3]))
+            continue;
+        X[m++] = mid;
+        got += slot[4 * i + 1];
     }
     qsort(X, (size_t)m, sizeof X[0], cmp_double);
     return m;
@@ -139,6 +160,8 @@ static void test_pick_matches_ranking(void **state)
         double mem[NF_SPANRES_DOUBLES(10, 8, 3, 3)];
         nf_spanres_t r;
         nf_spanres_init(&r, &s, 0.05, mem);
+        if (trial % 2)
+            add_background(&r); /* else the data range is the points' alone */
         /* Excess concentrated near a random spot, plus scattered noise. */
         double cu = ref_rand(0, 1), cv = ref_rand(0, 1);
         for (int k = 0; k < 400; k++) {
@@ -153,7 +176,7 @@ static void test_pick_matches_ranking(void **state)
             int m = nf_spanres_pick(&r, 0, max, X, &spread);
             int want = brute_pick(r.su, s.U, 3, 10, max, Y);
             assert_int_equal(m, want);
-            assert_true(m >= 1 && m <= max);
+            assert_true(m <= max);
             assert_true(spread == (m > NF_KNOTS_SPREAD * 6));
             for (int i = 0; i < m; i++) {
                 assert_near(X[i], Y[i], 1e-15);
@@ -200,19 +223,20 @@ static void test_pick_location(void **state)
     nf_spanres_add(&r, 0.3, 0.3, -0.049);
     assert_int_equal(r.out, 0);
     assert_int_equal(nf_spanres_pick(&r, 0, 4, X, NULL), 0);
-    /* All excess in span [0.5, 0.7), at u = 0.62 (inside the middle half
-     * [0.55, 0.65]): the knot goes there. Weighted by e^2: points at 0.6
-     * (e = 0.1), 0.68 (e = 0.1) and 0.56 (e = 0.2) -> (0.6 + 0.68 + 4 * 0.56) / 6. */
-    nf_spanres_add(&r, 0.6, 0.4, 0.15);
-    nf_spanres_add(&r, 0.68, 0.4, -0.15);
-    nf_spanres_add(&r, 0.56, 0.4, 0.25);
+    /* All excess in span [0.5, 0.7) with data on both sides of 0.6: halved. */
+    nf_spanres_add(&r, 0.52, 0.4, 0.15);
+    nf_spanres_add(&r, 0.68, 0.4, -0.01);
     assert_int_equal(nf_spanres_pick(&r, 0, 4, X, NULL), 1);
-    assert_near(X[0], (0.6 + 0.68 + 4 * 0.56) / 6, 1e-12);
-    /* Excess at the span's left end: the knot is kept at a + h/4. */
+    assert_true(X[0] == 0.6);
+    /* The worst span [0.5, 0.7) has data on one side of its midpoint only
+     * (narrower than the data spacing): the next span [0.7, 0.85) is split. */
     nf_spanres_init(&r, &s, 0.05, mem);
-    nf_spanres_add(&r, 0.5, 0.4, 1.0);
+    nf_spanres_add(&r, 0.55, 0.4, 1.0);
+    nf_spanres_add(&r, 0.58, 0.4, 1.0);
+    nf_spanres_add(&r, 0.71, 0.4, 0.1);
+    nf_spanres_add(&r, 0.84, 0.4, 0.0);
     assert_int_equal(nf_spanres_pick(&r, 0, 4, X, NULL), 1);
-    assert_near(X[0], 0.55, 1e-15);
+    assert_near(X[0], 0.775, 1e-15);
     ref_surf_free(&s);
 }
 
@@ -227,13 +251,15 @@ static void test_choose_ridge(void **state)
     nf_spanres_t r;
     int ru, rv;
     nf_spanres_init(&r, &s, 0.05, mem);
+    add_background(&r);
     for (int k = 0; k < 500; k++)
         nf_spanres_add(&r, 0.6 + 0.01 * sin(k), (k + 0.5) / 500.0, 0.3);
     nf_spanres_choose(&r, 7, Xu, &ru, 5, Xv, &rv);
     assert_int_equal(ru, 1);
     assert_int_equal(rv, 0);
-    assert_true(Xu[0] > 0.5 && Xu[0] < 0.7);
+    assert_true(Xu[0] == 0.6);
     nf_spanres_init(&r, &s, 0.05, mem);
+    add_background(&r);
     for (int k = 0; k < 500; k++)
         nf_spanres_add(&r, 0.6 + 0.01 * sin(k), 0.3 + 0.01 * cos(k), 0.3);
     nf_spanres_choose(&r, 7, Xu, &ru, 5, Xv, &rv);
