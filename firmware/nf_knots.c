@@ -13,19 +13,25 @@ int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem
     r->tol = tol;
     r->su = mem;
     r->sv = mem + NF_SPANRES_SLOT * (long)(s->nu - s->p);
-    for (long i = 0; i < NF_SPANRES_DOUBLES(s->nu, s->nv, s->p, s->q); i += NF_SPANRES_SLOT) {
-        mem[i] = mem[i + 1] = 0.0;
-        mem[i + 2] = HUGE_VAL;
-        mem[i + 3] = -HUGE_VAL;
+    r->cell = r->sv + NF_SPANRES_SLOT * (long)(s->nv - s->q);
+    for (double *c = mem; c < r->cell; c += NF_SPANRES_SLOT) {
+        c[0] = c[1] = 0.0;
+        c[2] = HUGE_VAL;
+        c[3] = -HUGE_VAL;
     }
-    r->out = 0;
+    for (long i = 0; i < NF_SPANRES_CELL * (long)(s->nu - s->p) * (s->nv - s->q); i++)
+        r->cell[i] = 0.0;
+    r->out = r->all = r->rej = 0;
     r->e2 = 0.0;
     return NF_OK;
 }
 
-void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
+/* The point's span slots and cell, its data range and count taken;
+ * NULL slots for non-finite parameters. */
+static void locate(nf_spanres_t *r, double u, double v, double **a, double **b, double **c)
 {
     const nf_surf_t *s = r->s;
+    *a = *b = *c = NULL;
     if (!isfinite(u) || !isfinite(v))
         return;
     double u0, u1, v0, v1;
@@ -34,13 +40,24 @@ void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
     v = v < v0 ? v0 : (v > v1 ? v1 : v);
     const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
               k = nf_find_span(s->nv - 1, s->q, v, s->V);
-    double *a = r->su + NF_SPANRES_SLOT * (l - s->p), *b = r->sv + NF_SPANRES_SLOT * (k - s->q);
-    a[2] = u < a[2] ? u : a[2];
-    a[3] = u > a[3] ? u : a[3];
-    b[2] = v < b[2] ? v : b[2];
-    b[3] = v > b[3] ? v : b[3];
+    double *sa = r->su + NF_SPANRES_SLOT * (l - s->p), *sb = r->sv + NF_SPANRES_SLOT * (k - s->q);
+    sa[2] = u < sa[2] ? u : sa[2];
+    sa[3] = u > sa[3] ? u : sa[3];
+    sb[2] = v < sb[2] ? v : sb[2];
+    sb[3] = v > sb[3] ? v : sb[3];
+    *c = r->cell + NF_SPANRES_CELL * ((l - s->p) + (long)(k - s->q) * (s->nu - s->p));
+    (*c)[0] += 1.0;
+    r->all++;
+    *a = sa;
+    *b = sb;
+}
+
+void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
+{
+    double *a, *b, *c;
+    locate(r, u, v, &a, &b, &c);
     const double e = fabs(d) - r->tol, e2 = e * e;
-    if (!(e > 0.0) || !isfinite(e))
+    if (!a || !(e > 0.0) || !isfinite(e))
         return;
     a[0] += 1.0;
     a[1] += e2;
@@ -48,6 +65,42 @@ void nf_spanres_add(nf_spanres_t *r, double u, double v, double d)
     b[1] += e2;
     r->out++;
     r->e2 += e2;
+}
+
+void nf_spanres_add_rejected(nf_spanres_t *r, double u, double v, double d)
+{
+    double *a, *b, *c;
+    locate(r, u, v, &a, &b, &c);
+    const double e = fabs(d) - r->tol;
+    if (!a || !(e > 0.0) || !isfinite(e))
+        return;
+    c[1] += 1.0;
+    c[2] += e * e;
+    r->rej++;
+}
+
+int nf_spanres_fold(nf_spanres_t *r)
+{
+    const nf_surf_t *s = r->s;
+    const int nsu = s->nu - s->p, nsv = s->nv - s->q;
+    const double share = r->all > 0 ? (double)r->rej / (double)r->all : 0.0;
+    int folded = 0;
+    for (int k = 0; k < nsv; k++)
+        for (int l = 0; l < nsu; l++) {
+            double *c = r->cell + NF_SPANRES_CELL * (l + (long)k * nsu);
+            if (!(c[1] >= NF_KNOTS_MIN_REJ) || !(c[1] >= NF_KNOTS_COHERENT * share * c[0]))
+                continue;
+            double *a = r->su + NF_SPANRES_SLOT * l, *b = r->sv + NF_SPANRES_SLOT * k;
+            a[0] += c[1];
+            a[1] += c[2];
+            b[0] += c[1];
+            b[1] += c[2];
+            r->out += (long)c[1];
+            r->e2 += c[2];
+            c[1] = c[2] = 0.0;
+            folded++;
+        }
+    return folded;
 }
 
 /* Span i ranks before span j: more excess, or as much and a lower index

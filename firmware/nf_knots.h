@@ -24,14 +24,28 @@
 /* Per span slot: points out of tolerance, their sum of e^2 (e = |d| - tol),
  * and the smallest and largest parameter of all points in the span. */
 #define NF_SPANRES_SLOT 4
-#define NF_SPANRES_DOUBLES(nu, nv, p, q) (NF_SPANRES_SLOT * ((long)(nu) - (p) + (long)(nv) - (q)))
+/* Per cell (span in u x span in v): points, and the points out of tolerance
+ * that a robust fit rejected with their sum of e^2 (nf_spanres_fold). */
+#define NF_SPANRES_CELL 3
+#define NF_SPANRES_DOUBLES(nu, nv, p, q)                                                           \
+    (NF_SPANRES_SLOT * ((long)(nu) - (p) + (long)(nv) - (q)) +                                     \
+     NF_SPANRES_CELL * ((long)(nu) - (p)) * ((long)(nv) - (q)))
+
+/* Rejected points of a cell are a feature the net cannot follow yet, not
+ * spikes, when there are at least NF_KNOTS_MIN_REJ of them and their share
+ * of the cell's points is NF_KNOTS_COHERENT times the share over all cells
+ * (spikes fall everywhere alike; a feature's misfit is in one place). */
+#define NF_KNOTS_COHERENT 4.0
+#define NF_KNOTS_MIN_REJ 4
 
 typedef struct nf_spanres {
     const nf_surf_t *s; /* the surface whose knot spans are counted */
     double tol;         /* |d| above tol is out of tolerance */
     double *su, *sv;    /* slots of spans l = p .. nu-1 (index l - p), k = q .. nv-1 */
-    long out;           /* points out of tolerance */
+    double *cell;       /* cells (l - p) + (k - q)(nu - p) */
+    long out;           /* points out of tolerance counted in the slots */
     double e2;          /* their total squared excess */
+    long all, rej;      /* points seen; rejected ones out of tolerance */
 } nf_spanres_t;
 
 /* Clear the counts for s (after nf_surf_check) and tolerance tol > 0;
@@ -44,6 +58,16 @@ int nf_spanres_init(nf_spanres_t *r, const nf_surf_t *s, double tol, double *mem
  * is counted out of tolerance when |d| > tol. Non-finite parameters are
  * ignored; so is a non-finite d, except for the data range. */
 void nf_spanres_add(nf_spanres_t *r, double u, double v, double d);
+
+/* A point a robust fit rejected (weight 0): data range and cell counts as
+ * nf_spanres_add, but its excess goes to its cell only, not to the spans:
+ * a spike is not a shape. */
+void nf_spanres_add_rejected(nf_spanres_t *r, double u, double v, double d);
+
+/* After the pass: the rejected excess of the cells where it is coherent
+ * (NF_KNOTS_COHERENT) is added to their spans after all, and cleared from
+ * the cells (a second call adds nothing). Returns the cells folded in. */
+int nf_spanres_fold(nf_spanres_t *r);
 
 /* Knots to insert in one direction (dir 0: u, 1: v) into X (room for max),
  * ascending; returns how many (0 .. max). The non-empty spans with excess

@@ -226,8 +226,8 @@ static double dist_at(const nf_surf_t *s, const double *q)
 /* A pass over the points against the fit s: |Q - S(u, v)| at the given
  * parameters with --uv, else the normal distance to s (projection). Sums
  * for the summary, the count within tol (if > 0), the |d| histogram, and
- * (if sr) the excess per knot span of the points out of tolerance, except
- * those beyond cut (> 0: points a robust fit rejects as outliers). */
+ * (if sr) the excess per knot span of the points out of tolerance; those
+ * beyond cut (> 0: points a robust fit rejects) go to their cells only. */
 static int measure(cf_points_t *r, const nf_surf_t *s, const projector_t *pj, double tol,
                    nf_spanres_t *sr, double cut, double *buf, double *rows, resid_t *out, char *msg,
                    size_t ml)
@@ -251,9 +251,11 @@ static int measure(cf_points_t *r, const nf_surf_t *s, const projector_t *pj, do
             out->n++;
             out->within += tol > 0 && d <= tol;
             nf_rhist_add(&out->hist, d);
-            if (cut > 0 && d >= cut)
+            if (cut > 0 && d >= cut) {
                 out->outliers++;
-            else if (sr)
+                if (sr)
+                    nf_spanres_add_rejected(sr, q[0], q[1], d);
+            } else if (sr)
                 nf_spanres_add(sr, q[0], q[1], d);
         }
     }
@@ -501,6 +503,8 @@ int cmd_fit(int argc, char **argv)
         cf_seedgrid_free(&pj);
         if (ec)
             goto done;
+        if (srp)
+            nf_spanres_fold(srp); /* rejected misfit in one place: a feature */
         cf_round_t *rd = &rounds[nr++];
         rd->nu = fit.nu;
         rd->nv = fit.nv;

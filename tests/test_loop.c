@@ -268,6 +268,52 @@ static void test_choose_ridge(void **state)
     ref_surf_free(&s);
 }
 
+/* Rejected points: 1 % spikes everywhere stay out of the spans; a cluster
+ * of rejected misfit in one cell is folded into its spans. */
+static void test_fold(void **state)
+{
+    (void)state;
+    nf_surf_t s;
+    make_surf(&s);
+    double mem[NF_SPANRES_DOUBLES(10, 8, 3, 3)], X[7];
+    nf_spanres_t r;
+    /* The feature's cell: u [0.5, 0.7) (slot 4) x the v span holding 0.5. */
+    int l = 4, kk = -1;
+    for (int j = 3; j < 8; j++)
+        if (s.V[j] <= 0.5 && 0.5 < s.V[j + 1])
+            kk = j - 3;
+    assert_true(kk >= 0 && s.U[l + 3] == 0.5 && s.U[l + 4] == 0.7);
+    nf_spanres_init(&r, &s, 0.05, mem);
+    ref_seed(5);
+    int in_cell = 0; /* spikes that fall in the feature's cell fold with it */
+    for (int k = 0; k < 20000; k++) {
+        double u = ref_rand(0, 1), v = ref_rand(0, 1);
+        if (k % 100 == 0) {
+            nf_spanres_add_rejected(&r, u, v, 5.0);
+            in_cell += u >= 0.5 && u < 0.7 && v >= s.V[kk + 3] && v < s.V[kk + 4];
+        } else
+            nf_spanres_add(&r, u, v, 0.01);
+    }
+    assert_int_equal(r.out, 0);
+    assert_int_equal(r.rej, 200);
+    assert_int_equal(r.all, 20000);
+    assert_int_equal(nf_spanres_fold(&r), 0); /* spikes alone: nothing is a feature */
+    assert_int_equal(nf_spanres_pick(&r, 0, 7, X, NULL), 0);
+    /* A feature in that cell: 60 rejected points out of tolerance. */
+    for (int k = 0; k < 60; k++)
+        nf_spanres_add_rejected(&r, 0.55 + 0.1 * ref_rand(0, 1), 0.5, 0.3);
+    assert_int_equal(nf_spanres_fold(&r), 1);
+    assert_int_equal(nf_spanres_fold(&r), 0); /* cleared */
+    const double e2 = 60 * 0.0625 + in_cell * 4.95 * 4.95;
+    assert_int_equal(r.out, 60 + in_cell);
+    assert_near(r.e2, e2, 1e-12 * e2);
+    assert_near(r.su[4 * l + 1], e2, 1e-12 * e2);
+    assert_near(r.sv[4 * kk + 1], e2, 1e-12 * e2);
+    assert_int_equal(nf_spanres_pick(&r, 0, 7, X, NULL), 1);
+    assert_true(X[0] == 0.6);
+    ref_surf_free(&s);
+}
+
 static double gauss(void)
 {
     return sqrt(-2.0 * log(ref_rand(1e-300, 1.0))) * cos(6.283185307179586 * ref_rand(0, 1));
@@ -343,8 +389,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spanres_counts), cmocka_unit_test(test_pick_matches_ranking),
         cmocka_unit_test(test_pick_location),  cmocka_unit_test(test_choose_ridge),
-        cmocka_unit_test(test_rhist_quantile), cmocka_unit_test(test_sigma_outliers),
-        cmocka_unit_test(test_tukey),
+        cmocka_unit_test(test_fold),           cmocka_unit_test(test_rhist_quantile),
+        cmocka_unit_test(test_sigma_outliers), cmocka_unit_test(test_tukey),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
