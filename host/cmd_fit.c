@@ -454,6 +454,7 @@ int cmd_fit(int argc, char **argv)
         /* Robust passes: the MAD of the residuals to the last fit sets the
          * scale, Tukey weights of those residuals the next fit. */
         c = 0.0;
+        rejected = 0;
         for (long it = 0; o.robust && it < o.robust_iters; it++) {
             projector_t pj;
             memset(&pj, 0, sizeof pj);
