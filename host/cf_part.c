@@ -1,4 +1,4 @@
-/* cf_part.c: the synthetic part (nominal panel plus dent and warp). */
+/* cf_part.c: the synthetic part (nominal panel plus dent, warp, bump, ridge). */
 #include "cf_part.h"
 #include "nf_basis.h"
 #include <math.h>
@@ -13,6 +13,10 @@ void cf_part_default(cf_part_t *pt)
     pt->dent_y = 60.0;
     pt->dent_r = 15.0;
     pt->warp = 0.3;
+    pt->bump_h = pt->bump_x = pt->bump_y = 0.0;
+    pt->bump_r = 1.0;
+    pt->ridge_h = pt->ridge_x = 0.0;
+    pt->ridge_w = 1.0;
 }
 
 static double crown_z(const cf_part_t *pt, double x, double y)
@@ -53,7 +57,16 @@ double cf_part_deviation(const cf_part_t *pt, double x, double y)
     double dx = x - pt->dent_x, dy = y - pt->dent_y;
     double dent = -pt->dent_depth * exp(-2.0 * (dx * dx + dy * dy) / (pt->dent_r * pt->dent_r));
     double warp = pt->warp * (x / pt->len_x - 0.5) * (y / pt->len_y - 0.5) * 4.0;
-    return dent + warp;
+    double z = dent + warp;
+    if (pt->bump_h != 0.0) {
+        double bx = x - pt->bump_x, by = y - pt->bump_y;
+        z += pt->bump_h * exp(-2.0 * (bx * bx + by * by) / (pt->bump_r * pt->bump_r));
+    }
+    if (pt->ridge_h != 0.0) {
+        double rx = x - pt->ridge_x;
+        z += pt->ridge_h * exp(-2.0 * rx * rx / (pt->ridge_w * pt->ridge_w));
+    }
+    return z;
 }
 
 void cf_part_true_point(const cf_part_t *pt, const nf_surf_t *nominal, double u, double v,

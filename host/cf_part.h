@@ -13,10 +13,13 @@ typedef struct cf_part {
     double dent_depth;             /* depth of the dent (negative z), mm */
     double dent_x, dent_y, dent_r; /* dent centre and radius (1/e^2), mm */
     double warp;                   /* twist: z += warp * (x/Lx - 1/2)(y/Ly - 1/2) */
+    /* Narrow features for the refinement tests (0 height: none, the default). */
+    double bump_h, bump_x, bump_y, bump_r; /* Gaussian bump: height, centre, radius (1/e^2) */
+    double ridge_h, ridge_x, ridge_w;      /* ridge along y at x = ridge_x, half-width (1/e^2) */
 } cf_part_t;
 
 /* The default part: a 200 x 150 mm panel with a 12 mm crown, a 0.4 mm deep
- * dent of radius 15 mm and a 0.3 mm warp. */
+ * dent of radius 15 mm and a 0.3 mm warp; no bump, no ridge. */
 void cf_part_default(cf_part_t *pt);
 
 /* The nominal surface: degree p x p, nu x nv net on [0,1]^2 with uniform
@@ -24,7 +27,8 @@ void cf_part_default(cf_part_t *pt);
  * (the nominal is this spline exactly). s must be allocated for the shape. */
 void cf_part_nominal(const cf_part_t *pt, nf_surf_t *s);
 
-/* Deviation along z of the real part from the nominal at (x, y). */
+/* Deviation along z of the real part from the nominal at (x, y): dent,
+ * warp, bump and ridge. */
 double cf_part_deviation(const cf_part_t *pt, double x, double y);
 
 /* The real part's point at nominal parameters (u, v). */

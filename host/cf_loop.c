@@ -1,0 +1,101 @@
+/* cf_loop.c: next net of the fitting loop (uniform or residual-driven knot
+ * insertion, within the limits) and the round records. */
+#include "cf_loop.h"
+#include "cf_err.h"
+#include "cf_surf.h"
+#include "nf_err.h"
+#include "nf_refine.h"
+#include <stdlib.h>
+#include <string.h>
+
+int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, long max_cp,
+                 nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml)
+{
+    int nu2, nv2, ru = 0, rv = 0, rc;
+    double *Xu = NULL, *Xv = NULL;
+    *stop = 1;
+    if (how == CF_REFINE_UNIFORM) {
+        rc = nf_refine_uniform_size(fit, &nu2, &nv2);
+        if (rc == NF_EBUDGET)
+            return cf_fail(msg, ml, CF_OK,
+                           "the next net would exceed the board's %ld control points",
+                           (long)NF_MAX_CP);
+        if (rc)
+            return cf_fail(msg, ml, rc, "refinement: %s", nf_strerror(rc));
+    } else {
+        if (!sr)
+            return cf_fail(msg, ml, CF_EARG, "residual refinement without span counts");
+        Xu = malloc(sizeof(double) * (size_t)fit->nu);
+        Xv = malloc(sizeof(double) * (size_t)fit->nv);
+        if (!Xu || !Xv) {
+            free(Xu);
+            free(Xv);
+            return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+        }
+        nf_spanres_choose(sr, fit->nu - fit->p, Xu, &ru, fit->nv - fit->q, Xv, &rv);
+        nu2 = fit->nu + ru;
+        nv2 = fit->nv + rv;
+    }
+    long ncp = (long)nu2 * nv2, need = nf_fit_bytes(nu2, nv2, fit->p, fit->q, solver);
+    rc = CF_OK;
+    if (how == CF_REFINE_RESIDUAL && ru + rv == 0)
+        cf_fail(msg, ml, CF_OK, "no knot span left to split");
+    else if (ncp > max_cp || ncp > NF_MAX_CP)
+        cf_fail(msg, ml, CF_OK, "the next net (%d x %d = %ld control points) would exceed %s %ld",
+                nu2, nv2, ncp, ncp > max_cp ? "--max-cp" : "the board's",
+                ncp > max_cp ? max_cp : (long)NF_MAX_CP);
+    else if (need < 0 || need > NF_ARENA_BYTES)
+        cf_fail(msg, ml, CF_OK, "the next net (%d x %d) would need %ld bytes, board %s allows %ld",
+                nu2, nv2, need, BOARD_NAME, (long)NF_ARENA_BYTES);
+    else {
+        /* Refine: uniform in one go, else u into tmp and then v. */
+        nf_surf_t tmp;
+        memset(&tmp, 0, sizeof tmp);
+        if (cf_surf_alloc(nxt, fit->p, fit->q, nu2, nv2) ||
+            (how == CF_REFINE_RESIDUAL && cf_surf_alloc(&tmp, fit->p, fit->q, nu2, fit->nv)))
+            rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+        else if (how == CF_REFINE_UNIFORM)
+            rc = nf_refine_uniform(fit, nxt);
+        else if (!(rc = nf_refine_u(fit, Xu, ru, &tmp)))
+            rc = nf_refine_v(&tmp, Xv, rv, nxt);
+        cf_surf_free(&tmp);
+        if (rc) {
+            cf_surf_free(nxt);
+            if (rc != CF_ENOMEM)
+                cf_fail(msg, ml, rc, "knot insertion: %s", nf_strerror(rc));
+        } else
+            *stop = 0;
+    }
+    free(Xu);
+    free(Xv);
+    return rc;
+}
+
+void cf_rounds_json(cli_json_t *j, const cf_round_t *r, int n, int robust)
+{
+    fprintf(j->f, "%s\"rounds\": [", j->n++ ? ", " : "");
+    for (int i = 0; i < n; i++) {
+        fprintf(j->f,
+                "%s{\"round\": %d, \"nu\": %d, \"nv\": %d, \"control_points\": %ld, "
+                "\"within_tol_pct\": %.17g, \"rms\": %.17g, \"max_abs\": %.17g",
+                i ? ", " : "", i, r[i].nu, r[i].nv, (long)r[i].nu * r[i].nv, r[i].within_pct,
+                r[i].rms, r[i].mx);
+        if (robust)
+            fprintf(j->f, ", \"sigma\": %.17g, \"rejected\": %ld", r[i].sigma, r[i].rejected);
+        fprintf(j->f, ", \"seconds\": %.6g}", r[i].seconds);
+    }
+    fputc(']', j->f);
+}
+
+void cf_round_print(FILE *f, int i, const cf_round_t *r, double tol, int robust)
+{
+    fprintf(f, "  round %d: %d x %d net (%ld control points)", i, r->nu, r->nv,
+            (long)r->nu * r->nv);
+    if (tol > 0)
+        fprintf(f, ", %.3f %% within %g mm", r->within_pct, tol);
+    fprintf(f, ", rms %.6g, max %.6g", r->rms, r->mx);
+    if (robust)
+        fprintf(f, ", sigma %.3g, %ld rejected", r->sigma, r->rejected);
+    fprintf(f, " (%.2f s)\n", r->seconds);
+    fflush(f);
+}

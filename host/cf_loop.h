@@ -1,0 +1,46 @@
+/* cf_loop.h: the refinement step and the round records of `cellfit fit
+ * --tol` (Brujic et al. 2010, Section 2.2: fit, reparameterise, insert
+ * knots until the tolerance holds; docs/loop.md). The next net is the fit
+ * itself with knots inserted (Boehm: the same surface), so it is both the
+ * next round's base and its nominal P0. */
+#ifndef CF_LOOP_H
+#define CF_LOOP_H
+
+#include "cf_cli.h"
+#include "nf_budget.h"
+#include "nf_knots.h"
+#include "nf_surf.h"
+#include <stddef.h>
+
+typedef enum cf_refine {
+    CF_REFINE_UNIFORM = 0, /* every non-empty span halved (nf_refine_uniform) */
+    CF_REFINE_RESIDUAL = 1 /* the spans holding most excess split (nf_spanres_choose) */
+} cf_refine_t;
+
+/* The next net from fit: uniform, or residual-driven from sr (the span
+ * counts of the check pass on fit). CF_OK with *stop = 0 and *nxt
+ * allocated (cf_surf_free), or CF_OK with *stop = 1 and msg saying why the
+ * loop ends: no span to split, more than max_cp (or the board's NF_MAX_CP)
+ * control points, more bytes than the board's arena with this solver.
+ * CF_ENOMEM, or an nf_err_t of knot insertion, with msg. */
+int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, long max_cp,
+                 nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml);
+
+/* One round as reported. */
+typedef struct cf_round {
+    int nu, nv;
+    double within_pct; /* points within the tolerance, percent */
+    double rms, mx;    /* of the distances to the round's fit */
+    double sigma;      /* robust scale of the last reweighting (0: none) */
+    long rejected;     /* robust: points of weight 0 in the last pass */
+    double seconds;
+} cf_round_t;
+
+/* "rounds": [{round, nu, nv, control_points, within_tol_pct, rms, max_abs,
+ * [sigma, rejected,] seconds}, ...] as a field of an open JSON object. */
+void cf_rounds_json(cli_json_t *j, const cf_round_t *r, int n, int robust);
+
+/* One line for people: net, share within tol (if tol > 0), rms, max. */
+void cf_round_print(FILE *f, int i, const cf_round_t *r, double tol, int robust);
+
+#endif
