@@ -100,15 +100,13 @@ int cf_job_check(const cf_job_fit_opts_t *o, char *msg, size_t ml)
 
 /* x y z rows projected onto s (seed grid pj) into u v x y z rows; with
  * dist, the signed normal distances instead. */
-static void project(const cf_seedgrid_t *pj, const double *xyz, long n, int cols, double *uv,
+static void project(cf_seedgrid_t *pj, const double *xyz, long n, int cols, double *uv,
                     double *dist)
 {
     for (long k = 0; k < n; k++) {
         const double *Q = xyz + (long)cols * k + (cols - 3);
-        double u0, v0;
         nf_proj_t pr;
-        cf_seedgrid_start(pj, Q, &u0, &v0);
-        nf_project(pj->seed.s, Q, u0, v0, JPROJ_TOL, &pr); /* best point kept on ENOCONV */
+        cf_seedgrid_project(pj, Q, JPROJ_TOL, &pr); /* best point kept on ENOCONV */
         if (dist)
             dist[k] = pr.dist;
         if (uv) {

@@ -41,10 +41,8 @@ int cf_sfit_init(cf_sfit_t *s, const nf_surf_t *nominal, const nf_surf_t *proj, 
 
 int cf_sfit_add(cf_sfit_t *s, const double xyz[3])
 {
-    double u0, v0;
     nf_proj_t pr;
-    cf_seedgrid_start(&s->pj, xyz, &u0, &v0);
-    int rc = nf_project(s->proj, xyz, u0, v0, PROJ_TOL, &pr);
+    int rc = cf_seedgrid_project(&s->pj, xyz, PROJ_TOL, &pr);
     if (rc && rc != NF_ENOCONV) /* the best point is kept on ENOCONV, as cmd_fit does */
         return rc;
     rc = nf_fit_add(&s->f, pr.u, pr.v, xyz, 1.0);
@@ -99,10 +97,8 @@ int cf_sfit_residuals(const nf_surf_t *s, jnl_reader_t *rd, cf_sfit_resid_t *out
     while ((rc = jnl_reader_next(rd, &r)) == 1) {
         if (r.type != JNL_T_POINT || (r.flags & JNL_F_NOSURF))
             continue;
-        double u0, v0;
         nf_proj_t pr;
-        cf_seedgrid_start(&pj, r.xyz, &u0, &v0);
-        nf_project(s, r.xyz, u0, v0, PROJ_TOL, &pr);
+        cf_seedgrid_project(&pj, r.xyz, PROJ_TOL, &pr); /* best point kept on ENOCONV */
         double d = fabs(pr.dist);
         ss += d * d;
         out->max = d > out->max ? d : out->max;

@@ -428,10 +428,8 @@ static int proj_point(void *ctx, const double Q[3], long line)
     if (!(Q[0] - Q[0] == 0.0) || !(Q[1] - Q[1] == 0.0) || !(Q[2] - Q[2] == 0.0))
         return cli_error("base", CLI_USAGE, "%s:%ld: %s", c->path, line,
                          nf_strerror(NF_ENONFINITE));
-    double u0, v0;
     nf_proj_t pr;
-    cf_seedgrid_start(&c->g, Q, &u0, &v0);
-    nf_project(c->g.seed.s, Q, u0, v0, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+    cf_seedgrid_project(&c->g, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
     c->ss += pr.dist * pr.dist;
     int rc = c->b3 ? nf_coons3_add(c->b3, pr.u, pr.v, Q) : nf_fit_add(c->fit, pr.u, pr.v, Q, 1.0);
     if (rc)

@@ -35,15 +35,12 @@ static int projector_init(projector_t *pj, const nf_surf_t *s)
 }
 
 /* rows of x y z in, rows of u v x y z out (distance in *dist if asked). */
-static void project_rows(const projector_t *pj, const double *xyz, long n, double *uvxyz,
-                         double *dist)
+static void project_rows(projector_t *pj, const double *xyz, long n, double *uvxyz, double *dist)
 {
     for (long k = 0; k < n; k++) {
         const double *Q = xyz + 3 * k;
-        double u0, v0;
         nf_proj_t pr;
-        cf_seedgrid_start(pj, Q, &u0, &v0);
-        nf_project(pj->seed.s, Q, u0, v0, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+        cf_seedgrid_project(pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
         double *r = uvxyz + 5 * k;
         r[0] = pr.u;
         r[1] = pr.v;
@@ -228,7 +225,7 @@ static double dist_at(const nf_surf_t *s, const double *q)
  * for the summary, the count within tol (if > 0), the |d| histogram, and
  * (if sr) the excess per knot span of the points out of tolerance; those
  * beyond cut (> 0: points a robust fit rejects) go to their cells only. */
-static int measure(cf_points_t *r, const nf_surf_t *s, const projector_t *pj, double tol,
+static int measure(cf_points_t *r, const nf_surf_t *s, projector_t *pj, double tol,
                    nf_spanres_t *sr, double cut, double *buf, double *rows, resid_t *out, char *msg,
                    size_t ml)
 {

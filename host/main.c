@@ -37,8 +37,6 @@ static int usage(FILE *f, int code)
             "  journal export JOURNAL [--out FILE] | info JOURNAL [--json] | recover JOURNAL\n"
             "        | fit JOURNAL --nominal N.igs --out OUT.igs [--reparam K]   the journal of "
             "points\n"
-            "  bench accumulate|solve|fit|export [--points M] [--cp N] [--order raster|random]\n"
-            "        [--solver S] [--json]   benchmarks on generated data\n"
             "  rig   status|home|move X Y|probe|reset|stop --stage URI --probe URI [--count N]\n"
             "        [--timeout MS] [--retries N] [--json]   the stage and probe by hand (hal.h)\n"
             "  ports [--json]   serial ports with their USB VID:PID\n"
