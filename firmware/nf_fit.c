@@ -9,6 +9,23 @@ static int finite3(const double *x)
     return x[0] - x[0] == 0.0 && x[1] - x[1] == 0.0 && x[2] - x[2] == 0.0;
 }
 
+/* Lend the raster row buffers from arena room the solver uses later. */
+static void take_rowbuf(nf_fit_t *f, nf_arena_t *a)
+{
+    f->row_mark = f->row_top = 0;
+    if (!f->acc.fast || f->acc.rational)
+        return;
+    f->row_mark = nf_arena_mark(a);
+    double *G = nf_arena_doubles(a, (size_t)7 * f->base->nu),
+           *Gq = nf_arena_doubles(a, (size_t)3 * f->base->nu);
+    if (G && Gq) {
+        nf_accum_rowbuf(&f->acc, G, Gq);
+        f->row_top = nf_arena_mark(a);
+    } else {
+        nf_arena_release(a, f->row_mark);
+    }
+}
+
 int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, nf_arena_t *a)
 {
     if (!f || !base || !prm || !a)
@@ -38,6 +55,8 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
         return NF_EARENA; /* unreachable when the formula is right */
     nf_stripe_init(&f->A, base->nu, base->nv, base->p, base->q, S);
     nf_accum_init(&f->acc, base, &f->A, f->rhs);
+    f->shard = 0;
+    f->shard_mark = 0;
     for (long i = 0; i < 3 * n; i++)
         f->P[i] = base->cp[i]; /* P0: the nominal net is the start and the beta target */
     f->base = base;
@@ -53,6 +72,59 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
     nf_surf_domain(base, &f->dom[0], &f->dom[1], &f->dom[2], &f->dom[3]);
     f->dtol[0] = 1e-12 * (f->dom[1] - f->dom[0]);
     f->dtol[1] = 1e-12 * (f->dom[3] - f->dom[2]);
+    /* Row buffers for raster rows of one v (10 Nu doubles, at most 2.5 N
+     * since Nv >= 4, against the smallest solver term 6N): returned at
+     * nf_fit_finish, before any solve. */
+    take_rowbuf(f, a);
+    return NF_OK;
+}
+
+int nf_fit_shard_init(nf_fit_t *sh, const nf_fit_t *f, nf_arena_t *a)
+{
+    if (!sh || !f || !a || f->shard || f->finished)
+        return NF_EARG;
+    const nf_surf_t *s = f->base;
+    const long more = nf_fit_shard_bytes(s->nu, s->nv, s->p, s->q);
+    if (more < 0 || f->need_bytes < 0 || more > NF_ARENA_BYTES - f->need_bytes)
+        return NF_EBUDGET;
+    if ((size_t)more > nf_arena_room(a))
+        return NF_EARENA;
+    *sh = *f;
+    sh->shard = 1;
+    sh->arena = a;
+    sh->shard_mark = nf_arena_mark(a);
+    double *S = nf_arena_doubles(a, (size_t)(f->n * f->A.K));
+    sh->rhs = nf_arena_doubles(a, (size_t)(3 * f->n));
+    if (!S || !sh->rhs) {
+        nf_arena_release(a, sh->shard_mark);
+        return NF_EARENA;
+    }
+    sh->P = 0;
+    nf_stripe_init(&sh->A, s->nu, s->nv, s->p, s->q, S);
+    nf_accum_init(&sh->acc, s, &sh->A, sh->rhs);
+    sh->npoints = 0;
+    sh->sumw = 0.0;
+    sh->pf_l = sh->pf_k = -1;
+    take_rowbuf(sh, a); /* from room the job's solver uses later */
+    return NF_OK;
+}
+
+int nf_fit_shard_merge(nf_fit_t *f, nf_fit_t *sh)
+{
+    if (!f || !sh || !sh->shard || f->shard || f->finished || sh->base != f->base)
+        return NF_EARG;
+    nf_accum_flush(&sh->acc);
+    /* f's open run stays open: sums commute, only rounding order changes. */
+    const long nS = f->n * f->A.K;
+    for (long i = 0; i < nS; i++)
+        f->A.S[i] += sh->A.S[i];
+    for (long i = 0; i < 3 * f->n; i++)
+        f->rhs[i] += sh->rhs[i];
+    f->npoints += sh->npoints;
+    f->sumw += sh->sumw;
+    nf_accum_rowbuf(&sh->acc, 0, 0);
+    nf_arena_release(sh->arena, sh->shard_mark);
+    sh->finished = 1;
     return NF_OK;
 }
 
@@ -73,55 +145,99 @@ int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt)
     return NF_OK;
 }
 
-/* Points this far ahead have their stripe rows prefetched: in random order
- * every point's 16 rows are cache misses, and the loads of later points can
- * overlap the arithmetic of this one. */
-#define NF_PREFETCH_AHEAD 6
+/* nf_fit_add_rows works in batches of NF_FIT_BATCH points: the spans of
+ * batch i + 1 are found (and, when the store exceeds the cache, their stripe
+ * rows prefetched) before batch i is accumulated with the spans it already
+ * has, so that the loads of the next points overlap this batch's arithmetic
+ * and no span is searched twice. */
+#define NF_FIT_BATCH 8
 
-static void prefetch_point(nf_fit_t *f, double u, double v)
+typedef struct fit_batch {
+    int n;
+    int l[NF_FIT_BATCH], k[NF_FIT_BATCH]; /* -1: nf_fit_add checks and reports it */
+    double u[NF_FIT_BATCH], v[NF_FIT_BATCH];
+} fit_batch_t;
+
+static void prefetch_rows(const nf_fit_t *f, int l, int k)
 {
 #if defined(__GNUC__)
     const nf_surf_t *s = f->base;
-    if (!(u >= f->dom[0] && u <= f->dom[1] && v >= f->dom[2] && v <= f->dom[3]))
-        return; /* nf_fit_add reports it */
-    /* Raster scans stay in one span for many points, then step to the next
-     * span in u, whose rows follow in memory: the hardware prefetcher has
-     * them. Only a jump elsewhere is worth two searches and the prefetches. */
-    if (f->pf_l >= 0 && v >= s->V[f->pf_k] && v < s->V[f->pf_k + 1] && u >= s->U[f->pf_l] &&
-        u < s->U[f->pf_l + 2 < s->nu + 1 ? f->pf_l + 2 : s->nu]) {
-        if (u >= s->U[f->pf_l + 1])
-            f->pf_l++;
-        return;
-    }
-    const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
-              k = nf_find_span(s->nv - 1, s->q, v, s->V);
-    f->pf_l = l;
-    f->pf_k = k;
     const long base = (l - s->p) + (long)(k - s->q) * s->nu, K = f->A.K;
+    const long bytes = (long)(s->p + 1) * K * (long)sizeof(double);
     for (int b = 0; b <= s->q; b++) {
         const char *a = (const char *)(f->A.S + (base + (long)b * s->nu) * K);
-        const long bytes = (long)(s->p + 1) * K * (long)sizeof(double);
         for (long o = 0; o < bytes; o += 64)
             __builtin_prefetch(a + o, 1, 3);
+        __builtin_prefetch(a + bytes - 1, 1, 3);
+        const char *r = (const char *)(f->rhs + 3 * (base + (long)b * s->nu));
+        __builtin_prefetch(r, 1, 3);
+        __builtin_prefetch(r + 24 * (s->p + 1) - 1, 1, 3);
     }
 #else
     (void)f;
-    (void)u;
-    (void)v;
+    (void)l;
+    (void)k;
 #endif
+}
+
+static void batch_prepare(nf_fit_t *f, const double *rows, int n, fit_batch_t *bt)
+{
+    bt->n = n;
+    for (int t = 0; t < n; t++) {
+        const double *r = rows + 5 * t;
+        double u = r[0], v = r[1];
+        bt->l[t] = bt->k[t] = -1;
+        if (!finite3(r + 2) || u - u != 0.0 || v - v != 0.0 || u < f->dom[0] - f->dtol[0] ||
+            u > f->dom[1] + f->dtol[0] || v < f->dom[2] - f->dtol[1] || v > f->dom[3] + f->dtol[1])
+            continue; /* nf_fit_add reports it, in order */
+        u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
+        v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
+        int l, k;
+        nf_accum_spans(&f->acc, u, v, f->pf_l, f->pf_k, &l, &k);
+        /* A raster stays in the span or steps to the next in u, whose rows
+         * follow in memory (the hardware prefetcher has them): only a jump
+         * elsewhere is worth the prefetches. */
+        if (f->prefetch && !(k == f->pf_k && (l == f->pf_l || l == f->pf_l + 1)))
+            prefetch_rows(f, l, k);
+        f->pf_l = l;
+        f->pf_k = k;
+        bt->l[t] = l;
+        bt->k[t] = k;
+        bt->u[t] = u;
+        bt->v[t] = v;
+    }
 }
 
 int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
 {
-    for (long i = 0; i < n; i++) {
-        const double *r = rows + 5 * i;
-        if (i + NF_PREFETCH_AHEAD < n && f->prefetch)
-            prefetch_point(f, r[5 * NF_PREFETCH_AHEAD], r[5 * NF_PREFETCH_AHEAD + 1]);
-        int rc = nf_fit_add(f, r[0], r[1], r + 2, 1.0);
-        if (rc) {
-            if (bad)
-                *bad = i;
-            return rc;
+    if (n > 0 && f->finished) {
+        if (bad)
+            *bad = 0;
+        return NF_ESTATE;
+    }
+    fit_batch_t bt[2];
+    int cur = 0;
+    batch_prepare(f, rows, (int)(n < NF_FIT_BATCH ? n : NF_FIT_BATCH), &bt[0]);
+    for (long i0 = 0; i0 < n; i0 += NF_FIT_BATCH, cur ^= 1) {
+        const long next = i0 + NF_FIT_BATCH;
+        if (next < n)
+            batch_prepare(f, rows + 5 * next,
+                          (int)(n - next < NF_FIT_BATCH ? n - next : NF_FIT_BATCH), &bt[cur ^ 1]);
+        const fit_batch_t *b = &bt[cur];
+        for (int t = 0; t < b->n; t++) {
+            const double *r = rows + 5 * (i0 + t);
+            if (b->l[t] >= 0) {
+                nf_accum_point_at(&f->acc, b->u[t], b->v[t], b->l[t], b->k[t], r + 2, 1.0);
+                f->npoints++;
+                f->sumw += 1.0;
+                continue;
+            }
+            int rc = nf_fit_add(f, r[0], r[1], r + 2, 1.0);
+            if (rc) {
+                if (bad)
+                    *bad = i0 + t;
+                return rc;
+            }
         }
     }
     return NF_OK;
@@ -167,9 +283,14 @@ static void add_alpha(nf_fit_t *f)
 
 int nf_fit_finish(nf_fit_t *f)
 {
-    if (f->finished)
+    if (f->finished || f->shard)
         return NF_ESTATE;
     nf_accum_flush(&f->acc);
+    if (f->acc.G) { /* give the row buffers back to the solver (see nf_fit_init) */
+        nf_accum_rowbuf(&f->acc, 0, 0);
+        if (nf_arena_mark(f->arena) == f->row_top)
+            nf_arena_release(f->arena, f->row_mark);
+    }
     const int K = f->A.K;
     if (f->prm.alpha == 0.0 && f->prm.beta == 0.0) {
         for (long i = 0; i < f->n; i++)
@@ -195,7 +316,7 @@ int nf_fit_finish(nf_fit_t *f)
 
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st)
 {
-    if (!f->finished)
+    if (!f->finished || f->shard)
         return NF_ESTATE;
     const nf_surf_t *s = f->base;
     if (solver == NF_SOLVER_AUTO)
