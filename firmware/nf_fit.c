@@ -3,27 +3,61 @@
 #include "nf_basis.h"
 #include "nf_err.h"
 #include "nf_solve.h"
+#include <stdint.h>
 
 static int finite3(const double *x)
 {
     return x[0] - x[0] == 0.0 && x[1] - x[1] == 0.0 && x[2] - x[2] == 0.0;
 }
 
-/* Lend the raster row buffers from arena room the solver uses later. */
-static void take_rowbuf(nf_fit_t *f, nf_arena_t *a)
+/* Random order: a window of points is sorted by tiles of NF_TILE x NF_TILE
+ * knot spans before it is accumulated, so that a tile's stripe rows
+ * ((NF_TILE + q) (NF_TILE + p) rows, 72 KB bicubic) come from memory once
+ * for all its points instead of once per point. Windows shorter than
+ * NF_BIN_MIN points, or ordered (a raster), are accumulated as they come. */
+#define NF_TILE 16
+#define NF_BIN_MIN 1024
+
+/* Lend the raster row buffers and the bins from arena room the solver uses
+ * later (idle while points stream in): at most half the job's solver term
+ * each for the job and for one shard, so nothing is added to the formula. */
+static void take_lent(nf_fit_t *f, nf_arena_t *a)
 {
+    const nf_surf_t *s = f->base;
     f->row_mark = f->row_top = 0;
-    if (!f->acc.fast || f->acc.rational)
-        return;
+    f->bin_key = f->bin_idx = f->bin_cnt = 0;
+    f->bin_cap = 0;
+    long cap = (f->need_bytes - NF_BYTES_BASE(f->n, s->p, s->q) - NF_ARENA_SLACK) / 2 -
+               8L * NF_ARENA_ALIGN;
     f->row_mark = nf_arena_mark(a);
-    double *G = nf_arena_doubles(a, (size_t)7 * f->base->nu),
-           *Gq = nf_arena_doubles(a, (size_t)3 * f->base->nu);
-    if (G && Gq) {
-        nf_accum_rowbuf(&f->acc, G, Gq);
-        f->row_top = nf_arena_mark(a);
-    } else {
-        nf_arena_release(a, f->row_mark);
+    if (f->acc.fast && !f->acc.rational && cap >= 80L * s->nu) {
+        double *G = nf_arena_doubles(a, (size_t)7 * s->nu),
+               *Gq = nf_arena_doubles(a, (size_t)3 * s->nu);
+        if (G && Gq) {
+            nf_accum_rowbuf(&f->acc, G, Gq);
+            cap -= 80L * s->nu;
+        }
     }
+    f->bin_tx = (s->nu - s->p + NF_TILE - 1) / NF_TILE;
+    const long tiles = (long)f->bin_tx * ((s->nv - s->q + NF_TILE - 1) / NF_TILE);
+    long w = (cap - 8 * (tiles + 1)) / 8; /* key and index per point */
+    w = w > f->n ? f->n : w;
+    w = w > 0xFFFFFFL ? 0xFFFFFFL : w; /* 24 bits of row index */
+    if (w >= NF_BIN_MIN && tiles > 1) {
+        /* two uint32 arrays of w and the counts, as doubles from the arena */
+        double *k = nf_arena_doubles(a, (size_t)(w + 1) / 2),
+               *x = nf_arena_doubles(a, (size_t)(w + 1) / 2),
+               *c = nf_arena_doubles(a, (size_t)(tiles + 1));
+        if (k && x && c) {
+            f->bin_key = (uint32_t *)(void *)k;
+            f->bin_idx = (uint32_t *)(void *)x;
+            f->bin_cnt = (uint32_t *)(void *)c;
+            f->bin_cap = w;
+            f->bin_tiles = tiles;
+        }
+    }
+    if (nf_arena_mark(a) != f->row_mark)
+        f->row_top = nf_arena_mark(a);
 }
 
 int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, nf_arena_t *a)
@@ -75,7 +109,7 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
     /* Row buffers for raster rows of one v (10 Nu doubles, at most 2.5 N
      * since Nv >= 4, against the smallest solver term 6N): returned at
      * nf_fit_finish, before any solve. */
-    take_rowbuf(f, a);
+    take_lent(f, a);
     return NF_OK;
 }
 
@@ -105,7 +139,7 @@ int nf_fit_shard_init(nf_fit_t *sh, const nf_fit_t *f, nf_arena_t *a)
     sh->npoints = 0;
     sh->sumw = 0.0;
     sh->pf_l = sh->pf_k = -1;
-    take_rowbuf(sh, a); /* from room the job's solver uses later */
+    take_lent(sh, a); /* from room the job's solver uses later */
     return NF_OK;
 }
 
@@ -208,13 +242,8 @@ static void batch_prepare(nf_fit_t *f, const double *rows, int n, fit_batch_t *b
     }
 }
 
-int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
+static int add_batched(nf_fit_t *f, const double *rows, long n, long *bad)
 {
-    if (n > 0 && f->finished) {
-        if (bad)
-            *bad = 0;
-        return NF_ESTATE;
-    }
     fit_batch_t bt[2];
     int cur = 0;
     batch_prepare(f, rows, (int)(n < NF_FIT_BATCH ? n : NF_FIT_BATCH), &bt[0]);
@@ -239,6 +268,127 @@ int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
                 return rc;
             }
         }
+    }
+    return NF_OK;
+}
+
+/* Spans of row r, clamped, or 0 when nf_fit_add must judge it. */
+static inline int row_spans(nf_fit_t *f, const double *r, double *u, double *v, int *l, int *k)
+{
+    double a = r[0], b = r[1];
+    if (!finite3(r + 2) || a - a != 0.0 || b - b != 0.0 || a < f->dom[0] - f->dtol[0] ||
+        a > f->dom[1] + f->dtol[0] || b < f->dom[2] - f->dtol[1] || b > f->dom[3] + f->dtol[1])
+        return 0;
+    *u = a < f->dom[0] ? f->dom[0] : (a > f->dom[1] ? f->dom[1] : a);
+    *v = b < f->dom[2] ? f->dom[2] : (b > f->dom[3] ? f->dom[3] : b);
+    nf_accum_spans(&f->acc, *u, *v, *l, *k, l, k);
+    return 1;
+}
+
+/* n <= bin_cap rows: the valid prefix counting-sorted by tile and
+ * accumulated tile by tile (Eq. 9's sums in another order), unless it is
+ * ordered already; then the first bad row, if any, is reported. */
+static int add_binned(nf_fit_t *f, const double *rows, long n, long *bad)
+{
+    const nf_surf_t *s = f->base;
+    int l = -1, k = -1, pl = -1, pk = -1;
+    long m = 0, jumps = 0;
+    for (; m < n; m++) {
+        double u, v;
+        if (!row_spans(f, rows + 5 * m, &u, &v, &l, &k))
+            break;
+        jumps += !(k == pk && (l == pl || l == pl + 1));
+        pl = l;
+        pk = k;
+        f->bin_key[m] = (uint32_t)((l - s->p) / NF_TILE + ((k - s->q) / NF_TILE) * (long)f->bin_tx);
+        /* the row, and its spans as offsets in the tile: 24 + 4 + 4 bits */
+        const uint32_t dl = (uint32_t)((l - s->p) % NF_TILE), dk = (uint32_t)((k - s->q) % NF_TILE);
+        f->bin_idx[m] = (uint32_t)m | dl << 24 | dk << 28;
+    }
+    if (jumps * 4 < m) { /* a raster: its order is the better one */
+        int rc = add_batched(f, rows, m, bad);
+        if (rc)
+            return rc;
+    } else {
+        /* Counting sort in place (American flag): cnt = tile starts,
+         * nxt = next free slot of each tile; key and idx swap together. */
+        uint32_t *cnt = f->bin_cnt, *nxt = f->bin_cnt + f->bin_tiles + 1, *key = f->bin_key,
+                 *idx = f->bin_idx;
+        for (long t = 0; t <= f->bin_tiles; t++)
+            cnt[t] = 0;
+        for (long t = 0; t < m; t++)
+            cnt[key[t] + 1]++;
+        for (long t = 0; t < f->bin_tiles; t++)
+            cnt[t + 1] += cnt[t];
+        for (long t = 0; t < f->bin_tiles; t++)
+            nxt[t] = cnt[t];
+        for (long T = 0; T < f->bin_tiles; T++)
+            while (nxt[T] < cnt[T + 1]) {
+                const uint32_t at = nxt[T], kt = key[at];
+                if (kt == (uint32_t)T) {
+                    nxt[T]++;
+                    continue;
+                }
+                const uint32_t to = nxt[kt]++, e = idx[at];
+                key[at] = key[to];
+                idx[at] = idx[to];
+                key[to] = kt;
+                idx[to] = e;
+            }
+        const int p = s->p, q = s->q;
+        for (long T = 0; T < f->bin_tiles; T++) {
+            const int l0 = p + (int)(T % f->bin_tx) * NF_TILE,
+                      k0 = q + (int)(T / f->bin_tx) * NF_TILE;
+            for (uint32_t t = T ? cnt[T] : 0; t < cnt[T + 1]; t++) {
+                const uint32_t e = idx[t];
+                const double *r = rows + 5 * (long)(e & 0xFFFFFFu);
+                double u = r[0], v = r[1];
+                u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
+                v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
+                nf_accum_point_at(&f->acc, u, v, l0 + (int)(e >> 24 & 15u), k0 + (int)(e >> 28),
+                                  r + 2, 1.0);
+            }
+        }
+        f->npoints += m;
+        f->sumw += (double)m;
+    }
+    if (m < n) {
+        int rc = nf_fit_add(f, rows[5 * m], rows[5 * m + 1], rows + 5 * m + 2, 1.0);
+        if (bad)
+            *bad = m;
+        if (rc)
+            return rc;
+        long at = -1; /* nf_fit_add took it after all: go on */
+        rc = add_binned(f, rows + 5 * (m + 1), n - m - 1, &at);
+        if (rc && bad)
+            *bad = m + 1 + at;
+        return rc;
+    }
+    return NF_OK;
+}
+
+int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
+{
+    if (n > 0 && f->finished) {
+        if (bad)
+            *bad = 0;
+        return NF_ESTATE;
+    }
+    for (long i = 0; i < n;) {
+        long w = n - i, at = -1;
+        int rc;
+        if (f->bin_cap > 0 && w >= NF_BIN_MIN) {
+            w = w > f->bin_cap ? f->bin_cap : w;
+            rc = add_binned(f, rows + 5 * i, w, &at);
+        } else {
+            rc = add_batched(f, rows + 5 * i, w, &at);
+        }
+        if (rc) {
+            if (bad)
+                *bad = i + at;
+            return rc;
+        }
+        i += w;
     }
     return NF_OK;
 }
@@ -286,10 +436,12 @@ int nf_fit_finish(nf_fit_t *f)
     if (f->finished || f->shard)
         return NF_ESTATE;
     nf_accum_flush(&f->acc);
-    if (f->acc.G) { /* give the row buffers back to the solver (see nf_fit_init) */
+    if (f->row_top) { /* give the lent buffers back to the solver (take_lent) */
         nf_accum_rowbuf(&f->acc, 0, 0);
+        f->bin_cap = 0;
         if (nf_arena_mark(f->arena) == f->row_top)
             nf_arena_release(f->arena, f->row_mark);
+        f->row_top = 0;
     }
     const int K = f->A.K;
     if (f->prm.alpha == 0.0 && f->prm.beta == 0.0) {

@@ -11,6 +11,7 @@
 #include "nf_budget.h"
 #include "nf_stripe.h"
 #include "nf_surf.h"
+#include <stdint.h>
 
 typedef struct nf_fit_params {
     double alpha;       /* Greville criterion weight (paper default 0.1) */
@@ -56,9 +57,12 @@ typedef struct nf_fit {
     nf_accum_t acc;           /* hot-loop state: fixed size, see nf_accum.h */
     int prefetch;             /* nf_fit_add_rows prefetches stripe rows ahead */
     int pf_l, pf_k;           /* spans of the last point prepared (nf_fit_add_rows) */
-    size_t row_mark, row_top; /* arena marks around the lent row buffers */
-    int shard;                /* 1: a shard (nf_fit_shard_init), no P, no solve */
-    size_t shard_mark;        /* its arena mark before its storage */
+    size_t row_mark, row_top; /* arena marks around the lent buffers (0: none) */
+    uint32_t *bin_key, *bin_idx, *bin_cnt; /* random order: tile per point, order, counts */
+    long bin_cap, bin_tiles;               /* points per window (0: no bins), tiles */
+    int bin_tx;                            /* tiles along u */
+    int shard;                             /* 1: a shard (nf_fit_shard_init), no P, no solve */
+    size_t shard_mark;                     /* its arena mark before its storage */
 } nf_fit_t;
 
 /* Check the base surface and the budget, then take the job's storage from

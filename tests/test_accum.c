@@ -350,13 +350,80 @@ static void test_bad_row_index(void **state)
     ref_surf_free(&s);
 }
 
+/* Random windows of at least 1,024 points go through the bins (tiles of
+ * 16 x 16 spans): the same stripes as the dense R^T R (built here from the
+ * reference basis rows, only where they are non-zero) and as the plain
+ * path; a bad row inside a binned window is reported by its index, with
+ * exactly the rows before it accumulated. */
+static void test_binned_random(void **state)
+{
+    (void)state;
+    ref_seed(18);
+    for (int r = 0; r < 2; r++) {
+        nf_surf_t s;
+        ref_surf_random(&s, 3, 3, 36, 36, 0, 1, 0, 1, r ? 0.5 : 1.0, r ? 2.0 : 1.0);
+        const long n = 36L * 36, M = 3000;
+        double *pts = malloc(sizeof(double) * 5 * M), *row = malloc(sizeof(double) * n);
+        for (long t = 0; t < M; t++) {
+            double *q5 = pts + 5 * t;
+            q5[0] = ref_rand(0, 1);
+            q5[1] = ref_rand(0, 1);
+            nf_surf_eval(&s, q5[0], q5[1], q5 + 2);
+        }
+        job_t fast, plain;
+        job_start(&fast, &s, 0);
+        job_start(&plain, &s, 1);
+        assert_true(fast.f.bin_cap >= 1024 && fast.f.bin_cap < M);
+        assert_int_equal(nf_fit_add_rows(&fast.f, pts, M, NULL), NF_OK);
+        for (long t = 0; t < M; t++)
+            assert_int_equal(nf_fit_add(&plain.f, pts[5 * t], pts[5 * t + 1], pts + 5 * t + 2, 1.0),
+                             NF_OK);
+        nf_accum_flush(&fast.f.acc); /* a corner may lack data: no finish */
+        nf_accum_flush(&plain.f.acc);
+        const ref_t pl = {&plain.f, NULL, NULL};
+        same_store(&fast.f, pl, 1e-13);
+        /* Dense reference: A = sum r r^T, b = sum r q over the non-zeros of r. */
+        double *A = calloc((size_t)(n * n), sizeof(double)), *b = calloc((size_t)(3 * n), 8);
+        for (long t = 0; t < M; t++) {
+            ref_rbasis_row(&s, pts[5 * t], pts[5 * t + 1], row);
+            for (long i = 0; i < n; i++) {
+                if (row[i] == 0.0)
+                    continue;
+                for (long k = 0; k < n; k++)
+                    if (row[k] != 0.0)
+                        A[i * n + k] += row[i] * row[k];
+                for (int c = 0; c < 3; c++)
+                    b[3 * i + c] += row[i] * pts[5 * t + 2 + c];
+            }
+        }
+        const ref_t dense = {NULL, A, b};
+        same_store(&fast.f, dense, 1e-12);
+        free(A);
+        free(b);
+        /* A bad row in the second window. */
+        free(fast.mem);
+        job_start(&fast, &s, 0);
+        const long at = fast.f.bin_cap + 100;
+        pts[5 * at + 3] = NAN;
+        long bad = -1;
+        assert_int_equal(nf_fit_add_rows(&fast.f, pts, M, &bad), NF_ENONFINITE);
+        assert_int_equal(bad, at);
+        assert_int_equal(fast.f.npoints, at);
+        free(fast.mem);
+        free(plain.mem);
+        free(pts);
+        free(row);
+        ref_surf_free(&s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bicubic_polynomial), cmocka_unit_test(test_bicubic_rational),
         cmocka_unit_test(test_mixed_degrees),      cmocka_unit_test(test_weights_all_paths),
         cmocka_unit_test(test_span_search),        cmocka_unit_test(test_shard_budget),
-        cmocka_unit_test(test_bad_row_index),
+        cmocka_unit_test(test_bad_row_index),      cmocka_unit_test(test_binned_random),
     };
     return cmocka_run_group_tests_name("accum", tests, NULL, NULL);
 }
