@@ -305,10 +305,20 @@ static int add_binned(nf_fit_t *f, const double *rows, long n, long *bad)
         const uint32_t dl = (uint32_t)((l - s->p) % NF_TILE), dk = (uint32_t)((k - s->q) % NF_TILE);
         f->bin_idx[m] = (uint32_t)m | dl << 24 | dk << 28;
     }
-    if (jumps * 4 < m) { /* a raster: its order is the better one */
-        int rc = add_batched(f, rows, m, bad);
-        if (rc)
-            return rc;
+    const int p = s->p, q = s->q, tx = f->bin_tx;
+    if (jumps * 4 < m) { /* a raster: its order is the better one; spans from key and idx */
+        const uint32_t *key = f->bin_key, *idx = f->bin_idx;
+        for (long t = 0; t < m; t++) {
+            const double *r = rows + 5 * t;
+            const uint32_t e = idx[t], T = key[t];
+            double u = r[0], v = r[1];
+            u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
+            v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
+            nf_accum_point_at(&f->acc, u, v, p + (int)(T % tx) * NF_TILE + (int)(e >> 24 & 15u),
+                              q + (int)(T / tx) * NF_TILE + (int)(e >> 28), r + 2, 1.0);
+        }
+        f->npoints += m;
+        f->sumw += (double)m;
     } else {
         /* Counting sort in place (American flag): cnt = tile starts,
          * nxt = next free slot of each tile; key and idx swap together. */
@@ -335,7 +345,6 @@ static int add_binned(nf_fit_t *f, const double *rows, long n, long *bad)
                 key[to] = kt;
                 idx[to] = e;
             }
-        const int p = s->p, q = s->q;
         for (long T = 0; T < f->bin_tiles; T++) {
             const int l0 = p + (int)(T % f->bin_tx) * NF_TILE,
                       k0 = q + (int)(T / f->bin_tx) * NF_TILE;

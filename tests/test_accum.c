@@ -350,8 +350,8 @@ static void test_bad_row_index(void **state)
     ref_surf_free(&s);
 }
 
-/* Random windows of at least 1,024 points go through the bins (tiles of
- * 16 x 16 spans): the same stripes as the dense R^T R (built here from the
+/* Windows of at least 1,024 points go through the bins (tiles of 16 x 16
+ * spans; a raster window keeps its order, its spans from the bins): the same stripes as the dense R^T R (built here from the
  * reference basis rows, only where they are non-zero) and as the plain
  * path; a bad row inside a binned window is reported by its index, with
  * exactly the rows before it accumulated. */
@@ -359,15 +359,15 @@ static void test_binned_random(void **state)
 {
     (void)state;
     ref_seed(18);
-    for (int r = 0; r < 2; r++) {
+    for (int r = 0; r < 3; r++) { /* random polynomial, random rational, raster */
         nf_surf_t s;
-        ref_surf_random(&s, 3, 3, 36, 36, 0, 1, 0, 1, r ? 0.5 : 1.0, r ? 2.0 : 1.0);
+        ref_surf_random(&s, 3, 3, 36, 36, 0, 1, 0, 1, r == 1 ? 0.5 : 1.0, r == 1 ? 2.0 : 1.0);
         const long n = 36L * 36, M = 3000;
         double *pts = malloc(sizeof(double) * 5 * M), *row = malloc(sizeof(double) * n);
         for (long t = 0; t < M; t++) {
             double *q5 = pts + 5 * t;
-            q5[0] = ref_rand(0, 1);
-            q5[1] = ref_rand(0, 1);
+            q5[0] = r == 2 ? (double)(t % 60) / 59 : ref_rand(0, 1);
+            q5[1] = r == 2 ? (double)(t / 60) / 49 : ref_rand(0, 1);
             nf_surf_eval(&s, q5[0], q5[1], q5 + 2);
         }
         job_t fast, plain;
