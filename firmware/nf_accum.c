@@ -283,6 +283,25 @@ NF_INLINE void row_expand33(nf_accum_t *ac)
     }
 }
 
+/* The 12 products Nu[a] qw[c] at 3a + c, as 3 vectors, added to dst or
+ * stored (add = 0). */
+NF_INLINE void nq12(double *dst, const double *Nu, const double *qw, const int add)
+{
+    const nf_v4 n0 = {Nu[0], Nu[0], Nu[0], Nu[1]}, n1 = {Nu[1], Nu[1], Nu[2], Nu[2]},
+                n2 = {Nu[2], Nu[3], Nu[3], Nu[3]};
+    const nf_v4 q0 = {qw[0], qw[1], qw[2], qw[0]}, q1 = {qw[1], qw[2], qw[0], qw[1]},
+                q2 = {qw[2], qw[0], qw[1], qw[2]};
+    if (add) {
+        V4(dst) += n0 * q0;
+        V4(dst + 4) += n1 * q1;
+        V4(dst + 8) += n2 * q2;
+    } else {
+        V4(dst) = n0 * q0;
+        V4(dst + 4) = n1 * q1;
+        V4(dst + 8) = n2 * q2;
+    }
+}
+
 /* One point of the row into G: column l - 3 + a, band offsets c - a. */
 NF_INLINE void row_add33(nf_accum_t *ac, int l, const double *Nu, const double *qw)
 {
@@ -291,12 +310,7 @@ NF_INLINE void row_add33(nf_accum_t *ac, int l, const double *Nu, const double *
     NF_UNROLL
     for (int a = 0; a < 4; a++)
         V4(g + 6 * a) += Nu[a] * nu4; /* row l-3+a starts at g + 7a - a */
-    double *gq = ac->Gq + 3 * (long)(l - 3);
-    NF_UNROLL
-    for (int a = 0; a < 4; a++)
-        NF_UNROLL
-    for (int c = 0; c < 3; c++)
-        gq[3 * a + c] += Nu[a] * qw[c];
+    nq12(ac->Gq + 3 * (long)(l - 3), Nu, qw, 1);
     if (l - 3 < ac->g0)
         ac->g0 = l - 3;
     if (l > ac->g1)
@@ -563,11 +577,7 @@ static void point33(nf_accum_t *ac, double u, double v, int l, int k, const doub
             NF_UNROLL
             for (int a = 0; a < 4; a++)
                 V4(ac->Su + 4 * a) += (Nu[a] * nu4);
-            NF_UNROLL
-            for (int a = 0; a < 4; a++)
-                NF_UNROLL
-            for (int c = 0; c < 3; c++)
-                ac->Sq[3 * a + c] += Nu[a] * qw[c];
+            nq12(ac->Sq, Nu, qw, 1);
             ac->npend++;
             return;
         }
@@ -583,11 +593,7 @@ static void point33(nf_accum_t *ac, double u, double v, int l, int k, const doub
             NF_UNROLL
             for (int a = 0; a < 4; a++)
                 V4(ac->Su + 4 * a) = Nu[a] * nu4;
-            NF_UNROLL
-            for (int a = 0; a < 4; a++)
-                NF_UNROLL
-            for (int c = 0; c < 3; c++)
-                ac->Sq[3 * a + c] = Nu[a] * qw[c];
+            nq12(ac->Sq, Nu, qw, 0);
             ac->npend = 1;
             return;
         }
