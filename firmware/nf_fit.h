@@ -75,7 +75,10 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
 int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt);
 
 /* Accumulate n points given as rows of 5 doubles (u v x y z). On error,
- * *bad is the index of the offending row. */
+ * *bad is the index of the offending row; the rows before it are in, none
+ * after. Spans are found 8 points ahead (their stripe rows prefetched when
+ * the store exceeds the cache), and windows of random order are sorted by
+ * tiles of 16 x 16 spans first (nf_fit.c): larger n bins better. */
 int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad);
 
 /* A shard: a further accumulator of job f over its own stripes and R^T Q,
