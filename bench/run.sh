@@ -133,6 +133,13 @@ for o in raster random; do
     cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points 1000000 --cp 1000000 \
         --order "$o" --json
 done
+say "accumulation on two cores (a shard each, merged at the end), M = 10^6"
+for n in 100 1000 10000 100000 1000000; do
+    for o in raster random; do
+        cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points 1000000 --cp "$n" \
+            --order "$o" --threads 2 --json
+    done
+done
 table accumulate
 
 # --- solvers: Tables 3 and 4 -------------------------------------------------

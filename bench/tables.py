@@ -102,7 +102,7 @@ def machine(out):
     print("- date: %s" % m["date"])
     print("- CPU: %s, nproc %d, %.1f GB RAM, Linux %s"
           % (m["cpu"], m["nproc"], m["mem_total_kb"] / 2**20, m["kernel"]))
-    print("- compiler: %s; cellfit built with `%s` (one core, no threads)"
+    print("- compiler: %s; cellfit built with `%s` (one core unless a table says two)"
           % (m["compiler"], m["cellfit_cflags"]))
     print("- cellfit revision: %s" % m["cellfit_rev"])
     print("- CHOLMOD's BLAS: %s; %s, scipy %s" % (m["blas"], m["python"], m["scipy"]))
@@ -131,6 +131,8 @@ def stream(out):
 
 def accumulate(out):
     good, bad = load(out, "accumulate")
+    two = [d for d in good if d.get("threads", 1) == 2]
+    good = [d for d in good if d.get("threads", 1) == 1]
     b = best(good, lambda d: (d["points"], d["control_points"], d["order"]))
     print("## Accumulation (preparation phase, paper Table 2)\n")
     print("Time to stream M points into the stripes (R^T R and R^T Q), point generation"
@@ -152,6 +154,21 @@ def accumulate(out):
                      T2_KB.get(decade(n), "-"), "%.0f" % (rss / 2**20) if rss else "-"])
     table(["M", "N", "paper ms", "raster ms", "raster M pts/s", "random ms", "random M pts/s",
            "paper / raster", "stripes kB", "paper kB", "peak RSS MiB"], rows)
+    if two:
+        b2 = best(two, lambda d: (d["points"], d["control_points"], d["order"]))
+        print("One core and two (`--threads 2`: the job and a shard, each on its own stripes,"
+              " half of every chunk each, merged at the end; merge included), M = 10^6:\n")
+        rows = []
+        for m, n, o in sorted(b2):
+            d2 = b2[(m, n, o)][0]
+            d1 = b.get((m, n, o), ({}, 0))[0]
+            p1, p2 = d1.get("points_per_s"), d2.get("points_per_s")
+            rows.append(["{:,}".format(n), o, mps(p1), mps(p2),
+                         "%.2f" % (p2 / p1) if p1 and p2 else "-",
+                         ms(d2.get("merge_seconds")),
+                         "{:,.0f}".format(d2["arena_bytes"] / 1e3)])
+        table(["N", "order", "1 core M pts/s", "2 cores M pts/s", "speed-up", "merge ms",
+               "arena kB, 2 cores"], rows)
     failures(bad)
 
 
@@ -269,6 +286,8 @@ def e2e(out):
 
 def targets(out):
     acc, _ = load(out, "accumulate")
+    acc2 = [d for d in acc if d.get("threads", 1) == 2]
+    acc = [d for d in acc if d.get("threads", 1) == 1]
     sol, _ = load(out, "solve")
     e2, _ = load(out, "e2e")
     a = best(acc, lambda d: (d["points"], d["control_points"], d["order"]))
@@ -292,6 +311,14 @@ def targets(out):
     if rnd:
         rows.append(["accumulation, random, N = 10^5", ">= 5 M points/s",
                      "%s M/s (M = 10^6)" % mps(rnd[0]), verdict(rnd[0] >= 5e6)])
+    a2 = best(acc2, lambda d: (d["points"], d["control_points"], d["order"]))
+    for o in ("raster", "random"):
+        c = [(d[0]["points_per_s"], n) for (m, n, oo), d in a2.items()
+             if m == 10**6 and oo == o and n <= 100000]
+        if c:
+            lo = min(c)
+            rows.append(["accumulation, %s, N <= 10^5, two cores" % o, "(where it pays)",
+                         "%s M/s (lowest, N = %s)" % (mps(lo[0]), "{:,}".format(lo[1])), "-"])
     for dec, lim in ((10**5, 0.3), (10**6, 5.0)):
         c = [(d[0]["solve_seconds"], sv, d[0]["rel_residual"]) for (n, sv), d in s.items()
              if decade(n) == dec and d[0]["rel_residual"] <= 1e-10]

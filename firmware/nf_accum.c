@@ -11,6 +11,21 @@
 #define NF_INLINE static inline
 #endif
 
+/* The bicubic kernels use GCC's generic vectors of 4 doubles (AVX2 on the
+ * cell controller, lowered to pairs or scalars elsewhere). */
+#if defined(__GNUC__) && !defined(NF_NO_VECTOR)
+#define NF_ACCUM_VECTOR 1
+typedef double nf_v4 __attribute__((vector_size(32)));
+/* 4 doubles at any 8-byte aligned address, aliasing the doubles there. */
+typedef double nf_v4u __attribute__((vector_size(32), aligned(8), may_alias));
+#define V4(ptr) (*(nf_v4u *)(ptr))
+#define V4C(ptr) (*(const nf_v4u *)(ptr))
+/* GCC at -O2 does not unroll the short constant loops of the kernels. */
+#define NF_UNROLL _Pragma("GCC unroll 4")
+#else
+#define NF_ACCUM_VECTOR 0
+#endif
+
 void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *rhs)
 {
     ac->s = s;
@@ -31,18 +46,17 @@ void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *r
     for (int k = 0; k < NF_ACCUM_BUF; k++)
         for (int t = 0; t < NF_LOCAL_PAD; t++)
             ac->Rb[k][t] = 0.0; /* the tails past nl stay zero */
-}
-
-/* Span of u given the last one: raster scans stay in it or step to the next. */
-static int span_near(int last, int n, int p, double u, const double *U)
-{
-    if (last >= 0) {
-        if (U[last] <= u && (u < U[last + 1] || (last == n && u <= U[n + 1])))
-            return last;
-        if (last < n && U[last + 1] <= u && (u < U[last + 2] || (last + 1 == n)))
-            return last + 1;
-    }
-    return nf_find_span(n, p, u, U);
+    ac->mode = 0;
+    ac->G = ac->Gq = 0;
+    ac->vk = -1;
+    ac->vlast = 0.0;
+    ac->hu = (s->nu - s->p) / (s->U[s->nu] - s->U[s->p]);
+    ac->hv = (s->nv - s->q) / (s->V[s->nv] - s->V[s->q]);
+#if NF_ACCUM_VECTOR
+    ac->fast = s->p == 3 && s->q == 3;
+#else
+    ac->fast = 0;
+#endif
 }
 
 static void rhs_add(nf_accum_t *ac, int l, int k, const double *R, const double *q)
@@ -65,18 +79,7 @@ static void rhs_add(nf_accum_t *ac, int l, int k, const double *R, const double 
  * Whole padded rows are updated (the flush reads the upper triangle): with
  * the accumulator of a row segment held in a register across the buffered
  * points, the block is loaded and stored once per NF_ACCUM_BUF points. */
-#if defined(__GNUC__) && defined(__AVX__) && !defined(NF_NO_VECTOR)
-typedef double nf_v4 __attribute__((vector_size(32)));
-static inline nf_v4 v4_load(const double *p)
-{
-    nf_v4 v;
-    __builtin_memcpy(&v, p, sizeof v);
-    return v;
-}
-static inline void v4_store(double *p, nf_v4 v)
-{
-    __builtin_memcpy(p, &v, sizeof v);
-}
+#if NF_ACCUM_VECTOR && defined(__AVX__)
 /* Row t1 from the vector holding column t1 on: the upper triangle plus at
  * most three entries below it, which the flush ignores. nb is a constant
  * (NF_ACCUM_BUF) for the full-buffer call, so the k loop unrolls there. */
@@ -85,10 +88,10 @@ NF_INLINE void block_rows_nb(nf_accum_t *ac, int nl, int nlp, const int nb)
     for (int t1 = 0; t1 < nl; t1++) {
         double *row = ac->blk + t1 * nlp;
         for (int T = t1 & ~3; T < nlp; T += 4) {
-            nf_v4 acc = v4_load(row + T);
+            nf_v4 acc = V4C(row + T);
             for (int k = 0; k < nb; k++)
-                acc += ac->Rb[k][t1] * v4_load(ac->Rb[k] + T);
-            v4_store(row + T, acc);
+                acc += ac->Rb[k][t1] * V4C(ac->Rb[k] + T);
+            V4(row + T) = acc;
         }
     }
 }
@@ -142,6 +145,188 @@ static void block_rank_any(nf_accum_t *ac)
         block_rank(ac, ac->nl, ac->nlp);
 }
 
+#if NF_ACCUM_VECTOR
+/* Bicubic stripe rows, 4-wide (Eq. 9-11, slots of nf_stripe_slot with
+ * p = q = 3, K = 25): control point (a, b) of the span's 4 x 4 receives, for
+ * v-offset f = d - b > 0, 4 consecutive slots 4 + 7 (f - 1) + 3 - a + c,
+ * c = 0..3, and for f = 0 the slots c - a, c >= a. The latter are written as
+ * a whole vector at row - a with lanes c < a zeroed: those lanes add +-0 to
+ * the previous row's last slots, which changes no value. */
+static const double nf_lane_mask[4][4] = {{1, 1, 1, 1}, {0, 1, 1, 1}, {0, 0, 1, 1}, {0, 0, 0, 1}};
+
+#define NF_SLOT33(a, f) (4 + 7 * ((f)-1) + 3 - (a))
+
+/* S += wgt-free sum: stripe row (a, b) gets row a of X times C[b][d] for the
+ * factored run (X = Su, C = Nv Nv^T), or the rows of a buffered R. */
+NF_INLINE void expand33(nf_accum_t *ac, long base)
+{
+    const long nu = ac->s->nu;
+    const double *Nv = ac->fNv;
+    double *S = ac->A->S;
+    NF_UNROLL
+    for (int b = 0; b < 4; b++) {
+        NF_UNROLL
+        for (int a = 0; a < 4; a++) {
+            const nf_v4 su = V4C(ac->Su + 4 * a);
+            double *row = S + (base + a + b * nu) * 25;
+            const nf_v4 m = V4C(nf_lane_mask[a]) * (Nv[b] * Nv[b]);
+            V4(row - a) += (su * m);
+            NF_UNROLL
+            for (int d = b + 1; d < 4; d++) {
+                double *sl = row + NF_SLOT33(a, d - b);
+                V4(sl) += (su * (Nv[b] * Nv[d]));
+            }
+        }
+        double *r = ac->rhs + 3 * (base + b * nu);
+        NF_UNROLL
+        for (int t = 0; t < 12; t += 4)
+            V4(r + t) += (V4C(ac->Sq + t) * Nv[b]);
+    }
+}
+
+/* One row R (16 values, row-major in (a, b)) with its point q straight into
+ * the stripes: the same as nf_stripe_add_outer + rhs_add, 4-wide. */
+NF_INLINE void scatter33(nf_accum_t *ac, long base, const double *R, const double *q)
+{
+    const long nu = ac->s->nu;
+    double *S = ac->A->S;
+    nf_v4 Rv[4];
+    NF_UNROLL
+    for (int d = 0; d < 4; d++)
+        Rv[d] = V4C(R + 4 * d);
+    NF_UNROLL
+    for (int b = 0; b < 4; b++) {
+        NF_UNROLL
+        for (int a = 0; a < 4; a++) {
+            const double ra = R[a + 4 * b];
+            double *row = S + (base + a + b * nu) * 25;
+            V4(row - a) += ((ra * Rv[b]) * V4C(nf_lane_mask[a]));
+            NF_UNROLL
+            for (int d = b + 1; d < 4; d++) {
+                double *sl = row + NF_SLOT33(a, d - b);
+                V4(sl) += (ra * Rv[d]);
+            }
+        }
+        double *r = ac->rhs + 3 * (base + b * nu);
+        NF_UNROLL
+        for (int a = 0; a < 4; a++) {
+            r[3 * a] += R[a + 4 * b] * q[0];
+            r[3 * a + 1] += R[a + 4 * b] * q[1];
+            r[3 * a + 2] += R[a + 4 * b] * q[2];
+        }
+    }
+}
+
+/* The summed 16 x 16 block (rows from column 4b on, see block_rows). */
+NF_INLINE void block_flush33(nf_accum_t *ac, long base)
+{
+    const long nu = ac->s->nu;
+    double *S = ac->A->S;
+    NF_UNROLL
+    for (int b = 0; b < 4; b++)
+        NF_UNROLL
+    for (int a = 0; a < 4; a++) {
+        const int t1 = a + 4 * b;
+        const double *br = ac->blk + t1 * 16;
+        double *row = S + (base + a + b * nu) * 25;
+        V4(row - a) += (V4C(br + 4 * b) * V4C(nf_lane_mask[a]));
+        NF_UNROLL
+        for (int d = b + 1; d < 4; d++) {
+            double *sl = row + NF_SLOT33(a, d - b);
+            V4(sl) += (V4C(br + 4 * d));
+        }
+        double *r = ac->rhs + 3 * (base + a + b * nu);
+        r[0] += ac->brhs[3 * t1];
+        r[1] += ac->brhs[3 * t1 + 1];
+        r[2] += ac->brhs[3 * t1 + 2];
+    }
+}
+
+/* Row mode: the band G (x) N(v) N(v)^T into the stripes of the row's four
+ * v rows, column by column: slots 0..3 get G_i,i..i+3 C_bb, slots of
+ * offset f = d - b > 0 get G_i,i-3..i+3 C_bd (two vectors, the second
+ * without its first lane); then G is cleared where it was used. */
+NF_INLINE void row_expand33(nf_accum_t *ac)
+{
+    const long nu = ac->s->nu;
+    const double *Nv = ac->rowNv;
+    double C[4][4];
+    NF_UNROLL
+    for (int b = 0; b < 4; b++)
+        NF_UNROLL
+    for (int d = 0; d < 4; d++)
+        C[b][d] = Nv[b] * Nv[d];
+    const nf_v4 m1 = V4C(nf_lane_mask[1]);
+    for (int i = ac->g0; i <= ac->g1; i++) {
+        double *g = ac->G + 7 * (long)i, *gq = ac->Gq + 3 * (long)i;
+        const nf_v4 glo = V4C(g), ghi = V4C(g + 3) * m1, gd = V4C(g + 3);
+        NF_UNROLL
+        for (int b = 0; b < 4; b++) {
+            const long pt = i + (ac->rowk - 3 + b) * nu;
+            double *row = ac->A->S + pt * 25;
+            V4(row) += gd * C[b][b];
+            NF_UNROLL
+            for (int d = b + 1; d < 4; d++) {
+                double *sl = row + 4 + 7 * (d - b - 1);
+                V4(sl) += glo * C[b][d];
+                V4(sl + 3) += ghi * C[b][d];
+            }
+            double *r = ac->rhs + 3 * pt;
+            r[0] += gq[0] * Nv[b];
+            r[1] += gq[1] * Nv[b];
+            r[2] += gq[2] * Nv[b];
+        }
+        NF_UNROLL
+        for (int t = 0; t < 7; t++)
+            g[t] = 0.0;
+        gq[0] = gq[1] = gq[2] = 0.0;
+    }
+}
+
+/* The 12 products Nu[a] qw[c] at 3a + c, as 3 vectors, added to dst or
+ * stored (add = 0). */
+NF_INLINE void nq12(double *dst, const double *Nu, const double *qw, const int add)
+{
+    const nf_v4 n0 = {Nu[0], Nu[0], Nu[0], Nu[1]}, n1 = {Nu[1], Nu[1], Nu[2], Nu[2]},
+                n2 = {Nu[2], Nu[3], Nu[3], Nu[3]};
+    const nf_v4 q0 = {qw[0], qw[1], qw[2], qw[0]}, q1 = {qw[1], qw[2], qw[0], qw[1]},
+                q2 = {qw[2], qw[0], qw[1], qw[2]};
+    if (add) {
+        V4(dst) += n0 * q0;
+        V4(dst + 4) += n1 * q1;
+        V4(dst + 8) += n2 * q2;
+    } else {
+        V4(dst) = n0 * q0;
+        V4(dst + 4) = n1 * q1;
+        V4(dst + 8) = n2 * q2;
+    }
+}
+
+/* One point of the row into G: column l - 3 + a, band offsets c - a. */
+NF_INLINE void row_add33(nf_accum_t *ac, int l, const double *Nu, const double *qw)
+{
+    const nf_v4 nu4 = {Nu[0], Nu[1], Nu[2], Nu[3]};
+    double *g = ac->G + 7 * (long)(l - 3) + 3;
+    NF_UNROLL
+    for (int a = 0; a < 4; a++)
+        V4(g + 6 * a) += Nu[a] * nu4; /* row l-3+a starts at g + 7a - a */
+    nq12(ac->Gq + 3 * (long)(l - 3), Nu, qw, 1);
+    if (l - 3 < ac->g0)
+        ac->g0 = l - 3;
+    if (l > ac->g1)
+        ac->g1 = l;
+}
+#endif
+
+void nf_accum_rowbuf(nf_accum_t *ac, double *G, double *Gq)
+{
+    ac->G = G && Gq ? G : 0;
+    ac->Gq = G && Gq ? Gq : 0;
+}
+
+/* Runs of at most this many rows skip the block: straight to the stripes. */
+#define NF_ACCUM_DIRECT 2
+
 void nf_accum_flush(nf_accum_t *ac)
 {
     if (ac->npend == 0)
@@ -149,7 +334,23 @@ void nf_accum_flush(nf_accum_t *ac)
     const nf_surf_t *s = ac->s;
     const int p = s->p, q = s->q, o = p + 1, K = ac->A->K;
     const long base = (ac->bl - p) + (long)(ac->bk - q) * s->nu;
-    if (ac->npend == 1) { /* a lone point: straight to the stripes */
+#if NF_ACCUM_VECTOR
+    if (ac->mode == 3) {
+        row_expand33(ac);
+    } else if (ac->mode == 1) {
+        expand33(ac, base);
+    } else if (ac->fast) {
+        if (!ac->open && ac->npend <= NF_ACCUM_DIRECT) {
+            for (int t = 0; t < ac->nb; t++)
+                scatter33(ac, base, ac->Rb[t], ac->qb[t]);
+        } else {
+            if (ac->nb)
+                block_rank(ac, 16, 16);
+            block_flush33(ac, base);
+        }
+    } else
+#endif
+        if (ac->npend == 1) { /* a lone point: straight to the stripes */
         nf_stripe_add_outer(ac->A, base, ac->Rb[0], 1.0);
         rhs_add(ac, ac->bl, ac->bk, ac->Rb[0], ac->qb[0]);
     } else { /* the block's upper triangle, by the slots of nf_stripe_add_outer */
@@ -176,17 +377,35 @@ void nf_accum_flush(nf_accum_t *ac)
     ac->npend = 0;
     ac->nb = 0;
     ac->open = 0;
+    ac->mode = 0;
     ac->bl = ac->bk = -1;
 }
 
-NF_INLINE void point_pq(nf_accum_t *ac, double u, double v, const double xyz[3], double wgt,
-                        const int p, const int q)
+/* Row of R into the span's buffer (rank-NF_ACCUM_BUF block updates). */
+NF_INLINE void buffer_row(nf_accum_t *ac, const double *R, const double *qw, const int nl)
+{
+    double *Rd = ac->Rb[ac->nb];
+    for (int t = 0; t < nl; t++)
+        Rd[t] = R[t];
+    ac->qb[ac->nb][0] = qw[0];
+    ac->qb[ac->nb][1] = qw[1];
+    ac->qb[ac->nb][2] = qw[2];
+    ac->nb++;
+    ac->npend++;
+    if (ac->nb == NF_ACCUM_BUF) {
+        if (nl == 16)
+            block_rank(ac, 16, 16);
+        else
+            block_rank(ac, nl, ac->nlp);
+    }
+}
+
+NF_INLINE void point_pq(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3],
+                        double wgt, const int p, const int q)
 {
     const nf_surf_t *s = ac->s;
     const int o = p + 1, nl = o * (q + 1);
     double Nu[NF_MAX_ORDER], Nv[NF_MAX_ORDER], R[NF_MAX_LOCAL];
-    const int l = span_near(ac->lu, s->nu - 1, p, u, s->U);
-    const int k = span_near(ac->lv, s->nv - 1, q, v, s->V);
     if (l != ac->lu) {
         nf_basis_recip(l, p, s->U, ac->ru);
         ac->lu = l;
@@ -227,29 +446,219 @@ NF_INLINE void point_pq(nf_accum_t *ac, double u, double v, const double xyz[3],
         ac->bl = l;
         ac->bk = k;
     }
-    double *Rd = ac->Rb[ac->nb];
-    for (int t = 0; t < nl; t++)
-        Rd[t] = R[t];
-    ac->qb[ac->nb][0] = qw[0];
-    ac->qb[ac->nb][1] = qw[1];
-    ac->qb[ac->nb][2] = qw[2];
-    ac->nb++;
-    ac->npend++;
-    if (ac->nb == NF_ACCUM_BUF) {
-        if (nl == 16)
-            block_rank(ac, 16, 16);
-        else
-            block_rank(ac, nl, ac->nlp);
+    buffer_row(ac, R, qw, nl);
+}
+
+#if NF_ACCUM_VECTOR
+/* Reciprocals of the 6 knot differences of a cubic span (nf_basis_recip,
+ * p = 3) for u and v together: 3 vector divisions instead of 12 scalar. */
+static void recip33(const double *U, int l, double *ru, const double *V, int k, double *rv, int du,
+                    int dv)
+{
+    double d[12];
+    d[0] = U[l + 1] - U[l];
+    d[1] = U[l + 1] - U[l - 1];
+    d[2] = U[l + 2] - U[l];
+    d[3] = U[l + 1] - U[l - 2];
+    d[4] = U[l + 2] - U[l - 1];
+    d[5] = U[l + 3] - U[l];
+    d[6] = V[k + 1] - V[k];
+    d[7] = V[k + 1] - V[k - 1];
+    d[8] = V[k + 2] - V[k];
+    d[9] = V[k + 1] - V[k - 2];
+    d[10] = V[k + 2] - V[k - 1];
+    d[11] = V[k + 3] - V[k];
+    double r[12];
+    const nf_v4 one = {1.0, 1.0, 1.0, 1.0};
+    NF_UNROLL
+    for (int t = 0; t < 12; t += 4)
+        V4(r + t) = one / V4C(d + t);
+    NF_UNROLL
+    for (int t = 0; t < 6; t++) {
+        if (du)
+            ru[t] = r[t];
+        if (dv)
+            rv[t] = r[6 + t];
     }
+}
+
+/* nf_basis_funs_r for p = 3, written out (A2.2 with the reciprocals). */
+static inline void basis3(int l, double u, const double *U, const double *rc, double *N)
+{
+    const double l1 = u - U[l], l2 = u - U[l - 1], l3 = u - U[l - 2];
+    const double r1 = U[l + 1] - u, r2 = U[l + 2] - u, r3 = U[l + 3] - u;
+    double t, sv;
+    /* j = 1 */
+    double n0 = r1 * rc[0], n1 = l1 * rc[0];
+    /* j = 2 */
+    t = n0 * rc[1];
+    n0 = r1 * t;
+    sv = l2 * t;
+    t = n1 * rc[2];
+    n1 = sv + r2 * t;
+    double n2 = l1 * t;
+    /* j = 3 */
+    t = n0 * rc[3];
+    N[0] = r1 * t;
+    sv = l3 * t;
+    t = n1 * rc[4];
+    N[1] = sv + r2 * t;
+    sv = l2 * t;
+    t = n2 * rc[5];
+    N[2] = sv + r3 * t;
+    N[3] = l1 * t;
+}
+
+/* Bicubic, inline and vectorised. Polynomial points sharing the span and
+ * v open a factored run (mode 1); a change of v within the span closes it
+ * and buffers rows for the block (mode 2); rational points always buffer. */
+static void point33(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3],
+                    double wgt)
+{
+    const nf_surf_t *s = ac->s;
+    if (l != ac->lu || k != ac->lv) {
+        recip33(s->U, l, ac->ru, s->V, k, ac->rv, l != ac->lu, k != ac->lv);
+        if (k != ac->lv)
+            ac->vk = -1;
+        ac->lu = l;
+        ac->lv = k;
+    }
+    double Nu[4];
+    basis3(l, u, s->U, ac->ru, Nu);
+    if (v != ac->vlast || ac->vk != k) { /* rows of one v: N(v) once */
+        basis3(k, v, s->V, ac->rv, ac->Nvc);
+        ac->vlast = v;
+        ac->vk = k;
+    }
+    double qw[3] = {xyz[0], xyz[1], xyz[2]};
+    if (wgt != 1.0) { /* sqrt(wgt) on N(u) and on q: wgt R R^T and wgt R q */
+        const double sw = sqrt(wgt);
+        NF_UNROLL
+        for (int a = 0; a < 4; a++)
+            Nu[a] *= sw;
+        NF_UNROLL
+        for (int c = 0; c < 3; c++)
+            qw[c] *= sw;
+    }
+    if (ac->mode == 3) {
+        if (k == ac->rowk && v == ac->rowv) {
+            row_add33(ac, l, Nu, qw);
+            ac->npend++;
+            return;
+        }
+        nf_accum_flush(ac);
+    }
+    const int same = l == ac->bl && k == ac->bk;
+    if (!ac->rational) {
+        const nf_v4 nu4 = {Nu[0], Nu[1], Nu[2], Nu[3]};
+        if (!same && ac->mode == 1 && ac->G && k == ac->bk && v == ac->fv) {
+            /* The next span of a row of one v: the run's sums move to G. */
+            double *g = ac->G + 7 * (long)(ac->bl - 3) + 3;
+            NF_UNROLL
+            for (int a = 0; a < 4; a++)
+                V4(g + 6 * a) += V4C(ac->Su + 4 * a);
+            double *gq = ac->Gq + 3 * (long)(ac->bl - 3);
+            NF_UNROLL
+            for (int t = 0; t < 12; t++)
+                gq[t] += ac->Sq[t];
+            ac->mode = 3;
+            ac->rowk = k;
+            ac->rowv = v;
+            NF_UNROLL
+            for (int b = 0; b < 4; b++)
+                ac->rowNv[b] = ac->fNv[b];
+            ac->g0 = ac->bl - 3;
+            ac->g1 = ac->bl;
+            row_add33(ac, l, Nu, qw);
+            ac->npend++;
+            return;
+        }
+        if (same && ac->mode == 1 && v == ac->fv) {
+            NF_UNROLL
+            for (int a = 0; a < 4; a++)
+                V4(ac->Su + 4 * a) += (Nu[a] * nu4);
+            nq12(ac->Sq, Nu, qw, 1);
+            ac->npend++;
+            return;
+        }
+        if (!same) { /* a new run, factored until v changes */
+            nf_accum_flush(ac);
+            ac->bl = l;
+            ac->bk = k;
+            ac->mode = 1;
+            ac->fv = v;
+            NF_UNROLL
+            for (int b = 0; b < 4; b++)
+                ac->fNv[b] = ac->Nvc[b];
+            NF_UNROLL
+            for (int a = 0; a < 4; a++)
+                V4(ac->Su + 4 * a) = Nu[a] * nu4;
+            nq12(ac->Sq, Nu, qw, 0);
+            ac->npend = 1;
+            return;
+        }
+        if (ac->mode == 1) { /* same span, new v: the factored part goes now */
+            nf_accum_flush(ac);
+            ac->bl = l;
+            ac->bk = k;
+        }
+        ac->mode = 2;
+        double R[16];
+        NF_UNROLL
+        for (int b = 0; b < 4; b++)
+            NF_UNROLL
+        for (int a = 0; a < 4; a++)
+            R[a + 4 * b] = Nu[a] * ac->Nvc[b];
+        buffer_row(ac, R, qw, 16);
+        return;
+    }
+    /* Rational basis R_ij (Eq. 1); sqrt(wgt) is already on N(u). */
+    const double *w = s->w + (l - 3) + (long)(k - 3) * s->nu;
+    double R[16], W = 0.0;
+    NF_UNROLL
+    for (int b = 0; b < 4; b++)
+        NF_UNROLL
+    for (int a = 0; a < 4; a++) {
+        const double r = Nu[a] * ac->Nvc[b] * w[a + (long)b * s->nu];
+        R[a + 4 * b] = r;
+        W += r;
+    }
+    /* W carries sqrt(wgt) once; R / W must carry it once too. */
+    const double inv = (wgt != 1.0 ? sqrt(wgt) : 1.0) / W;
+    NF_UNROLL
+    for (int t = 0; t < 16; t++)
+        R[t] *= inv;
+    if (!same) {
+        nf_accum_flush(ac);
+        ac->bl = l;
+        ac->bk = k;
+    }
+    ac->mode = 2;
+    buffer_row(ac, R, qw, 16);
+}
+#endif
+
+void nf_accum_point_at(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3],
+                       double wgt)
+{
+    const int p = ac->s->p, q = ac->s->q;
+#if NF_ACCUM_VECTOR
+    if (ac->fast) {
+        point33(ac, u, v, l, k, xyz, wgt);
+        return;
+    }
+#endif
+    if (p == 3 && q == 3)
+        point_pq(ac, u, v, l, k, xyz, wgt, 3, 3);
+    else if (p == 2 && q == 2)
+        point_pq(ac, u, v, l, k, xyz, wgt, 2, 2);
+    else
+        point_pq(ac, u, v, l, k, xyz, wgt, p, q);
 }
 
 void nf_accum_point(nf_accum_t *ac, double u, double v, const double xyz[3], double wgt)
 {
-    const int p = ac->s->p, q = ac->s->q;
-    if (p == 3 && q == 3)
-        point_pq(ac, u, v, xyz, wgt, 3, 3);
-    else if (p == 2 && q == 2)
-        point_pq(ac, u, v, xyz, wgt, 2, 2);
-    else
-        point_pq(ac, u, v, xyz, wgt, p, q);
+    int l, k;
+    nf_accum_spans(ac, u, v, ac->lu, ac->lv, &l, &k);
+    nf_accum_point_at(ac, u, v, l, k, xyz, wgt);
 }

@@ -7,7 +7,16 @@
  *    summed into a dense (p+1)(q+1) block first, NF_ACCUM_BUF rows at a
  *    time, which the stripes receive once when the span changes: contiguous,
  *    vectorisable work instead of scattered updates. A lone point in its
- *    span goes straight to the stripes.
+ *    span goes straight to the stripes;
+ *  - bicubic, polynomial: consecutive points of one span that share v
+ *    exactly (a raster row of a scan grid) share N(v), and their rows
+ *    R = N(u) (x) N(v) sum to (sum N(u) N(u)^T) (x) N(v) N(v)^T: a 4 x 4 sum
+ *    per point, expanded into the stripes once per run (Eq. 9-10). When the
+ *    span changes and v does not (the next span of a raster row), the sums
+ *    go on in a band buffer G of the whole row, G_ij = sum N_i(u) N_j(u)
+ *    (7 per control column), expanded as G (x) N(v) N(v)^T once per row.
+ *    G (10 Nu doubles) is lent by nf_fit from the solver's arena space,
+ *    which is idle while points stream in (nf_accum_rowbuf).
  * Memory: fixed by NF_MAX_DEGREE (sizeof(nf_accum_t)), never by N or M. */
 #ifndef NF_ACCUM_H
 #define NF_ACCUM_H
@@ -28,12 +37,24 @@ typedef struct nf_accum {
     double *rhs;
     int lu, lv; /* span of the cached reciprocals, -1 none */
     double ru[NF_RECIP_LEN], rv[NF_RECIP_LEN];
-    int bl, bk;   /* span of the open block, -1 none */
-    int npend;    /* points seen in this span */
-    int nb;       /* of them, still in the buffer */
-    int open;     /* blk and brhs hold a sum */
-    int nl, nlp;  /* (p+1)(q+1) and its padded row length */
-    int rational; /* weights differ: R_ij = N_i N_j w_ij / W (Eq. 1) */
+    int bl, bk;    /* span of the open block, -1 none */
+    int npend;     /* points seen in this span */
+    int nb;        /* of them, still in the buffer */
+    int open;      /* blk and brhs hold a sum */
+    int nl, nlp;   /* (p+1)(q+1) and its padded row length */
+    int rational;  /* weights differ: R_ij = N_i N_j w_ij / W (Eq. 1) */
+    int fast;      /* bicubic vector kernels; nf_accum_init sets it (tests may clear it) */
+    int mode;      /* open run: 0 generic, 1 factored (one v), 2 rows buffered */
+    double hu, hv; /* spans per unit parameter: the first guess of a span search */
+    double vlast;  /* v whose basis Nvc holds (span vk), for rows of one v */
+    int vk;        /* -1: Nvc empty */
+    double fv;     /* v of the factored run */
+    double Nvc[NF_MAX_ORDER], fNv[NF_MAX_ORDER];
+    _Alignas(32) double Su[16]; /* factored run: sum of N(u) N(u)^T (4 x 4, full) */
+    _Alignas(32) double Sq[12]; /* and of N(u) (x y z), a-major */
+    double *G, *Gq;             /* row mode: 7 Nu band and 3 Nu right-hand side, or NULL */
+    int g0, g1, rowk;           /* columns touched, v span of the row */
+    double rowv, rowNv[NF_MAX_ORDER];
     _Alignas(32) double Rb[NF_ACCUM_BUF][NF_LOCAL_PAD]; /* buffered rows of R, zero tails */
     double qb[NF_ACCUM_BUF][3];
     _Alignas(32) double blk[NF_MAX_LOCAL * NF_LOCAL_PAD]; /* row t1 at t1*nlp, upper used */
@@ -42,8 +63,28 @@ typedef struct nf_accum {
 
 void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *rhs);
 
+/* Lend the row buffers (G: 7 Nu doubles, Gq: 3 Nu, zeroed) or take them
+ * back (NULL, after nf_accum_flush). Bicubic polynomial nets use them. */
+void nf_accum_rowbuf(nf_accum_t *ac, double *G, double *Gq);
+
 /* One point; (u, v) already checked and clamped to the domain, wgt > 0. */
 void nf_accum_point(nf_accum_t *ac, double u, double v, const double xyz[3], double wgt);
+
+/* The knot spans of (u, v) (clamped to the domain), the same as
+ * nf_find_span's: a guess from uniform spacing, a few steps, binary search
+ * only when the knots are far from uniform. last_l, last_k: the previous
+ * point's spans or -1 (a raster stays in them or steps to the next). */
+static inline void nf_accum_spans(const nf_accum_t *ac, double u, double v, int last_l, int last_k,
+                                  int *l, int *k)
+{
+    const nf_surf_t *s = ac->s;
+    *l = nf_find_span_from(last_l, s->nu - 1, s->p, u, s->U, ac->hu);
+    *k = nf_find_span_from(last_k, s->nv - 1, s->q, v, s->V, ac->hv);
+}
+
+/* nf_accum_point with the spans already known (nf_accum_spans). */
+void nf_accum_point_at(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3],
+                       double wgt);
 
 /* Empty the open block into the stripes (before solving or reading S). */
 void nf_accum_flush(nf_accum_t *ac);

@@ -10,6 +10,36 @@
  * (A2.1). u must lie in [U[p], U[n+1]]. */
 int nf_find_span(int n, int p, double u, const double *U);
 
+/* nf_find_span's result, fast: the span last or the next (raster scans), else
+ * a guess from uniform spacing (h = spans per unit parameter) walked a few
+ * steps, else the binary search. Each step keeps
+ * p <= g <= n (U[p] < u < U[n+1] there) and moves toward the unique g with
+ * U[g] <= u < U[g+1]: the result is nf_find_span's. */
+static inline int nf_find_span_from(int last, int n, int p, double u, const double *U, double h)
+{
+    if (u >= U[n + 1])
+        return n;
+    if (u <= U[p])
+        return p;
+    if (last >= 0) {
+        if (U[last] <= u && u < U[last + 1])
+            return last;
+        if (last < n && U[last + 1] <= u && u < U[last + 2])
+            return last + 1;
+    }
+    double x = (u - U[p]) * h;
+    int g = x < (double)(n - p) ? p + (int)x : n;
+    for (int t = 0; t < 4; t++) {
+        if (u < U[g])
+            g--;
+        else if (u >= U[g + 1])
+            g++;
+        else
+            return g;
+    }
+    return nf_find_span(n, p, u, U);
+}
+
 /* The p+1 non-zero basis functions N[l-p..l] at u (A2.2). */
 void nf_basis_funs(int l, double u, int p, const double *U, double *N);
 

@@ -28,6 +28,14 @@ long nf_fit_bytes(int nu, int nv, int p, int q, nf_solver_t solver)
     return (long)b;
 }
 
+long nf_fit_shard_bytes(int nu, int nv, int p, int q)
+{
+    if (nu < 1 || nv < 1 || p < 0 || q < 0)
+        return -1;
+    const double b = 8.0 * (double)nu * nv * (NF_STRIPE_SLOTS(p, q) + 3.0) + 4.0 * NF_ARENA_ALIGN;
+    return b > (double)LONG_MAX ? -1 : (long)b;
+}
+
 nf_solver_t nf_solver_pick(int nu, int nv, int p, int q)
 {
     double n = (double)nu * nv, bw = (double)q * nu + p;

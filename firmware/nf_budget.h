@@ -13,6 +13,11 @@
  *                                          determinacy probe (3N)
  *   chol   = base + 8 (N (q Nu + p + 1) + 3N)   upper band of half bandwidth q Nu + p
  *   bytes  = solver term + NF_ARENA_SLACK  alignment of at most 16 blocks
+ *   shard  = 8 N (K + 3) + 4 NF_ARENA_ALIGN  each further accumulator (a second
+ *                                          core's stripes and R^T Q, summed
+ *                                          into the job's at the end)
+ * The raster row buffers (10 Nu doubles per accumulator) are lent from the
+ * solver term, idle while points stream in: they add nothing.
  */
 #ifndef NF_BUDGET_H
 #define NF_BUDGET_H
@@ -36,6 +41,9 @@ typedef enum nf_solver {
     (NF_BYTES_BASE((long)(nu) * (nv), p, q) +                                                      \
      8L * (long)(nu) * (nv) * ((long)(q) * (nu) + (p) + 1 + 3) + NF_ARENA_SLACK)
 
+#define NF_BYTES_SHARD(n, p, q)                                                                    \
+    (8L * (long)(n) * (NF_STRIPE_SLOTS(p, q) + 3L) + 4L * NF_ARENA_ALIGN)
+
 /* The board's arena must hold the largest net it advertises, at its design
  * degree, with the iterative solvers (Cholesky is refused when it would not fit). */
 _Static_assert(NF_ARENA_BYTES >= NF_BYTES_PCG(NF_MAX_CP, NF_DESIGN_DEGREE, NF_DESIGN_DEGREE),
@@ -45,6 +53,10 @@ _Static_assert(NF_BYTES_GS(1, 1, 1) <= NF_BYTES_PCG(1, 1, 1), "PCG is the larger
 /* Bytes a fit of this net needs with this solver (AUTO: the one nf_solver_pick
  * chooses), or -1 when the sizes overflow. */
 long nf_fit_bytes(int nu, int nv, int p, int q, nf_solver_t solver);
+
+/* Bytes of one further accumulator (nf_fit_shard_init), or -1 on overflow:
+ * a job accumulating on T cores needs nf_fit_bytes + (T - 1) of these. */
+long nf_fit_shard_bytes(int nu, int nv, int p, int q);
 
 /* The solver AUTO resolves to: Cholesky when its band fits the board and its
  * cost N (q Nu + p)^2 stays small, otherwise PCG. */

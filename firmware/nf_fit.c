@@ -3,10 +3,61 @@
 #include "nf_basis.h"
 #include "nf_err.h"
 #include "nf_solve.h"
+#include <stdint.h>
 
 static int finite3(const double *x)
 {
     return x[0] - x[0] == 0.0 && x[1] - x[1] == 0.0 && x[2] - x[2] == 0.0;
+}
+
+/* Random order: a window of points is sorted by tiles of NF_TILE x NF_TILE
+ * knot spans before it is accumulated, so that a tile's stripe rows
+ * ((NF_TILE + q) (NF_TILE + p) rows, 72 KB bicubic) come from memory once
+ * for all its points instead of once per point. Windows shorter than
+ * NF_BIN_MIN points, or ordered (a raster), are accumulated as they come. */
+#define NF_TILE 16
+#define NF_BIN_MIN 1024
+
+/* Lend the raster row buffers and the bins from arena room the solver uses
+ * later (idle while points stream in): at most half the job's solver term
+ * each for the job and for one shard, so nothing is added to the formula. */
+static void take_lent(nf_fit_t *f, nf_arena_t *a)
+{
+    const nf_surf_t *s = f->base;
+    f->row_mark = f->row_top = 0;
+    f->bin_key = f->bin_idx = f->bin_cnt = 0;
+    f->bin_cap = 0;
+    long cap = (f->need_bytes - NF_BYTES_BASE(f->n, s->p, s->q) - NF_ARENA_SLACK) / 2 -
+               8L * NF_ARENA_ALIGN;
+    f->row_mark = nf_arena_mark(a);
+    if (f->acc.fast && !f->acc.rational && cap >= 80L * s->nu) {
+        double *G = nf_arena_doubles(a, (size_t)7 * s->nu),
+               *Gq = nf_arena_doubles(a, (size_t)3 * s->nu);
+        if (G && Gq) {
+            nf_accum_rowbuf(&f->acc, G, Gq);
+            cap -= 80L * s->nu;
+        }
+    }
+    f->bin_tx = (s->nu - s->p + NF_TILE - 1) / NF_TILE;
+    const long tiles = (long)f->bin_tx * ((s->nv - s->q + NF_TILE - 1) / NF_TILE);
+    long w = (cap - 8 * (tiles + 1)) / 8; /* key and index per point */
+    w = w > f->n ? f->n : w;
+    w = w > 0xFFFFFFL ? 0xFFFFFFL : w; /* 24 bits of row index */
+    if (w >= NF_BIN_MIN && tiles > 1) {
+        /* two uint32 arrays of w and the counts, as doubles from the arena */
+        double *k = nf_arena_doubles(a, (size_t)(w + 1) / 2),
+               *x = nf_arena_doubles(a, (size_t)(w + 1) / 2),
+               *c = nf_arena_doubles(a, (size_t)(tiles + 1));
+        if (k && x && c) {
+            f->bin_key = (uint32_t *)(void *)k;
+            f->bin_idx = (uint32_t *)(void *)x;
+            f->bin_cnt = (uint32_t *)(void *)c;
+            f->bin_cap = w;
+            f->bin_tiles = tiles;
+        }
+    }
+    if (nf_arena_mark(a) != f->row_mark)
+        f->row_top = nf_arena_mark(a);
 }
 
 int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, nf_arena_t *a)
@@ -38,6 +89,8 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
         return NF_EARENA; /* unreachable when the formula is right */
     nf_stripe_init(&f->A, base->nu, base->nv, base->p, base->q, S);
     nf_accum_init(&f->acc, base, &f->A, f->rhs);
+    f->shard = 0;
+    f->shard_mark = 0;
     for (long i = 0; i < 3 * n; i++)
         f->P[i] = base->cp[i]; /* P0: the nominal net is the start and the beta target */
     f->base = base;
@@ -53,6 +106,59 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
     nf_surf_domain(base, &f->dom[0], &f->dom[1], &f->dom[2], &f->dom[3]);
     f->dtol[0] = 1e-12 * (f->dom[1] - f->dom[0]);
     f->dtol[1] = 1e-12 * (f->dom[3] - f->dom[2]);
+    /* Row buffers for raster rows of one v (10 Nu doubles, at most 2.5 N
+     * since Nv >= 4, against the smallest solver term 6N): returned at
+     * nf_fit_finish, before any solve. */
+    take_lent(f, a);
+    return NF_OK;
+}
+
+int nf_fit_shard_init(nf_fit_t *sh, const nf_fit_t *f, nf_arena_t *a)
+{
+    if (!sh || !f || !a || f->shard || f->finished)
+        return NF_EARG;
+    const nf_surf_t *s = f->base;
+    const long more = nf_fit_shard_bytes(s->nu, s->nv, s->p, s->q);
+    if (more < 0 || f->need_bytes < 0 || more > NF_ARENA_BYTES - f->need_bytes)
+        return NF_EBUDGET;
+    if ((size_t)more > nf_arena_room(a))
+        return NF_EARENA;
+    *sh = *f;
+    sh->shard = 1;
+    sh->arena = a;
+    sh->shard_mark = nf_arena_mark(a);
+    double *S = nf_arena_doubles(a, (size_t)(f->n * f->A.K));
+    sh->rhs = nf_arena_doubles(a, (size_t)(3 * f->n));
+    if (!S || !sh->rhs) {
+        nf_arena_release(a, sh->shard_mark);
+        return NF_EARENA;
+    }
+    sh->P = 0;
+    nf_stripe_init(&sh->A, s->nu, s->nv, s->p, s->q, S);
+    nf_accum_init(&sh->acc, s, &sh->A, sh->rhs);
+    sh->npoints = 0;
+    sh->sumw = 0.0;
+    sh->pf_l = sh->pf_k = -1;
+    take_lent(sh, a); /* from room the job's solver uses later */
+    return NF_OK;
+}
+
+int nf_fit_shard_merge(nf_fit_t *f, nf_fit_t *sh)
+{
+    if (!f || !sh || !sh->shard || f->shard || f->finished || sh->base != f->base)
+        return NF_EARG;
+    nf_accum_flush(&sh->acc);
+    /* f's open run stays open: sums commute, only rounding order changes. */
+    const long nS = f->n * f->A.K;
+    for (long i = 0; i < nS; i++)
+        f->A.S[i] += sh->A.S[i];
+    for (long i = 0; i < 3 * f->n; i++)
+        f->rhs[i] += sh->rhs[i];
+    f->npoints += sh->npoints;
+    f->sumw += sh->sumw;
+    nf_accum_rowbuf(&sh->acc, 0, 0);
+    nf_arena_release(sh->arena, sh->shard_mark);
+    sh->finished = 1;
     return NF_OK;
 }
 
@@ -73,56 +179,225 @@ int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt)
     return NF_OK;
 }
 
-/* Points this far ahead have their stripe rows prefetched: in random order
- * every point's 16 rows are cache misses, and the loads of later points can
- * overlap the arithmetic of this one. */
-#define NF_PREFETCH_AHEAD 6
+/* nf_fit_add_rows works in batches of NF_FIT_BATCH points: the spans of
+ * batch i + 1 are found (and, when the store exceeds the cache, their stripe
+ * rows prefetched) before batch i is accumulated with the spans it already
+ * has, so that the loads of the next points overlap this batch's arithmetic
+ * and no span is searched twice. */
+#define NF_FIT_BATCH 8
 
-static void prefetch_point(nf_fit_t *f, double u, double v)
+typedef struct fit_batch {
+    int n;
+    int l[NF_FIT_BATCH], k[NF_FIT_BATCH]; /* -1: nf_fit_add checks and reports it */
+    double u[NF_FIT_BATCH], v[NF_FIT_BATCH];
+} fit_batch_t;
+
+static void prefetch_rows(const nf_fit_t *f, int l, int k)
 {
 #if defined(__GNUC__)
     const nf_surf_t *s = f->base;
-    if (!(u >= f->dom[0] && u <= f->dom[1] && v >= f->dom[2] && v <= f->dom[3]))
-        return; /* nf_fit_add reports it */
-    /* Raster scans stay in one span for many points, then step to the next
-     * span in u, whose rows follow in memory: the hardware prefetcher has
-     * them. Only a jump elsewhere is worth two searches and the prefetches. */
-    if (f->pf_l >= 0 && v >= s->V[f->pf_k] && v < s->V[f->pf_k + 1] && u >= s->U[f->pf_l] &&
-        u < s->U[f->pf_l + 2 < s->nu + 1 ? f->pf_l + 2 : s->nu]) {
-        if (u >= s->U[f->pf_l + 1])
-            f->pf_l++;
-        return;
-    }
-    const int l = nf_find_span(s->nu - 1, s->p, u, s->U),
-              k = nf_find_span(s->nv - 1, s->q, v, s->V);
-    f->pf_l = l;
-    f->pf_k = k;
     const long base = (l - s->p) + (long)(k - s->q) * s->nu, K = f->A.K;
+    const long bytes = (long)(s->p + 1) * K * (long)sizeof(double);
     for (int b = 0; b <= s->q; b++) {
         const char *a = (const char *)(f->A.S + (base + (long)b * s->nu) * K);
-        const long bytes = (long)(s->p + 1) * K * (long)sizeof(double);
         for (long o = 0; o < bytes; o += 64)
             __builtin_prefetch(a + o, 1, 3);
+        __builtin_prefetch(a + bytes - 1, 1, 3);
+        const char *r = (const char *)(f->rhs + 3 * (base + (long)b * s->nu));
+        __builtin_prefetch(r, 1, 3);
+        __builtin_prefetch(r + 24 * (s->p + 1) - 1, 1, 3);
     }
 #else
     (void)f;
-    (void)u;
-    (void)v;
+    (void)l;
+    (void)k;
 #endif
+}
+
+static void batch_prepare(nf_fit_t *f, const double *rows, int n, fit_batch_t *bt)
+{
+    bt->n = n;
+    for (int t = 0; t < n; t++) {
+        const double *r = rows + 5 * t;
+        double u = r[0], v = r[1];
+        bt->l[t] = bt->k[t] = -1;
+        if (!finite3(r + 2) || u - u != 0.0 || v - v != 0.0 || u < f->dom[0] - f->dtol[0] ||
+            u > f->dom[1] + f->dtol[0] || v < f->dom[2] - f->dtol[1] || v > f->dom[3] + f->dtol[1])
+            continue; /* nf_fit_add reports it, in order */
+        u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
+        v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
+        int l, k;
+        nf_accum_spans(&f->acc, u, v, f->pf_l, f->pf_k, &l, &k);
+        /* A raster stays in the span or steps to the next in u, whose rows
+         * follow in memory (the hardware prefetcher has them): only a jump
+         * elsewhere is worth the prefetches. */
+        if (f->prefetch && !(k == f->pf_k && (l == f->pf_l || l == f->pf_l + 1)))
+            prefetch_rows(f, l, k);
+        f->pf_l = l;
+        f->pf_k = k;
+        bt->l[t] = l;
+        bt->k[t] = k;
+        bt->u[t] = u;
+        bt->v[t] = v;
+    }
+}
+
+static int add_batched(nf_fit_t *f, const double *rows, long n, long *bad)
+{
+    fit_batch_t bt[2];
+    int cur = 0;
+    batch_prepare(f, rows, (int)(n < NF_FIT_BATCH ? n : NF_FIT_BATCH), &bt[0]);
+    for (long i0 = 0; i0 < n; i0 += NF_FIT_BATCH, cur ^= 1) {
+        const long next = i0 + NF_FIT_BATCH;
+        if (next < n)
+            batch_prepare(f, rows + 5 * next,
+                          (int)(n - next < NF_FIT_BATCH ? n - next : NF_FIT_BATCH), &bt[cur ^ 1]);
+        const fit_batch_t *b = &bt[cur];
+        for (int t = 0; t < b->n; t++) {
+            const double *r = rows + 5 * (i0 + t);
+            if (b->l[t] >= 0) {
+                nf_accum_point_at(&f->acc, b->u[t], b->v[t], b->l[t], b->k[t], r + 2, 1.0);
+                f->npoints++;
+                f->sumw += 1.0;
+                continue;
+            }
+            int rc = nf_fit_add(f, r[0], r[1], r + 2, 1.0);
+            if (rc) {
+                if (bad)
+                    *bad = i0 + t;
+                return rc;
+            }
+        }
+    }
+    return NF_OK;
+}
+
+/* Spans of row r, clamped, or 0 when nf_fit_add must judge it. */
+static inline int row_spans(nf_fit_t *f, const double *r, double *u, double *v, int *l, int *k)
+{
+    double a = r[0], b = r[1];
+    if (!finite3(r + 2) || a - a != 0.0 || b - b != 0.0 || a < f->dom[0] - f->dtol[0] ||
+        a > f->dom[1] + f->dtol[0] || b < f->dom[2] - f->dtol[1] || b > f->dom[3] + f->dtol[1])
+        return 0;
+    *u = a < f->dom[0] ? f->dom[0] : (a > f->dom[1] ? f->dom[1] : a);
+    *v = b < f->dom[2] ? f->dom[2] : (b > f->dom[3] ? f->dom[3] : b);
+    nf_accum_spans(&f->acc, *u, *v, *l, *k, l, k);
+    return 1;
+}
+
+/* n <= bin_cap rows: the valid prefix counting-sorted by tile and
+ * accumulated tile by tile (Eq. 9's sums in another order), unless it is
+ * ordered already; then the first bad row, if any, is reported. */
+static int add_binned(nf_fit_t *f, const double *rows, long n, long *bad)
+{
+    const nf_surf_t *s = f->base;
+    int l = -1, k = -1, pl = -1, pk = -1;
+    long m = 0, jumps = 0;
+    for (; m < n; m++) {
+        double u, v;
+        if (!row_spans(f, rows + 5 * m, &u, &v, &l, &k))
+            break;
+        jumps += !(k == pk && (l == pl || l == pl + 1));
+        pl = l;
+        pk = k;
+        f->bin_key[m] = (uint32_t)((l - s->p) / NF_TILE + ((k - s->q) / NF_TILE) * (long)f->bin_tx);
+        /* the row, and its spans as offsets in the tile: 24 + 4 + 4 bits */
+        const uint32_t dl = (uint32_t)((l - s->p) % NF_TILE), dk = (uint32_t)((k - s->q) % NF_TILE);
+        f->bin_idx[m] = (uint32_t)m | dl << 24 | dk << 28;
+    }
+    const int p = s->p, q = s->q, tx = f->bin_tx;
+    if (jumps * 4 < m) { /* a raster: its order is the better one; spans from key and idx */
+        const uint32_t *key = f->bin_key, *idx = f->bin_idx;
+        for (long t = 0; t < m; t++) {
+            const double *r = rows + 5 * t;
+            const uint32_t e = idx[t], T = key[t];
+            double u = r[0], v = r[1];
+            u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
+            v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
+            nf_accum_point_at(&f->acc, u, v, p + (int)(T % tx) * NF_TILE + (int)(e >> 24 & 15u),
+                              q + (int)(T / tx) * NF_TILE + (int)(e >> 28), r + 2, 1.0);
+        }
+        f->npoints += m;
+        f->sumw += (double)m;
+    } else {
+        /* Counting sort in place (American flag): cnt = tile starts,
+         * nxt = next free slot of each tile; key and idx swap together. */
+        uint32_t *cnt = f->bin_cnt, *nxt = f->bin_cnt + f->bin_tiles + 1, *key = f->bin_key,
+                 *idx = f->bin_idx;
+        for (long t = 0; t <= f->bin_tiles; t++)
+            cnt[t] = 0;
+        for (long t = 0; t < m; t++)
+            cnt[key[t] + 1]++;
+        for (long t = 0; t < f->bin_tiles; t++)
+            cnt[t + 1] += cnt[t];
+        for (long t = 0; t < f->bin_tiles; t++)
+            nxt[t] = cnt[t];
+        for (long T = 0; T < f->bin_tiles; T++)
+            while (nxt[T] < cnt[T + 1]) {
+                const uint32_t at = nxt[T], kt = key[at];
+                if (kt == (uint32_t)T) {
+                    nxt[T]++;
+                    continue;
+                }
+                const uint32_t to = nxt[kt]++, e = idx[at];
+                key[at] = key[to];
+                idx[at] = idx[to];
+                key[to] = kt;
+                idx[to] = e;
+            }
+        for (long T = 0; T < f->bin_tiles; T++) {
+            const int l0 = p + (int)(T % f->bin_tx) * NF_TILE,
+                      k0 = q + (int)(T / f->bin_tx) * NF_TILE;
+            for (uint32_t t = T ? cnt[T] : 0; t < cnt[T + 1]; t++) {
+                const uint32_t e = idx[t];
+                const double *r = rows + 5 * (long)(e & 0xFFFFFFu);
+                double u = r[0], v = r[1];
+                u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
+                v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
+                nf_accum_point_at(&f->acc, u, v, l0 + (int)(e >> 24 & 15u), k0 + (int)(e >> 28),
+                                  r + 2, 1.0);
+            }
+        }
+        f->npoints += m;
+        f->sumw += (double)m;
+    }
+    if (m < n) {
+        int rc = nf_fit_add(f, rows[5 * m], rows[5 * m + 1], rows + 5 * m + 2, 1.0);
+        if (bad)
+            *bad = m;
+        if (rc)
+            return rc;
+        long at = -1; /* nf_fit_add took it after all: go on */
+        rc = add_binned(f, rows + 5 * (m + 1), n - m - 1, &at);
+        if (rc && bad)
+            *bad = m + 1 + at;
+        return rc;
+    }
+    return NF_OK;
 }
 
 int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
 {
-    for (long i = 0; i < n; i++) {
-        const double *r = rows + 5 * i;
-        if (i + NF_PREFETCH_AHEAD < n && f->prefetch)
-            prefetch_point(f, r[5 * NF_PREFETCH_AHEAD], r[5 * NF_PREFETCH_AHEAD + 1]);
-        int rc = nf_fit_add(f, r[0], r[1], r + 2, 1.0);
+    if (n > 0 && f->finished) {
+        if (bad)
+            *bad = 0;
+        return NF_ESTATE;
+    }
+    for (long i = 0; i < n;) {
+        long w = n - i, at = -1;
+        int rc;
+        if (f->bin_cap > 0 && w >= NF_BIN_MIN) {
+            w = w > f->bin_cap ? f->bin_cap : w;
+            rc = add_binned(f, rows + 5 * i, w, &at);
+        } else {
+            rc = add_batched(f, rows + 5 * i, w, &at);
+        }
         if (rc) {
             if (bad)
-                *bad = i;
+                *bad = i + at;
             return rc;
         }
+        i += w;
     }
     return NF_OK;
 }
@@ -167,9 +442,16 @@ static void add_alpha(nf_fit_t *f)
 
 int nf_fit_finish(nf_fit_t *f)
 {
-    if (f->finished)
+    if (f->finished || f->shard)
         return NF_ESTATE;
     nf_accum_flush(&f->acc);
+    if (f->row_top) { /* give the lent buffers back to the solver (take_lent) */
+        nf_accum_rowbuf(&f->acc, 0, 0);
+        f->bin_cap = 0;
+        if (nf_arena_mark(f->arena) == f->row_top)
+            nf_arena_release(f->arena, f->row_mark);
+        f->row_top = 0;
+    }
     const int K = f->A.K;
     if (f->prm.alpha == 0.0 && f->prm.beta == 0.0) {
         for (long i = 0; i < f->n; i++)
@@ -195,7 +477,7 @@ int nf_fit_finish(nf_fit_t *f)
 
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st)
 {
-    if (!f->finished)
+    if (!f->finished || f->shard)
         return NF_ESTATE;
     const nf_surf_t *s = f->base;
     if (solver == NF_SOLVER_AUTO)

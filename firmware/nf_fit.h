@@ -11,6 +11,7 @@
 #include "nf_budget.h"
 #include "nf_stripe.h"
 #include "nf_surf.h"
+#include <stdint.h>
 
 typedef struct nf_fit_params {
     double alpha;       /* Greville criterion weight (paper default 0.1) */
@@ -45,17 +46,23 @@ typedef struct nf_fit {
     double *rhs; /* 3N: R^T Q, then + beta P0 at finish */
     double *P;   /* 3N: solution, starts at P0 */
     nf_arena_t *arena;
-    long n;          /* control points */
-    long npoints;    /* points accumulated */
-    double sumw;     /* sum of point weights */
-    int finished;    /* alpha and beta terms added */
-    long bad_index;  /* control point named by NF_ENODATA / NF_ESINGULAR, else -1 */
-    long need_bytes; /* bytes the job needs (set by nf_fit_init even on refusal) */
-    double dom[4];   /* u0 u1 v0 v1 */
-    double dtol[2];  /* rounding allowance at the domain ends */
-    nf_accum_t acc;  /* hot-loop state: fixed size, see nf_accum.h */
-    int prefetch;    /* nf_fit_add_rows prefetches stripe rows ahead */
-    int pf_l, pf_k;  /* span last prefetched */
+    long n;                   /* control points */
+    long npoints;             /* points accumulated */
+    double sumw;              /* sum of point weights */
+    int finished;             /* alpha and beta terms added */
+    long bad_index;           /* control point named by NF_ENODATA / NF_ESINGULAR, else -1 */
+    long need_bytes;          /* bytes the job needs (set by nf_fit_init even on refusal) */
+    double dom[4];            /* u0 u1 v0 v1 */
+    double dtol[2];           /* rounding allowance at the domain ends */
+    nf_accum_t acc;           /* hot-loop state: fixed size, see nf_accum.h */
+    int prefetch;             /* nf_fit_add_rows prefetches stripe rows ahead */
+    int pf_l, pf_k;           /* spans of the last point prepared (nf_fit_add_rows) */
+    size_t row_mark, row_top; /* arena marks around the lent buffers (0: none) */
+    uint32_t *bin_key, *bin_idx, *bin_cnt; /* random order: tile per point, order, counts */
+    long bin_cap, bin_tiles;               /* points per window (0: no bins), tiles */
+    int bin_tx;                            /* tiles along u */
+    int shard;                             /* 1: a shard (nf_fit_shard_init), no P, no solve */
+    size_t shard_mark;                     /* its arena mark before its storage */
 } nf_fit_t;
 
 /* Check the base surface and the budget, then take the job's storage from
@@ -68,8 +75,23 @@ int nf_fit_init(nf_fit_t *f, const nf_surf_t *base, const nf_fit_params_t *prm, 
 int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt);
 
 /* Accumulate n points given as rows of 5 doubles (u v x y z). On error,
- * *bad is the index of the offending row. */
+ * *bad is the index of the offending row; the rows before it are in, none
+ * after. Spans are found 8 points ahead (their stripe rows prefetched when
+ * the store exceeds the cache), and windows of random order are sorted by
+ * tiles of 16 x 16 spans first (nf_fit.c): larger n bins better. */
 int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad);
+
+/* A shard: a further accumulator of job f over its own stripes and R^T Q,
+ * for a second core (threads live in host code: each calls nf_fit_add_rows
+ * on its own nf_fit_t). Its storage comes from arena a (the job's arena or
+ * another): NF_EBUDGET when the job plus the shard exceed the board
+ * (f->need_bytes + nf_fit_shard_bytes), NF_EARENA when a lacks the room.
+ * The shard accepts nf_fit_add and nf_fit_add_rows only. */
+int nf_fit_shard_init(nf_fit_t *sh, const nf_fit_t *f, nf_arena_t *a);
+
+/* Sum shard sh into job f (Eq. 9: R^T R and R^T Q are sums over points, in
+ * any grouping) and return sh's storage to its arena. Before nf_fit_finish. */
+int nf_fit_shard_merge(nf_fit_t *f, nf_fit_t *sh);
 
 /* Add the alpha and beta terms (Eq. 7). Refuses (NF_ENODATA, bad_index set)
  * when alpha = beta = 0 and a control point has no data under it. */

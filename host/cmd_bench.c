@@ -2,6 +2,7 @@
  * on generated, seeded data streamed without files (issue 6). Prints
  * figures; asserts nothing. Nets are square, bicubic, uniform knots. */
 #include "bench_project.h"
+#include "cf_accum.h"
 #include "cf_cli.h"
 #include "cf_surf.h"
 #include "nf_err.h"
@@ -147,7 +148,7 @@ static int parse(int argc, char **argv, bench_opts_t *o)
         else if (!strcmp(a, "--cp"))
             bad = cli_int(v, 4, NF_MAX_CP, &o->cp);
         else if (!strcmp(a, "--threads"))
-            bad = cli_int(v, 1, 64, &o->threads);
+            bad = cli_int(v, 1, 2, &o->threads);
         else if (!strcmp(a, "--degree"))
             bad = cli_int(v, 1, NF_MAX_DEGREE, &o->degree);
         else if (!strcmp(a, "--out"))
@@ -175,7 +176,7 @@ int cmd_bench(int argc, char **argv)
     if (argc < 2)
         return cli_error("bench", CLI_USAGE,
                          "usage: cellfit bench accumulate|solve|fit "
-                         "[--points M] [--cp N] [--order raster|random] "
+                         "[--points M] [--cp N] [--order raster|random] [--threads 1|2] "
                          "[--solver S] [--json]");
     const char *what = argv[1];
     if (!strcmp(what, "project")) /* host/bench_project.c */
@@ -197,6 +198,14 @@ int cmd_bench(int argc, char **argv)
     if (make_net(&o, &s))
         return cli_error("bench", CLI_FAIL, "out of memory");
     long need = nf_fit_bytes(s.nu, s.nv, s.p, s.q, o.solver);
+    /* --threads 2: a second accumulator (nf_fit_shard_init), in the formula. */
+    long shard = o.threads > 1 ? nf_fit_shard_bytes(s.nu, s.nv, s.p, s.q) : 0;
+    if (need >= 0 && shard >= 0 && need <= NF_ARENA_BYTES && shard > NF_ARENA_BYTES - need) {
+        cf_surf_free(&s);
+        return cli_error("bench", CLI_USAGE, "net on %ld threads needs %ld bytes, board allows %ld",
+                         o.threads, need + shard, (long)NF_ARENA_BYTES);
+    }
+    need += shard;
     if (need < 0 || need > NF_ARENA_BYTES) {
         cf_surf_free(&s);
         return cli_error("bench", CLI_USAGE, "net needs %ld bytes, board allows %ld", need,
@@ -215,16 +224,25 @@ int cmd_bench(int argc, char **argv)
     nf_fit_t f;
     nf_fit_params_t prm = {o.alpha, o.beta, o.solver};
     rc = nf_fit_init(&f, &s, &prm, &ar);
-    double t_acc = 0.0, t_gen = 0.0, t_solve = 0.0;
+    nf_fit_t sh;
+    if (!rc && o.threads > 1)
+        rc = nf_fit_shard_init(&sh, &f, &ar);
+    double t_acc = 0.0, t_gen = 0.0, t_solve = 0.0, t_merge = 0.0;
     nf_solve_stats_t st = {o.solver, 0, 0.0};
     for (long k = 0; !rc && k < o.points; k += CHUNK) {
         long n = o.points - k < CHUNK ? o.points - k : CHUNK;
         double t0 = cli_now();
         gen_chunk(&o, k, n, rows);
         double t1 = cli_now();
-        rc = nf_fit_add_rows(&f, rows, n, NULL);
+        rc = cf_accum_rows(&f, o.threads > 1 ? &sh : NULL, rows, n, NULL);
         t_acc += cli_now() - t1;
         t_gen += t1 - t0;
+    }
+    if (!rc && o.threads > 1) { /* the second core's sums join the job's: part of the time */
+        double t0 = cli_now();
+        rc = nf_fit_shard_merge(&f, &sh);
+        t_merge = cli_now() - t0;
+        t_acc += t_merge;
     }
     if (!rc && exp) {
         rc = nf_fit_finish(&f);
@@ -258,8 +276,10 @@ int cmd_bench(int argc, char **argv)
         cli_json_int(&j, "control_points", f.n);
         cli_json_int(&j, "degree", o.degree);
         cli_json_str(&j, "order", o.random ? "random" : "raster");
+        cli_json_int(&j, "threads", o.threads);
         if (acc || fit) {
             cli_json_num(&j, "accumulate_seconds", t_acc);
+            cli_json_num(&j, "merge_seconds", t_merge);
             cli_json_num(&j, "points_per_s", (double)o.points / t_acc);
         }
         if (sol || fit) {
@@ -275,8 +295,9 @@ int cmd_bench(int argc, char **argv)
         cli_json_int(&j, "peak_rss_bytes", peak_rss());
         cli_json_end(&j);
     } else {
-        printf("bench %s: %ld points, %ld control points, degree %ld, %s order\n", what, o.points,
-               f.n, o.degree, o.random ? "random" : "raster");
+        printf("bench %s: %ld points, %ld control points, degree %ld, %s order, %ld thread%s\n",
+               what, o.points, f.n, o.degree, o.random ? "random" : "raster", o.threads,
+               o.threads > 1 ? "s" : "");
         if (acc || fit)
             printf("  accumulate %.4f s = %.3g points/s\n", t_acc, (double)o.points / t_acc);
         if (sol || fit)

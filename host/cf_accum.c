@@ -1,0 +1,40 @@
+/* cf_accum.c: a chunk of points split between the job and its shard, the
+ * shard's half on a second thread (firmware/ has no threads). */
+#include "cf_accum.h"
+#include <pthread.h>
+
+typedef struct half {
+    nf_fit_t *f;
+    const double *rows;
+    long n, bad;
+    int rc;
+} half_t;
+
+static void *run_half(void *arg)
+{
+    half_t *h = arg;
+    h->bad = -1;
+    h->rc = nf_fit_add_rows(h->f, h->rows, h->n, &h->bad);
+    return 0;
+}
+
+int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, const double *rows, long n, long *bad)
+{
+    if (!sh || n < 2)
+        return nf_fit_add_rows(f, rows, n, bad);
+    const long n1 = n / 2;
+    half_t a = {f, rows, n1, -1, 0}, b = {sh, rows + 5 * n1, n - n1, -1, 0};
+    pthread_t th;
+    if (pthread_create(&th, 0, run_half, &b))
+        return nf_fit_add_rows(f, rows, n, bad); /* no thread: one core */
+    run_half(&a);
+    pthread_join(th, 0);
+    if (a.rc) {
+        if (bad)
+            *bad = a.bad;
+        return a.rc;
+    }
+    if (b.rc && bad)
+        *bad = n1 + b.bad;
+    return b.rc;
+}

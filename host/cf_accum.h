@@ -1,0 +1,14 @@
+/* cf_accum.h: accumulation of a chunk of points on two cores. The job f
+ * takes the first half, its shard sh (nf_fit_shard_init) the second, each
+ * on its own thread and its own stripes; nf_fit_shard_merge sums them at the
+ * end. Halves stay contiguous, so a raster keeps its rows (nf_accum.h). */
+#ifndef CF_ACCUM_H
+#define CF_ACCUM_H
+
+#include "nf_fit.h"
+
+/* n rows of 5 doubles (u v x y z). sh NULL: f alone, on this thread. On
+ * error *bad is the index (into rows) of the first offending row found. */
+int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, const double *rows, long n, long *bad);
+
+#endif
