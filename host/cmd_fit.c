@@ -34,22 +34,49 @@ static int projector_init(projector_t *pj, const nf_surf_t *s)
     return cf_seedgrid_init(pj, s, 8);
 }
 
-/* rows of x y z in, rows of u v x y z out (distance in *dist if asked). */
-static void project_rows(projector_t *pj, const double *xyz, long n, double *uvxyz, double *dist)
+/* What projection saw in a pass (Piegl & Tiller's parameterisation step):
+ * feet clamped to the domain boundary, and points farther than the limit
+ * from the surface (measured off the part, or the wrong base), which are
+ * flagged and, with --drop-far, left out of the fit. */
+typedef struct proj_count {
+    double far;   /* limit, mm */
+    int drop_far; /* 1: far points are not fitted */
+    long clamped, nfar, dropped;
+    long *src; /* per kept row, its index in the batch (for messages) */
+} proj_count_t;
+
+/* rows of x y z in, rows of u v x y z out (distance in *dist if asked);
+ * returns the rows written: all n, less the far ones when pc drops them. */
+static long project_rows(projector_t *pj, const double *xyz, long n, double *uvxyz, double *dist,
+                         proj_count_t *pc)
 {
+    long m = 0;
     for (long k = 0; k < n; k++) {
         const double *Q = xyz + 3 * k;
         nf_proj_t pr;
         cf_seedgrid_project(pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
-        double *r = uvxyz + 5 * k;
+        if (pc) {
+            pc->clamped += pr.clamped != 0;
+            if (fabs(pr.dist) > pc->far) {
+                pc->nfar++;
+                if (pc->drop_far) {
+                    pc->dropped++;
+                    continue;
+                }
+            }
+            pc->src[m] = k;
+        }
+        double *r = uvxyz + 5 * m;
+        if (dist)
+            dist[m] = pr.dist;
+        m++;
         r[0] = pr.u;
         r[1] = pr.v;
         r[2] = Q[0];
         r[3] = Q[1];
         r[4] = Q[2];
-        if (dist)
-            dist[k] = pr.dist;
     }
+    return m;
 }
 
 #define MAX_ROUNDS 64
@@ -62,6 +89,8 @@ typedef struct fit_opts {
     long max_iter;
     nf_solver_t solver;
     double dtol, within; /* --tol (mm, 0: no loop) and --within (percent) */
+    double far;          /* --far: distance limit of projected points, mm (0: 5 % of the part) */
+    int drop_far;        /* --drop-far */
     long max_cp, max_rounds;
     cf_refine_t refine;
     int robust;
@@ -91,6 +120,8 @@ static int parse(int argc, char **argv, fit_opts_t *o)
             o->json = 1, takes = 0;
         else if (!strcmp(a, "--robust"))
             o->robust = 1, takes = 0;
+        else if (!strcmp(a, "--drop-far"))
+            o->drop_far = 1, takes = 0;
         else if (!v)
             return cli_error("fit", CLI_USAGE, "option %s needs a value", a);
         else if (!strcmp(a, "--base"))
@@ -117,6 +148,9 @@ static int parse(int argc, char **argv, fit_opts_t *o)
         } else if (!strcmp(a, "--tol")) {
             if (cli_double(v, &o->dtol) || !(o->dtol > 0))
                 return cli_error("fit", CLI_USAGE, "--tol '%s': need a distance > 0 (mm)", v);
+        } else if (!strcmp(a, "--far")) {
+            if (cli_double(v, &o->far) || !(o->far > 0))
+                return cli_error("fit", CLI_USAGE, "--far '%s': need a distance > 0 (mm)", v);
         } else if (!strcmp(a, "--within")) {
             if (cli_double(v, &o->within) || !(o->within > 0) || o->within > 100)
                 return cli_error("fit", CLI_USAGE, "--within '%s': need a percentage in (0, 100]",
@@ -155,6 +189,10 @@ static int parse(int argc, char **argv, fit_opts_t *o)
     }
     if (!o->base || !o->points || !o->out)
         return cli_error("fit", CLI_USAGE, "need --base BASE.igs --points FILE --out OUT.igs");
+    if (o->uv && (o->far > 0 || o->drop_far))
+        return cli_error("fit", CLI_USAGE,
+                         "--far and --drop-far apply to projected points: "
+                         "not with --uv");
     if (o->uv && o->reparam)
         return cli_error("fit", CLI_USAGE, "--reparam projects x y z points: not with --uv");
     if (loop_opt && !(o->dtol > 0))
@@ -237,7 +275,7 @@ static int measure(cf_points_t *r, const nf_surf_t *s, projector_t *pj, double t
     while ((got = cf_points_read(r, buf, BATCH, msg, ml)) > 0) {
         const double *uv = buf;
         if (pj) {
-            project_rows(pj, buf, got, rows, NULL);
+            project_rows(pj, buf, got, rows, NULL, NULL);
             uv = rows;
         }
         for (long k = 0; k < got; k++) {
@@ -261,6 +299,20 @@ static int measure(cf_points_t *r, const nf_surf_t *s, projector_t *pj, double t
     return CLI_OK;
 }
 
+/* Diagonal of the bounding box of s's control points (the part's size). */
+static double net_diagonal(const nf_surf_t *s)
+{
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (long k = 0; k < (long)s->nu * s->nv; k++)
+        for (int c = 0; c < 3; c++) {
+            double x = s->cp[3 * k + c];
+            lo[c] = x < lo[c] ? x : lo[c];
+            hi[c] = x > hi[c] ? x : hi[c];
+        }
+    return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
 /* Peak resident set of this process (getrusage reports KiB on Linux). */
 static long peak_rss(void)
 {
@@ -272,7 +324,8 @@ static long peak_rss(void)
 
 typedef struct pass_out {
     long points;
-    long rejected; /* robust passes: points given weight 0 */
+    long rejected;              /* robust passes: points given weight 0 */
+    long clamped, far, dropped; /* projection: feet on the boundary, points beyond --far */
     nf_solve_stats_t st;
     double t_acc, t_solve;
 } pass_out_t;
@@ -311,18 +364,19 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
         cf_seedgrid_free(&pj);
         return cli_error("fit", CLI_USAGE, "%s: cannot read the points again", o->points);
     }
-    long got;
+    long got, src[BATCH];
+    proj_count_t pc = {o->far, o->drop_far, 0, 0, 0, src};
     while ((got = cf_points_read(pr, buf, BATCH, msg, sizeof msg)) > 0) {
-        long bad = -1;
+        long bad = -1, n = got;
         const double *uv = buf;
         if (proj_onto) {
-            project_rows(&pj, buf, got, rows, NULL);
+            n = project_rows(&pj, buf, got, rows, NULL, &pc);
             uv = rows;
         }
         if (!wt)
-            rc = nf_fit_add_rows(&f, uv, got, &bad);
+            rc = nf_fit_add_rows(&f, uv, n, &bad);
         else
-            for (long k = 0; k < got && !rc; k++) {
+            for (long k = 0; k < n && !rc; k++) {
                 const double *q = uv + 5 * k;
                 double w = nf_tukey(dist_at(wt->prev, q), wt->c);
                 if (w > 0)
@@ -333,7 +387,7 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
             }
         if (rc) {
             const double *q = uv + 5 * bad;
-            long line = line_of_point(pr, po->points + bad);
+            long line = line_of_point(pr, po->points + (proj_onto ? src[bad] : bad));
             double u0, u1, v0, v1;
             nf_surf_domain(base, &u0, &u1, &v0, &v1);
             if (rc == NF_EDOMAIN)
@@ -349,10 +403,17 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
         po->points += got;
     }
     cf_seedgrid_free(&pj);
+    po->clamped = pc.clamped;
+    po->far = pc.nfar;
+    po->dropped = pc.dropped;
     if (got < 0)
         return cli_error("fit", CLI_USAGE, "%s", msg);
     if (po->points == 0)
         return cli_error("fit", CLI_USAGE, "%s: no points", o->points);
+    if (po->dropped == po->points)
+        return cli_error("fit", CLI_USAGE,
+                         "%s: all %ld points are farther than %g mm from %s (--far): wrong base?",
+                         o->points, po->points, o->far, o->base);
     double t1 = cli_now();
     rc = nf_fit_finish(&f);
     nf_solve_opts_t so = {o->tol, (int)o->max_iter, 1};
@@ -389,6 +450,8 @@ int cmd_fit(int argc, char **argv)
     rc = cf_iges_read(o.base, (int)o.entity, &base, msg, sizeof msg);
     if (rc)
         return cli_error("fit", CLI_USAGE, "%s", msg);
+    if (!(o.far > 0)) /* default: 5 % of the diagonal of the base's control net */
+        o.far = 0.05 * net_diagonal(&base);
 
     long need = nf_fit_bytes(base.nu, base.nv, base.p, base.q, o.solver);
     nf_solver_t used =
@@ -417,7 +480,7 @@ int cmd_fit(int argc, char **argv)
     double *srmem = NULL;
     int ec = CLI_OK, met = 0, nr = 0;
     cf_round_t rounds[MAX_ROUNDS];
-    pass_out_t po = {0, 0, {NF_SOLVER_AUTO, 0, 0.0}, 0.0, 0.0};
+    pass_out_t po = {0, 0, 0, 0, 0, {NF_SOLVER_AUTO, 0, 0.0}, 0.0, 0.0};
     double t_acc = 0.0, t_solve = 0.0, best_within = -1.0, best_rms = 0.0, c = 0.0;
     resid_t res, best_res;
     nf_solve_stats_t best_st = po.st;
@@ -571,6 +634,12 @@ int cmd_fit(int argc, char **argv)
         cli_json_num(&j, "beta", o.beta);
         cli_json_str(&j, "parameters", o.uv ? "given" : "projected");
         cli_json_int(&j, "reparam", o.reparam);
+        if (!o.uv) {
+            cli_json_int(&j, "clamped", po.clamped);
+            cli_json_num(&j, "far_limit", o.far);
+            cli_json_int(&j, "far", po.far);
+            cli_json_int(&j, "dropped", po.dropped);
+        }
         cli_json_str(&j, "solver", nf_solver_name(best_st.solver));
         cli_json_int(&j, "iterations", best_st.iterations);
         cli_json_num(&j, "rel_residual", best_st.rel_residual);
@@ -606,6 +675,11 @@ int cmd_fit(int argc, char **argv)
         printf("  parameters %s", o.uv ? "given (--uv)" : "by projection onto the base");
         if (o.reparam)
             printf(", then %ld reparameterisation pass%s", o.reparam, o.reparam > 1 ? "es" : "");
+        if (!o.uv)
+            printf("\n  projection: %ld feet clamped to the boundary, %ld points farther than "
+                   "%g mm (%s)",
+                   po.clamped, po.far, o.far,
+                   o.drop_far ? "dropped" : "kept; --drop-far drops them");
         printf("\n  alpha %g  beta %g  solver %s  iterations %d  relative residual %.2e\n", o.alpha,
                o.beta, nf_solver_name(best_st.solver), best_st.iterations, best_st.rel_residual);
         if (o.robust)

@@ -14,6 +14,7 @@ static int usage(FILE *f, int code)
             "        [--tol T [--within PCT] [--refine residual|uniform] [--max-cp N]\n"
             "        [--max-rounds R]]  insert knots until PCT %% of the points are within T\n"
             "        [--robust [--robust-iters K]]  Tukey reweighting against outliers\n"
+            "        [--far MM [--drop-far]]  flag (drop) projected points farther than MM\n"
             "  eval  SURF.igs UVFILE [--entity N]   print x y z for each u v line\n"
             "  project SURF.igs XYZFILE [--entity N]  print u v distance for each point\n"
             "  report SURF.igs POINTS --tol T [--png MAP.png] [--json]\n"

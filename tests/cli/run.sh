@@ -78,6 +78,24 @@ r0=$(json "$T/proj.json" rms)
 r2=$(json "$T/out" rms)
 le "$r2" "$(awk -v a="$r0" 'BEGIN { print a * 1.0001 }')" && ok "reparameterisation does not worsen the fit (rms $r0 -> $r2)" || no "reparam rms $r0 -> $r2"
 expect 2 "--reparam with --uv refused" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.uvxyz" --uv --reparam 1 --out "$T/x.igs"
+# Points far off the surface (every 100th lifted 20 mm: measured off the part)
+# are counted; --drop-far leaves them out, and the fit is then as good as
+# the fit of the clean points.
+awk 'NR % 100 == 0 { print $1, $2, $3 + 20; next } { print }' "$T/fine/points.xyz" >"$T/fine/far.xyz"
+nfar=$(awk 'NR % 100 == 0' "$T/fine/points.xyz" | wc -l)
+expect 0 "fit counts far points" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/far.xyz" --far 1 --out "$T/far-kept.igs" --json
+[ "$(json "$T/out" far)" = "$nfar" ] && [ "$(json "$T/out" dropped)" = 0 ] && ok "fit flags the $nfar far points, keeps them" ||
+    no "far points: $(json "$T/out" far) flagged, $(json "$T/out" dropped) dropped, want $nfar, 0"
+expect 0 "fit --drop-far" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/far.xyz" --far 1 --drop-far --out "$T/far-drop.igs" --json
+[ "$(json "$T/out" dropped)" = "$nfar" ] && ok "--drop-far drops the $nfar far points" || no "dropped $(json "$T/out" dropped), want $nfar"
+"$CF" eval "$T/far-drop.igs" "$T/fine/check.uv" >"$T/e-far-drop"
+"$CF" eval "$T/far-kept.igs" "$T/fine/check.uv" >"$T/e-far-kept"
+d=$(paste "$T/e-far-drop" "$T/e-proj" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3); if (a < 0) a = -a; if (a > m) m = a } } END { printf "%.3g", m }')
+k=$(paste "$T/e-far-kept" "$T/e-proj" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3); if (a < 0) a = -a; if (a > m) m = a } } END { printf "%.3g", m }')
+le "$d" 0.01 && le 0.1 "$k" && ok "without the far points the fit is the clean one ($d mm; with them $k mm off)" ||
+    no "drop-far fit $d mm from the clean fit (kept: $k mm)"
+expect 2 "--far with --uv refused" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.uvxyz" --uv --far 1 --out "$T/x.igs"
+expect 2 "--far 0 refused" "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.xyz" --far 0 --out "$T/x.igs"
 # Deviation report: statistics, JSON, and the colour map as a PNG.
 expect 0 "report with --png" "$CF" report "$T/fine/nominal.igs" "$T/fine/points.xyz" --tol 0.05 --png "$T/map.png" --json
 for k in points rms max_abs within_tol_pct p95_abs histogram; do
