@@ -18,6 +18,8 @@ typedef struct hal_stage {
     int home_timeout_ms; /* default 60000 */
     int poll_ms;         /* status polling interval (default 5) */
     double tol_mm;       /* position read back must match the target within (0.002) */
+    double at[2];        /* position read with "in position" at the end of the last move */
+    int at_valid;        /* 1 until the next call: st_position answers at[] */
     char err[320];       /* detail of the last failure */
 } hal_stage_t;
 

@@ -1,7 +1,9 @@
 /* hal_stage.c: the Modbus motion stage driver (rig_stage_ops_t): a move
- * is one write of target and command (registers 0-4, so it is atomic), a
- * check that the stage took it (move counter, result register), then
- * status polling until in position, a fault, or the move timeout. */
+ * is one read of status, position and move counter, one write of target
+ * and command (registers 0-4, so it is atomic), a check that the stage
+ * took it (move counter, result register), then a sleep to the expected
+ * arrival and status-and-position reads until in position, a fault, or the
+ * move timeout: the travel time plus about four round trips. */
 #include "hal_priv.h"
 #include "hal_regmap.h"
 #include "hal_rig.h"
@@ -107,13 +109,18 @@ static int result_error(hal_stage_t *s, unsigned res, const char *cmd)
 
 /* Write a command (with the target first for a move) and check it was
  * taken: the move counter advanced (a retried write may count twice) and
- * the result register says so. */
-static int command(hal_stage_t *s, uint16_t cmd, const int32_t *tgt, const char *name)
+ * the result register says so. before: the move counter read just before
+ * (NULL: read it here). */
+static int command(hal_stage_t *s, uint16_t cmd, const int32_t *tgt, const uint16_t *before,
+                   const char *name)
 {
-    uint16_t before[2], after[2], w[5];
-    int rc = rd(s, STG_MOVES, 2, before, "reading the move counter");
-    if (rc)
-        return rc;
+    uint16_t b0, after[2], w[5];
+    int rc;
+    if (!before) {
+        if ((rc = rd(s, STG_MOVES, 1, &b0, "reading the move counter")))
+            return rc;
+        before = &b0;
+    }
     if (tgt) {
         put32(w + STG_TARGET_X, tgt[0]);
         put32(w + STG_TARGET_Y, tgt[1]);
@@ -127,10 +134,19 @@ static int command(hal_stage_t *s, uint16_t cmd, const int32_t *tgt, const char 
         return rc;
     if ((rc = result_error(s, after[1], name)))
         return rc;
-    if ((cmd == STG_CMD_MOVE || cmd == STG_CMD_HOME) && after[0] == before[0])
+    if ((cmd == STG_CMD_MOVE || cmd == STG_CMD_HOME) && after[0] == *before)
         return sfail(s, RIG_EPROTO, "stage did not take %s (move counter stays %u)", name,
                      after[0]);
     return RIG_OK;
+}
+
+/* The stop after a timeout: best effort, the timeout is the error. */
+static int timed_out(hal_stage_t *s, const char *what, int timeout_ms, unsigned st)
+{
+    uint16_t stop = STG_CMD_STOP;
+    hal_write_regs(s->h, STG_COMMAND, 1, &stop);
+    return sfail(s, RIG_ETIMEOUT, "stage: %s not done in %d ms (status 0x%02x); stopped", what,
+                 timeout_ms, st);
 }
 
 /* Poll until the bits in want are set and BUSY clear, a fault, or timeout. */
@@ -148,13 +164,49 @@ static int wait_for(hal_stage_t *s, unsigned want, double first_wait_ms, int tim
             return rc;
         if ((st & want) == want && !(st & RIG_ST_BUSY))
             return RIG_OK;
-        if (hal_now_ms() >= t_end) {
-            uint16_t stop = STG_CMD_STOP;
-            hal_write_regs(s->h, STG_COMMAND, 1, &stop);
-            return sfail(s, RIG_ETIMEOUT, "stage: %s not done in %d ms (status 0x%02x); stopped",
-                         what, timeout_ms, st);
-        }
+        if (hal_now_ms() >= t_end)
+            return timed_out(s, what, timeout_ms, st);
         hal_sleep_ms(s->poll_ms);
+    }
+}
+
+/* Wait for the end of a move to tgt (mm) commanded at t_cmd (ms) and
+ * expected to take est ms. Sleep to the expected arrival, then read status
+ * and position in one request: while busy, sleep the travel the position
+ * says is left (at speed), and once there (settling) poll 0.25 ms, doubling
+ * to poll_ms. So a move costs its travel plus about one round trip, not a
+ * multiple of the polling interval; the position that comes with the final
+ * status is the one checked and kept for st_position. */
+static int wait_move(hal_stage_t *s, const double tgt[2], double t_cmd, double est, int timeout_ms)
+{
+    double t_end = t_cmd + timeout_ms, settle = 0.25;
+    hal_sleep_ms(t_cmd + est - hal_now_ms());
+    for (;;) {
+        uint16_t r[5];
+        int rc = rd(s, STG_STATUS, 5, r, "reading status and position");
+        if (rc || (rc = status_error(s, r[0], "move")))
+            return rc;
+        double px = get32(r + 1) * 1e-3, py = get32(r + 3) * 1e-3;
+        if ((r[0] & RIG_ST_INPOS) && !(r[0] & RIG_ST_BUSY)) {
+            if (fabs(px - tgt[0]) > s->tol_mm || fabs(py - tgt[1]) > s->tol_mm)
+                return sfail(s, RIG_EPROTO,
+                             "stage: in position at (%.4f, %.4f), asked (%.4f, %.4f)", px, py,
+                             tgt[0], tgt[1]);
+            s->at[0] = px;
+            s->at[1] = py;
+            s->at_valid = 1;
+            return RIG_OK;
+        }
+        double now = hal_now_ms();
+        if (now >= t_end)
+            return timed_out(s, "move", timeout_ms, r[0]);
+        double left = 1e3 * fmax(fabs(tgt[0] - px), fabs(tgt[1] - py)) / s->speed;
+        if (left >= 0.25)
+            hal_sleep_ms(fmin(fmin(left, 100.0), t_end - now)); /* a stale speed costs <= 0.1 s */
+        else {
+            hal_sleep_ms(settle);
+            settle = fmin(2 * settle, s->poll_ms);
+        }
     }
 }
 
@@ -164,6 +216,7 @@ static int st_status(void *ctx, uint32_t *bits)
     uint16_t st;
     if (!s || !bits)
         return RIG_EARG;
+    s->at_valid = 0;
     int rc = rd(s, STG_STATUS, 1, &st, "reading status");
     if (!rc)
         *bits = st;
@@ -176,6 +229,14 @@ static int st_position(void *ctx, double *x, double *y)
     uint16_t r[4];
     if (!s || !x || !y)
         return RIG_EARG;
+    if (s->at_valid) {
+        /* Asked right after a move: the stage said this position together
+         * with "in position, not busy", and nothing was sent since. */
+        s->at_valid = 0;
+        *x = s->at[0];
+        *y = s->at[1];
+        return RIG_OK;
+    }
     int rc = rd(s, STG_POS_X, 4, r, "reading position");
     if (rc)
         return rc;
@@ -189,11 +250,12 @@ static int st_home(void *ctx)
     hal_stage_t *s = ctx;
     if (!s)
         return RIG_EARG;
+    s->at_valid = 0;
     uint16_t st;
     int rc = rd(s, STG_STATUS, 1, &st, "reading status");
     if (rc || (rc = status_error(s, st, "before homing")))
         return rc;
-    if ((rc = command(s, STG_CMD_HOME, NULL, "homing")))
+    if ((rc = command(s, STG_CMD_HOME, NULL, NULL, "homing")))
         return rc;
     return wait_for(s, RIG_ST_HOMED | RIG_ST_INPOS, 0, s->home_timeout_ms, "homing");
 }
@@ -203,39 +265,39 @@ static int st_move_to(void *ctx, double x, double y)
     hal_stage_t *s = ctx;
     if (!s || !isfinite(x) || !isfinite(y))
         return s ? sfail(s, RIG_EARG, "stage: target not finite") : RIG_EARG;
+    s->at_valid = 0;
     if (x < s->lo[0] || x > s->hi[0] || y < s->lo[1] || y > s->hi[1])
         return sfail(s, RIG_ELIMIT,
                      "stage: target (%g, %g) outside soft limits [%g, %g] x [%g, %g]", x, y,
                      s->lo[0], s->hi[0], s->lo[1], s->hi[1]);
-    uint16_t r[5];
-    int rc = rd(s, STG_STATUS, 5, r, "reading status and position");
+    /* Status, position and move counter in one request (registers 5-20). */
+    uint16_t r[STG_MOVES - STG_STATUS + 1];
+    int rc = rd(s, STG_STATUS, STG_MOVES - STG_STATUS + 1, r, "reading status and position");
     if (rc || (rc = status_error(s, r[0], "before the move")))
         return rc;
     if (!(r[0] & RIG_ST_HOMED))
         return sfail(s, RIG_ENOTHOMED, "stage: move to (%g, %g) asked before homing", x, y);
     double px = get32(r + 1) * 1e-3, py = get32(r + 3) * 1e-3;
     int32_t tgt[2] = {(int32_t)lround(x * 1e3), (int32_t)lround(y * 1e3)};
-    if ((rc = command(s, STG_CMD_MOVE, tgt, "the move")))
+    double t_cmd = hal_now_ms();
+    if ((rc = command(s, STG_CMD_MOVE, tgt, &r[STG_MOVES - STG_STATUS], "the move")))
         return rc;
-    /* Sleep through most of the expected travel, then poll. */
+    /* The wait counts from the command: the result check above was
+     * made while the stage travelled. */
     double est = 1e3 * fmax(fabs(x - px), fabs(y - py)) / s->speed;
     int tmo = s->move_timeout_ms > 0 ? s->move_timeout_ms : (int)(3 * est) + 2000;
-    if ((rc = wait_for(s, RIG_ST_INPOS, 0.8 * est, tmo, "move")))
-        return rc;
-    double ax, ay;
-    if ((rc = st_position(s, &ax, &ay)))
-        return rc;
-    if (fabs(ax - x) > s->tol_mm || fabs(ay - y) > s->tol_mm)
-        return sfail(s, RIG_EPROTO, "stage: in position at (%.4f, %.4f), asked (%.4f, %.4f)", ax,
-                     ay, x, y);
-    return RIG_OK;
+    double to[2] = {x, y};
+    return wait_move(s, to, t_cmd, est, tmo);
 }
 
 static int st_stop(void *ctx)
 {
     hal_stage_t *s = ctx;
     uint16_t c = STG_CMD_STOP;
-    return s ? wr(s, STG_COMMAND, 1, &c, "writing stop") : RIG_EARG;
+    if (!s)
+        return RIG_EARG;
+    s->at_valid = 0;
+    return wr(s, STG_COMMAND, 1, &c, "writing stop");
 }
 
 static int st_reset_fault(void *ctx)
@@ -243,6 +305,7 @@ static int st_reset_fault(void *ctx)
     hal_stage_t *s = ctx;
     if (!s)
         return RIG_EARG;
+    s->at_valid = 0;
     uint16_t c = STG_CMD_RESET, res;
     int rc = wr(s, STG_COMMAND, 1, &c, "writing fault reset");
     if (rc || (rc = rd(s, STG_RESULT, 1, &res, "reading the reset result")))
