@@ -371,6 +371,8 @@ int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint3
         m->reg[PLC_R_WORD_ORDER] = old_order;
         plc_map_set_order(m, v[PLC_R_WORD_ORDER - a]);
     }
+    if (a <= PLC_R_WATCHDOG_MS && PLC_R_WATCHDOG_MS < a + n)
+        f->hb_ms = now_ms; /* a new timeout counts from now, not from an old heartbeat */
     if (a <= PLC_R_PLC_HEARTBEAT && PLC_R_PLC_HEARTBEAT < a + n) {
         uint16_t hb = v[PLC_R_PLC_HEARTBEAT - a];
         if (hb != f->plc_hb) { /* armed by the first change */

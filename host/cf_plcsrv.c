@@ -421,7 +421,8 @@ static void accept_one(srv_t *s, const cf_plcsrv_opts_t *o, int lfd, client_t *c
     client_t *c = &cl[(*nc)++];
     memset(c, 0, sizeof *c);
     c->fd = fd;
-    c->t_tok = c->t_warn = now_ms();
+    c->t_tok = now_ms();
+    c->t_warn = c->t_tok - 1000; /* the first refusal is logged at once */
     c->tokens = o->max_rate < 1 ? 1 : o->max_rate;
     snprintf(c->name, sizeof c->name, "%s", name);
     set_clients(s, *nc);
