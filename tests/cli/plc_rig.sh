@@ -150,6 +150,9 @@ PYS=plc_soak.py
 start s --sim --sim-args "--speed 5000 --seed 2 --part $T/part/nominal.igs" --nominal "$T/part/nominal.igs" \
     --results "$T/res" --max-rate 0
 py soak "$port" "$simport" "$pid" "${PLC_SOAK_TX:-20000}" "${PLC_SOAK_MAX_GAP_MS:-1000}"
+kill -TERM "$pid"; wait "$pid"; rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+[ $rc -eq 0 ] && ok "SIGTERM after the soak: serve exits 0" || no "SIGTERM after the soak: exit $rc"
 
 if grep -E "Sanitizer|runtime error" "$T"/*.log >/dev/null; then
     no "sanitizer reports in the server logs"
