@@ -76,10 +76,10 @@ start a --sim --sim-args "$SIMARGS" --nominal "$T/part/nominal.igs" --results "$
 py cycle "$port" "$simport" "$T/res" "$(command -v mbpoll)" "$T/cycle.out"
 jnl=$(sed -n 2p "$T/cycle.out")
 if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
-    [ "$(json "$T/info.json" records)" = 232 ] && [ "$(json "$T/info.json" points)" = 231 ] &&
+    [ "$(json "$T/info.json" records)" = 862 ] && [ "$(json "$T/info.json" points)" = 861 ] &&
         [ "$(json "$T/info.json" ended)" = 1 ] && [ "$(json "$T/info.json" end_code)" = 0 ] &&
         [ "$(json "$T/info.json" torn_tail)" = 0 ] &&
-        ok "journal info: 231 points + end record, ended 0, no torn tail" || no "journal info: $(cat "$T/info.json")"
+        ok "journal info: 861 points + end record, ended 0, no torn tail" || no "journal info: $(cat "$T/info.json")"
     # The fit the cell exported = the journal replayed by `cellfit journal fit`
     # (alpha, beta as float32 in the registers: equal to 1e-6 mm).
     d=$(sed -n 1p "$T/cycle.out")
