@@ -21,6 +21,12 @@ typedef struct hal_stage {
     double at[2];        /* position read with "in position" at the end of the last move */
     int at_valid;        /* 1 until the next call: st_position answers at[] */
     char err[320];       /* detail of the last failure */
+    /* Appended: asked at every status poll of a move or homing (and between
+     * slices of the wait before polling); non-zero stops the stage and the
+     * call returns RIG_EABORTED. The caller's own line sends the stop, so a
+     * job's thread never shares its transport. NULL: never. */
+    int (*should_stop)(void *ctx);
+    void *stop_ctx;
 } hal_stage_t;
 
 /* Bind a stage to an open Modbus transport (its unit id is the URI's) and
