@@ -149,24 +149,45 @@ static int timed_out(hal_stage_t *s, const char *what, int timeout_ms, unsigned 
                  timeout_ms, st);
 }
 
+/* A stop asked (abort, watchdog): STOP sent, RIG_EABORTED; else RIG_OK. */
+static int stop_asked(hal_stage_t *s, const char *what)
+{
+    if (!s->should_stop || !s->should_stop(s->stop_ctx))
+        return RIG_OK;
+    uint16_t stop = STG_CMD_STOP;
+    hal_write_regs(s->h, STG_COMMAND, 1, &stop);
+    return sfail(s, RIG_EABORTED, "stage: %s stopped on request", what);
+}
+
+/* Sleep ms in slices of at most 20 ms that see a stop request. */
+static int sleep_watching(hal_stage_t *s, double ms, const char *what)
+{
+    double t_end = hal_now_ms() + ms;
+    for (;;) {
+        int rc = stop_asked(s, what);
+        double left = t_end - hal_now_ms();
+        if (rc || left <= 0)
+            return rc;
+        hal_sleep_ms(left < 20 ? left : 20);
+    }
+}
+
 /* Poll until the bits in want are set and BUSY clear, a fault, or timeout. */
 static int wait_for(hal_stage_t *s, unsigned want, double first_wait_ms, int timeout_ms,
                     const char *what)
 {
     double t_end = hal_now_ms() + timeout_ms, t_poll = hal_now_ms() + first_wait_ms;
     for (;;) {
-        if (s->should_stop && s->should_stop(s->stop_ctx)) {
-            uint16_t stop = STG_CMD_STOP;
-            hal_write_regs(s->h, STG_COMMAND, 1, &stop);
-            return sfail(s, RIG_EABORTED, "stage: %s stopped on request", what);
-        }
+        int rc = stop_asked(s, what);
+        if (rc)
+            return rc;
         double left = t_poll - hal_now_ms();
         if (left > 0) { /* the wait before polling, in slices that see a stop */
             hal_sleep_ms(left < 20 ? left : 20);
             continue;
         }
         uint16_t st;
-        int rc = rd(s, STG_STATUS, 1, &st, "reading status");
+        rc = rd(s, STG_STATUS, 1, &st, "reading status");
         if (rc)
             return rc;
         if ((rc = status_error(s, st, what)))
@@ -189,10 +210,12 @@ static int wait_for(hal_stage_t *s, unsigned want, double first_wait_ms, int tim
 static int wait_move(hal_stage_t *s, const double tgt[2], double t_cmd, double est, int timeout_ms)
 {
     double t_end = t_cmd + timeout_ms, settle = 0.25;
-    hal_sleep_ms(t_cmd + est - hal_now_ms());
+    int rc = sleep_watching(s, t_cmd + est - hal_now_ms(), "move");
+    if (rc)
+        return rc;
     for (;;) {
         uint16_t r[5];
-        int rc = rd(s, STG_STATUS, 5, r, "reading status and position");
+        rc = rd(s, STG_STATUS, 5, r, "reading status and position");
         if (rc || (rc = status_error(s, r[0], "move")))
             return rc;
         double px = get32(r + 1) * 1e-3, py = get32(r + 3) * 1e-3;
@@ -210,9 +233,12 @@ static int wait_move(hal_stage_t *s, const double tgt[2], double t_cmd, double e
         if (now >= t_end)
             return timed_out(s, "move", timeout_ms, r[0]);
         double left = 1e3 * fmax(fabs(tgt[0] - px), fabs(tgt[1] - py)) / s->speed;
-        if (left >= 0.25)
-            hal_sleep_ms(fmin(fmin(left, 100.0), t_end - now)); /* a stale speed costs <= 0.1 s */
-        else {
+        if (left >= 0.25) { /* a stale speed costs <= 0.1 s */
+            if ((rc = sleep_watching(s, fmin(fmin(left, 100.0), t_end - now), "move")))
+                return rc;
+        } else {
+            if ((rc = stop_asked(s, "move")))
+                return rc;
             hal_sleep_ms(settle);
             settle = fmin(2 * settle, s->poll_ms);
         }
