@@ -5,6 +5,7 @@
 #include "hal_priv.h"
 #include "hal_regmap.h"
 #include "hal_rig.h"
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -219,7 +220,8 @@ static int st_move_to(void *ctx, double x, double y)
         return rc;
     /* Sleep through most of the expected travel, then poll. */
     double est = 1e3 * fmax(fabs(x - px), fabs(y - py)) / s->speed;
-    int tmo = s->move_timeout_ms > 0 ? s->move_timeout_ms : (int)(3 * est) + 2000;
+    /* A far target at a slow reported speed must not overflow the int (fuzz_modbus). */
+    int tmo = s->move_timeout_ms > 0 ? s->move_timeout_ms : (int)fmin(3 * est + 2000, INT_MAX);
     if ((rc = wait_for(s, RIG_ST_INPOS, 0.8 * est, tmo, "move")))
         return rc;
     double ax, ay;
