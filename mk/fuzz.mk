@@ -16,14 +16,25 @@ FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
 # The device-driver targets run on a virtual clock (tests/fuzz/fuzz_hal.h).
 FUZZ_WRAP := -Wl,--wrap=hal_now_ms -Wl,--wrap=hal_sleep_ms
 FUZZ_LIBFUZZER ?=
+# The parsers under test are compiled again for the targets, with
+# float-to-int overflow checks (gcc's -fsanitize=undefined leaves them out).
+FUZZ_UNITS := host/cf_iges.c host/cf_points.c host/cf_conf.c host/cmd_serve.c hal/hal_uri.c \
+	hal/hal_stage.c hal/hal_probe.c hal/hal_probe_mb.c hal/hal_trig.c firmware/jnl.c \
+	firmware/plc_map.c firmware/plc_fsm.c
+FUZZ_UNIT_OBJ := $(patsubst %.c,$(BUILD)/fuzz/unit/%.o,$(FUZZ_UNITS))
 FUZZ_COMMON := $(BUILD)/fuzz/fuzz_util.o $(BUILD)/fuzz/fuzz_hal.o $(BUILD)/tests/ref_memstore.o \
-	$(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+	$(FUZZ_UNIT_OBJ) \
+	$(filter-out $(patsubst %.c,$(BUILD)/%.o,$(FUZZ_UNITS)),$(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ))
 
 .PHONY: fuzz fuzz-bins fuzz-run test-fuzz fuzz-regress-run valgrind valgrind-run lint-fuzz
 
 $(BUILD)/fuzz/%.o: tests/fuzz/%.c $(wildcard tests/fuzz/*.h tests/*.h host/*.h hal/*.h firmware/*.h)
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Itests -Itests/fuzz -c $< -o $@
+
+$(BUILD)/fuzz/unit/%.o: %.c $(wildcard host/*.h hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) $(if $(SAN),-fsanitize=float-cast-overflow) -c $< -o $@
 
 $(FUZZ_BIN): $(BUILD)/fuzz/%: $(BUILD)/fuzz/%.o $(FUZZ_COMMON) \
 	$(if $(FUZZ_LIBFUZZER),,$(BUILD)/fuzz/driver.o)
@@ -63,7 +74,7 @@ fuzz-regress-run: $(FUZZ_BIN)
 	@set -e; for t in $(FUZZ_NAMES); do \
 	  files=$$(ls tests/fuzz/corpus/$$t/* tests/fuzz/regress/$$t/* 2>/dev/null || true); \
 	  if [ -z "$$files" ]; then echo "fuzz_$$t: no inputs"; exit 1; fi; \
-	  if ! $(BUILD)/fuzz/fuzz_$$t $$files >$(BUILD)/fuzz/$$t.log 2>&1; then \
+	  if ! timeout 120 $(BUILD)/fuzz/fuzz_$$t $$files >$(BUILD)/fuzz/$$t.log 2>&1; then \
 	    tail -30 $(BUILD)/fuzz/$$t.log; echo "FAIL fuzz_$$t regression inputs"; exit 1; fi; \
 	  echo "ok   fuzz_$$t: $$(echo $$files | wc -w) corpus and regression inputs"; \
 	done
@@ -72,10 +83,11 @@ TEST_EXTRA += test-fuzz
 
 # valgrind memcheck over the unit tests that exercise firmware/ most (the
 # fitter, basis, refinement, quads, journal, PLC map and state machine, scan
-# job), built without sanitizers (valgrind cannot run ASan binaries).
+# job): the build/t-sim binaries make test has already built, without
+# sanitizers (valgrind cannot run ASan binaries).
 VALGRIND_TESTS := test_basis test_fit test_refine test_quad test_jnl test_plc test_scan
 valgrind:
-	$(MAKE) BOARD=sim BUILD=build/t-valgrind OPT=-O1 valgrind-run
+	$(MAKE) BOARD=sim BUILD=build/t-sim valgrind-run
 
 valgrind-run: $(patsubst %,$(BUILD)/tests/%,$(VALGRIND_TESTS))
 	@set -e; mkdir -p $(BUILD)/tmp; for t in $(VALGRIND_TESTS); do \

@@ -78,6 +78,9 @@ printf 'ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty floa
 fitx "PLY with fewer vertices than its header" "$P/short.ply:.*file ends after 1 of 5" "$N" "$P/short.ply"
 printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 nan 3\n' >"$P/nan.ply"
 fitx "PLY NaN coordinate" "$P/nan.ply:8: .*non-finite" "$N" "$P/nan.ply"
+printf 'ply\nformat binary_little_endian 1.0\nelement junk 1000000000000\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n' >"$P/empty-elements.ply"
+fitx "PLY with 10^12 empty elements (no hang)" "$P/empty-elements.ply: file ends after 0 of 1 vertices" \
+    "$N" "$P/empty-elements.ply"
 fitx "missing point file" "$T/nonexistent.xyz.*cannot open" "$N" "$T/nonexistent.xyz"
 # --uv parameters outside the knot domain [0, 1]^2.
 { sed -n 1,4p "$T/good.uvxyz"; echo "1.5 0.5 10 20 3"; } >"$P/domain.uvxyz"
