@@ -4,7 +4,7 @@
 # naming the file, the line or record where there is one, and what is
 # wrong, and no output file left behind (neither --out nor a .tmp beside
 # it). Covers point files, IGES surfaces and option values for fit, eval,
-# info, report and base.
+# info, report and base, and serve's configuration file.
 set -u
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-bad.XXXXXX")
@@ -160,6 +160,28 @@ bad "report: NaN coordinate" "$P/nan.xyz:3: .*non-finite" \
 bad "report: --tol negative" "--tol '-1'" "$CF" report "$N" "$T/good.xyz" --tol -1
 bad "report: zero weight" "$G/zeroweight.igs: line [0-9]+ .*weight" \
     "$CF" report "$G/zeroweight.igs" "$T/good.xyz" --tol 0.1 --png "$T/out/map.png"
+
+# --- serve's configuration file (--print-map: parse, print, never serve)
+S="$T/conf"
+mkdir -p "$S"
+printf 'plc = tcp:127.0.0.1:0\nwatchdog_ms = -5\n' >"$S/value.conf"
+bad "serve config: bad value" "$S/value.conf:2: watchdog_ms '-5'" \
+    "$CF" serve --config "$S/value.conf" --print-map
+printf '# cell\n\nspeed = 3\n' >"$S/unknown.conf"
+bad "serve config: unknown setting" "$S/unknown.conf:3: unknown setting 'speed'" \
+    "$CF" serve --config "$S/unknown.conf" --print-map
+printf 'plc tcp:127.0.0.1:0\n' >"$S/noeq.conf"
+bad "serve config: no '='" "$S/noeq.conf:1: expected key = value" \
+    "$CF" serve --config "$S/noeq.conf" --print-map
+head -c 5000 /dev/zero | tr '\0' 'x' >"$S/long.conf"
+bad "serve config: a 5000-byte line" "$S/long.conf:1: line longer than" \
+    "$CF" serve --config "$S/long.conf" --print-map
+for i in $(seq 1 33); do echo "results_dir.$((i % 8)) = /data/r$i"; done >"$S/many.conf"
+bad "serve config: settings beyond its storage are refused, not dropped" \
+    "$S/many.conf:33: results_dir.1: more than 32" "$CF" serve --config "$S/many.conf" --print-map
+printf 'plc = tcp:localhost:502\n' >"$S/plc.conf"
+bad "serve config: plc not an IPv4 address" "$S/plc.conf:1: plc 'tcp:localhost:502'" \
+    "$CF" serve --config "$S/plc.conf" --print-map
 
 echo "badinput: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
