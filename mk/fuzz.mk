@@ -50,20 +50,20 @@ fuzz:
 	$(MAKE) BOARD=sim BUILD=build/fuzz FUZZ_LIBFUZZER=1 fuzz-run
 
 fuzz-run:
-	@set -e; mkdir -p $(BUILD)/fuzz/findings; : >$(BUILD)/fuzz/summary.txt; \
+	@set -e; mkdir -p $(BUILD)/findings; : >$(BUILD)/summary.txt; \
 	for t in $(FUZZ_NAMES); do \
-	  mkdir -p $(BUILD)/fuzz/work/$$t; \
+	  mkdir -p $(BUILD)/work/$$t; \
 	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
 	  if ! $(BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
-	      -close_fd_mask=3 -print_final_stats=1 -artifact_prefix=$(BUILD)/fuzz/findings/$$t- \
-	      $(BUILD)/fuzz/work/$$t tests/fuzz/corpus/$$t >$(BUILD)/fuzz/$$t.log 2>&1; then \
-	    tail -40 $(BUILD)/fuzz/$$t.log; echo "fuzz_$$t: FINDING (input in $(BUILD)/fuzz/findings/)"; \
+	      -close_fd_mask=3 -print_final_stats=1 -artifact_prefix=$(BUILD)/findings/$$t- \
+	      $(BUILD)/work/$$t tests/fuzz/corpus/$$t >$(BUILD)/$$t.log 2>&1; then \
+	    tail -40 $(BUILD)/$$t.log; echo "fuzz_$$t: FINDING (input in $(BUILD)/findings/)"; \
 	    exit 1; fi; \
-	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/fuzz/$$t.log); \
-	  eps=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $(BUILD)/fuzz/$$t.log); \
-	  cov=$$(grep -o 'cov: [0-9]*' $(BUILD)/fuzz/$$t.log | tail -1); \
+	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/$$t.log); \
+	  eps=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $(BUILD)/$$t.log); \
+	  cov=$$(grep -o 'cov: [0-9]*' $(BUILD)/$$t.log | tail -1); \
 	  echo "fuzz_$$t: $$runs runs in $(FUZZ_SECONDS) s, $$eps exec/s, $$cov, no finding" | \
-	    tee -a $(BUILD)/fuzz/summary.txt; \
+	    tee -a $(BUILD)/summary.txt; \
 	done
 
 # make test: the corpus and the regression inputs, once, under gcc's ASan+UBSan.
