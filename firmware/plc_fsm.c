@@ -202,6 +202,7 @@ plc_action_t plc_fsm_command(plc_fsm_t *f, int cmd, uint16_t seq, uint32_t now_m
     plc_action_t act = PLC_ACT_NONE;
     plc_rule_t r = {PLC_K_REJECT, PLC_E_UNKNOWN_CMD};
     plc_params_t p;
+    memset(&p, 0, sizeof p); /* copied whole into the job (and compared by the tests) */
     if (cmd > PLC_C_NONE && cmd < PLC_C_COUNT)
         r = plc_cmd_rules[f->state][cmd];
     uint16_t code = r.code;

@@ -7,6 +7,7 @@
 #include "hal_priv.h"
 #include "hal_regmap.h"
 #include "hal_rig.h"
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -320,7 +321,8 @@ static int st_move_to(void *ctx, double x, double y)
     /* The wait counts from the command: the result check above was
      * made while the stage travelled. */
     double est = 1e3 * fmax(fabs(x - px), fabs(y - py)) / s->speed;
-    int tmo = s->move_timeout_ms > 0 ? s->move_timeout_ms : (int)(3 * est) + 2000;
+    /* A far target at a slow reported speed must not overflow the int (fuzz_modbus). */
+    int tmo = s->move_timeout_ms > 0 ? s->move_timeout_ms : (int)fmin(3 * est + 2000, INT_MAX);
     double to[2] = {x, y};
     return wait_move(s, to, t_cmd, est, tmo);
 }

@@ -716,7 +716,10 @@ static int cp_ply_point(cf_points_t *r, double *row)
     double scratch[CF_POINTS_MAX_COLS];
     if (!r->ply_ready) { /* elements before the vertices: read and dropped */
         for (int k = 0; k < r->velem; k++)
-            for (long long i = 0; i < r->elem[k].count; i++) {
+            /* A binary element without properties has no bytes: 10^12 of
+             * them are nothing to read, not 10^12 turns of a loop. */
+            for (long long i = 0;
+                 i < r->elem[k].count && (r->fmt != CP_PLY_BIN || r->elem[k].nprop); i++) {
                 int rc = r->fmt == CP_PLY_BIN ? cp_bin_one(r, &r->elem[k], scratch, i)
                                               : cp_asc_one(r, &r->elem[k], scratch, i);
                 if (rc > 0)

@@ -214,22 +214,23 @@ static long line_of_point(cf_points_t *r, long k)
     return cf_points_line(r);
 }
 
-static int fit_error(int rc, const nf_fit_t *f, const nf_surf_t *s)
+/* points: the file the data came from, named by the refusals it causes. */
+static int fit_error(int rc, const nf_fit_t *f, const nf_surf_t *s, const char *points)
 {
     long b = f->bad_index;
     int i = b >= 0 ? (int)(b % s->nu) : -1, j = b >= 0 ? (int)(b / s->nu) : -1;
     switch (rc) {
     case NF_ENODATA:
         return cli_error("fit", CLI_USAGE,
-                         "control point (%d, %d) has no data under it and alpha = beta = 0: the "
-                         "points do not determine the surface (measure there, or give --beta)",
-                         i, j);
+                         "%s: control point (%d, %d) has no data under it and alpha = beta = 0: "
+                         "the points do not determine the surface (measure there, or give --beta)",
+                         points, i, j);
     case NF_ESINGULAR:
         return cli_error("fit", CLI_USAGE,
-                         "the points do not determine the surface: control point (%d, %d) is "
+                         "%s: the points do not determine the surface: control point (%d, %d) is "
                          "left free (numerically rank-deficient normal equations; give "
                          "--alpha/--beta > 0 or more data there)",
-                         i, j);
+                         points, i, j);
     case NF_ENOCONV:
         return cli_error("fit", CLI_FAIL, "%s; try --solver chol or more --max-iter",
                          nf_strerror(rc));
@@ -357,7 +358,7 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
     nf_fit_params_t prm = {o->alpha, o->beta, o->solver};
     int rc = nf_fit_init(&f, base, &prm, &ar);
     if (rc)
-        return fit_error(rc, &f, base);
+        return fit_error(rc, &f, base, o->points);
     if (proj_onto && projector_init(&pj, proj_onto))
         return cli_error("fit", CLI_FAIL, "out of memory");
     if (cf_points_rewind(pr)) {
@@ -420,7 +421,7 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
     if (!rc)
         rc = nf_fit_solve(&f, o->solver, &so, &po->st);
     if (rc)
-        return fit_error(rc, &f, base);
+        return fit_error(rc, &f, base, o->points);
     memcpy(out->cp, f.P, sizeof(double) * (size_t)(3 * f.n));
     po->t_acc = t1 - t0;
     po->t_solve = cli_now() - t1;

@@ -33,16 +33,15 @@ typedef struct serve_conf {
     const char *port_file, *stage, *probe, *board;
     cf_plcrun_t run;
     char *strs[SERVE_MAX_STRS]; /* copies of string values, freed at the end */
-    int nstrs;
+    int nstrs, lost;
 } serve_conf_t;
 
 static const char *keep(serve_conf_t *c, const char *v)
 {
-    if (c->nstrs >= SERVE_MAX_STRS)
-        return NULL;
-    char *s = strdup(v);
+    char *s = c->nstrs < SERVE_MAX_STRS ? strdup(v) : NULL;
     if (s)
         c->strs[c->nstrs++] = s;
+    c->lost |= !s; /* apply refuses: a setting must not silently become none */
     return s;
 }
 
@@ -180,6 +179,9 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         c->board = keep(c, v);
     else
         return cf_fail(msg, ml, CF_EARG, "unknown setting '%s'", k);
+    if (c->lost)
+        return cf_fail(msg, ml, CF_EARG, "%s: more than %d file, directory and device settings", k,
+                       SERVE_MAX_STRS);
     return 0;
 }
 

@@ -1,0 +1,108 @@
+# mk/fuzz.mk: libFuzzer targets for every parser of outside input (issue 7,
+# docs/reliability.md), one tests/fuzz/fuzz_<name>.c each:
+#   make fuzz             clang -fsanitize=fuzzer,address,undefined into
+#                         build/fuzz/, each target run FUZZ_SECONDS (30) from
+#                         tests/fuzz/corpus/<name>/; a crash, leak or hang
+#                         stops it and leaves the input in build/fuzz/findings/
+#   make test-fuzz        (in make test) every target once over its corpus
+#                         and tests/fuzz/regress/<name>/ (inputs that found
+#                         bugs), built with gcc, ASan+UBSan, by a plain main
+#                         (tests/fuzz/driver.c): no fuzzing, a few seconds
+#   make valgrind         the firmware-core unit tests, no sanitizers, once
+#                         under valgrind memcheck (in make test)
+FUZZ_NAMES := iges points jnl plc probe modbus trig conf uri
+FUZZ_SECONDS ?= 30
+FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
+# The device-driver targets run on a virtual clock (tests/fuzz/fuzz_hal.h).
+FUZZ_WRAP := -Wl,--wrap=hal_now_ms -Wl,--wrap=hal_sleep_ms
+FUZZ_LIBFUZZER ?=
+# The parsers under test are compiled again for the targets, with
+# float-to-int overflow checks (gcc's -fsanitize=undefined leaves them out).
+FUZZ_UNITS := host/cf_iges.c host/cf_points.c host/cf_conf.c host/cmd_serve.c hal/hal_uri.c \
+	hal/hal_stage.c hal/hal_probe.c hal/hal_probe_mb.c hal/hal_trig.c firmware/jnl.c \
+	firmware/plc_map.c firmware/plc_fsm.c
+FUZZ_UNIT_OBJ := $(patsubst %.c,$(BUILD)/fuzz/unit/%.o,$(FUZZ_UNITS))
+FUZZ_COMMON := $(BUILD)/fuzz/fuzz_util.o $(BUILD)/fuzz/fuzz_hal.o $(BUILD)/tests/ref_memstore.o \
+	$(FUZZ_UNIT_OBJ) \
+	$(filter-out $(patsubst %.c,$(BUILD)/%.o,$(FUZZ_UNITS)),$(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ))
+
+.PHONY: fuzz fuzz-bins fuzz-run test-fuzz fuzz-regress-run valgrind valgrind-run lint-fuzz
+
+$(BUILD)/fuzz/%.o: tests/fuzz/%.c $(wildcard tests/fuzz/*.h tests/*.h host/*.h hal/*.h firmware/*.h)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Itests -Itests/fuzz -c $< -o $@
+
+$(BUILD)/fuzz/unit/%.o: %.c $(wildcard host/*.h hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) $(if $(SAN),-fsanitize=float-cast-overflow) -c $< -o $@
+
+$(FUZZ_BIN): $(BUILD)/fuzz/%: $(BUILD)/fuzz/%.o $(FUZZ_COMMON) \
+	$(if $(FUZZ_LIBFUZZER),,$(BUILD)/fuzz/driver.o)
+	$(CC) $(LDSAN) $(if $(FUZZ_LIBFUZZER),-fsanitize=fuzzer) $(FUZZ_WRAP) -o $@ $^ $(LIBS)
+
+fuzz-bins: $(FUZZ_BIN)
+
+# libFuzzer: new inputs go to build/fuzz/work/<name> (the committed corpus
+# is only read); final figures in build/fuzz/summary.txt.
+fuzz:
+	$(MAKE) BOARD=sim BUILD=build/fuzz CC=clang SAN=1 OPT="-O1 -fsanitize=fuzzer-no-link" \
+	  FUZZ_LIBFUZZER=1 fuzz-bins
+	$(MAKE) BOARD=sim BUILD=build/fuzz FUZZ_LIBFUZZER=1 fuzz-run
+
+fuzz-run:
+	@set -e; mkdir -p $(BUILD)/findings; : >$(BUILD)/summary.txt; \
+	for t in $(FUZZ_NAMES); do \
+	  mkdir -p $(BUILD)/work/$$t; \
+	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
+	  if ! $(BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
+	      -close_fd_mask=3 -print_final_stats=1 -artifact_prefix=$(BUILD)/findings/$$t- \
+	      $(BUILD)/work/$$t tests/fuzz/corpus/$$t >$(BUILD)/$$t.log 2>&1; then \
+	    tail -40 $(BUILD)/$$t.log; echo "fuzz_$$t: FINDING (input in $(BUILD)/findings/)"; \
+	    exit 1; fi; \
+	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/$$t.log); \
+	  eps=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $(BUILD)/$$t.log); \
+	  cov=$$(grep -o 'cov: [0-9]*' $(BUILD)/$$t.log | tail -1); \
+	  echo "fuzz_$$t: $$runs runs in $(FUZZ_SECONDS) s, $$eps exec/s, $$cov, no finding" | \
+	    tee -a $(BUILD)/summary.txt; \
+	done
+
+# make test: the corpus and the regression inputs, once, under gcc's ASan+UBSan.
+test-fuzz:
+	$(MAKE) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 fuzz-regress-run
+
+fuzz-regress-run: $(FUZZ_BIN)
+	@set -e; for t in $(FUZZ_NAMES); do \
+	  files=$$(ls tests/fuzz/corpus/$$t/* tests/fuzz/regress/$$t/* 2>/dev/null || true); \
+	  if [ -z "$$files" ]; then echo "fuzz_$$t: no inputs"; exit 1; fi; \
+	  if ! timeout 120 $(BUILD)/fuzz/fuzz_$$t $$files >$(BUILD)/fuzz/$$t.log 2>&1; then \
+	    tail -30 $(BUILD)/fuzz/$$t.log; echo "FAIL fuzz_$$t regression inputs"; exit 1; fi; \
+	  echo "ok   fuzz_$$t: $$(echo $$files | wc -w) corpus and regression inputs"; \
+	done
+
+TEST_EXTRA += test-fuzz
+
+# valgrind memcheck over the unit tests that exercise firmware/ most (the
+# fitter, basis, refinement, quads, journal, PLC map and state machine, scan
+# job): the build/t-sim binaries make test has already built, without
+# sanitizers (valgrind cannot run ASan binaries).
+VALGRIND_TESTS := test_basis test_fit test_refine test_quad test_jnl test_plc test_scan
+valgrind:
+	$(MAKE) BOARD=sim BUILD=build/t-sim valgrind-run
+
+valgrind-run: $(patsubst %,$(BUILD)/tests/%,$(VALGRIND_TESTS))
+	@set -e; mkdir -p $(BUILD)/tmp; for t in $(VALGRIND_TESTS); do \
+	  s=$$(date +%s); \
+	  if ! CF_TEST_TMP=$(BUILD)/tmp valgrind -q --error-exitcode=1 --leak-check=full \
+	      --errors-for-leak-kinds=definite,indirect $(BUILD)/tests/$$t >$(BUILD)/tmp/$$t.vg 2>&1; then \
+	    tail -40 $(BUILD)/tmp/$$t.vg; echo "FAIL valgrind $$t"; exit 1; fi; \
+	  echo "ok   valgrind $$t: no memcheck error ($$(( $$(date +%s) - s )) s)"; \
+	done
+
+TEST_EXTRA += valgrind
+
+# scripts/lint.sh formats tests/*.[ch] only; tests/fuzz is checked here.
+lint-fuzz:
+	@for f in tests/fuzz/*.[ch]; do clang-format --dry-run -Werror $$f >/dev/null 2>&1 || \
+	  { echo "lint: $$f is not clang-formatted"; exit 1; }; done; echo "lint-fuzz: tests/fuzz clean"
+
+TEST_EXTRA += lint-fuzz
