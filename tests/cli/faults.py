@@ -1,0 +1,551 @@
+#!/usr/bin/python3
+# tests/cli/faults.py CELLFIT [POWER_CUTS]: the fault-injection matrix and the
+# power cuts of issue 7 (docs/reliability-faults.md), run by faults.sh.
+#
+# Matrix: every fault (cellsim's wire and device faults over Modbus TCP, a
+# disk full while journalling, an unwritable output) x every phase of
+# `cellfit scan` (homing with --home, scanning, fitting with --fit,
+# exporting the fit and the report). Per cell: the job ends in a defined
+# state (exit 0 when the HAL's retries recovered, else 1 with one line
+# naming the cause and its code), the journal is consistent (read here by
+# an independent parser: CRC-32, sequence, whole records), holds every
+# acknowledged point, each grid point once and in plan order, a fit equals
+# the fit replayed from the journal, and the next job on the same cellsim
+# succeeds. One cellsim per row (fault), its faults armed through its
+# control file at the start of each cell.
+#
+# Power cuts: `cellfit scan` killed with SIGKILL at seeded random moments;
+# then the loss of the unsynced page cache is played on the file (cut at a
+# seeded offset at or after the last acknowledged record, half the time
+# zero-filled up to the old size, as a file system leaves unwritten
+# blocks); `cellfit journal recover` must keep every acknowledged record,
+# drop only the torn tail, and `cellfit journal fit` must fit what is left.
+import json
+import os
+import random
+import resource
+import signal
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import zlib
+
+signal.signal(signal.SIGTERM, lambda *a: sys.exit(1))  # timeout: the finally below stops cellsim
+CF = os.path.realpath(sys.argv[1])
+SIM = os.path.join(os.path.dirname(CF), "cellsim")
+CUTS = int(sys.argv[2]) if len(sys.argv) > 2 else 25
+T = tempfile.mkdtemp(prefix="cellfit-faults.")
+os.environ["HAL_DEBUG"] = "1"  # the HAL says each retry: the table counts them
+NOM = os.path.join(T, "part", "nominal.igs")
+REGION, STEP = (0.0, 50.0, 0.0, 30.0), 10.0  # 6 x 4 = 24 points
+passed = failed = 0
+procs = []
+
+
+def ok(name):
+    global passed
+    passed += 1
+    print("ok   " + name, flush=True)
+
+
+def no(name):
+    global failed
+    failed += 1
+    print("FAIL " + name, flush=True)
+
+
+def check(cond, name, detail=""):
+    if cond:
+        ok(name)
+    else:
+        no(name + (": " + detail if detail else ""))
+    return cond
+
+
+def run(args, timeout=60, limit=None, **kw):
+    """Run a command; limit: RLIMIT_FSIZE in bytes (SIGXFSZ ignored, so a
+    write past it fails with EFBIG as on a full file system)."""
+
+    def pre():
+        if limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return subprocess.run(args, capture_output=True, text=True, timeout=timeout, preexec_fn=pre, **kw)
+
+
+def stop(p):
+    if p.poll() is None:
+        p.terminate()
+        try:
+            p.wait(2)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def plan():
+    """The serpentine raster of scan.h, in scan order."""
+    nx = int((REGION[1] - REGION[0]) / STEP + 1e-9) + 1
+    ny = int((REGION[3] - REGION[2]) / STEP + 1e-9) + 1
+    pts = []
+    for k in range(nx * ny):
+        j, i = divmod(k, nx)
+        if j % 2:
+            i = nx - 1 - i
+        pts.append((REGION[0] + i * STEP, REGION[2] + j * STEP))
+    return pts
+
+
+PLAN = plan()
+
+
+def parse_journal(path):
+    """docs/journal.md read independently of jnl.c: the header (128 bytes,
+    magic, CRC), then 80-byte records: CRC-32 over bytes 0..75 at 76, seq
+    0, 1, 2 ... , type 1 (point) or 2 (end). Stops at the first record that
+    fails: what follows is the torn tail."""
+    with open(path, "rb") as f:
+        b = f.read()
+    if len(b) < 128 or struct.unpack_from("<I", b, 0)[0] != 0x314E4A43:
+        return None
+    if struct.unpack_from("<I", b, 124)[0] != zlib.crc32(b[:124]):
+        return None
+    out = {"records": 0, "points": 0, "flagged": 0, "ended": 0, "end_code": None, "synced": 0, "stages": []}
+    off = 128
+    while off + 80 <= len(b) and not out["ended"]:
+        r = b[off:off + 80]
+        seq, synced, typ, flags, code = struct.unpack_from("<IIHHi", r, 0)
+        if struct.unpack_from("<I", r, 76)[0] != zlib.crc32(r[:76]) or seq != out["records"] or typ not in (1, 2):
+            break
+        out["synced"] = max(out["synced"], synced)
+        if typ == 2:
+            out["ended"], out["end_code"] = 1, code
+        else:
+            out["stages"].append(struct.unpack_from("<dd", r, 16))
+            out["flagged" if flags & 1 else "points"] += 1
+        out["records"] += 1
+        off += 80
+    out["tail_bytes"] = len(b) - off
+    return out
+
+
+def on_plan(stages):
+    """Record k is grid point k (within the stage's 2 um): none twice,
+    none skipped."""
+    return len(stages) <= len(PLAN) and all(
+        abs(s[0] - p[0]) <= 0.002 and abs(s[1] - p[1]) <= 0.002 for s, p in zip(stages, PLAN))
+
+
+class Sim:
+    def __init__(self, name, *extra, homed=False):
+        self.name = name
+        self.ctl = os.path.join(T, name + ".ctl")
+        self.err = os.path.join(T, name + ".sim.err")
+        out = os.path.join(T, name + ".sim.out")
+        args = [SIM, "--tcp", "0", "--part", NOM, "--speed", "5000", "--verbose", "--control", self.ctl]
+        args += ["--homed"] if homed else []
+        self.p = subprocess.Popen(args + list(extra), stdout=open(out, "w"), stderr=open(self.err, "w"))
+        procs.append(self.p)
+        self.port = None
+        for _ in range(200):
+            with open(out) as f:
+                s = f.read()
+            if "cellsim: ready" in s:
+                self.port = int(s.split("cellsim: tcp 127.0.0.1 ")[1].split()[0])
+                break
+            time.sleep(0.05)
+        self.stage = "tcp:127.0.0.1:%d:1" % self.port
+        self.probe = "tcp:127.0.0.1:%d:2" % self.port
+
+    def control(self, line, wait=True):
+        """Write the control file (renamed into place: cellsim never reads
+        half of it) and wait until cellsim has obeyed it (removed it)."""
+        tmp = self.ctl + ".tmp"
+        with open(tmp, "w") as f:
+            f.write(line + "\n")
+        os.rename(tmp, self.ctl)
+        for _ in range(100):
+            if not wait or not os.path.exists(self.ctl):
+                return
+            time.sleep(0.02)
+
+    def fired(self):
+        with open(self.err) as f:
+            return f.read().count("cellsim: fault ")
+
+    def rig(self, op):
+        return run([CF, "rig", op, "--stage", self.stage, "--json"], timeout=30)
+
+    def wait_line(self, secs=8):
+        """The line is back (after a long disconnect)."""
+        t = time.time() + secs
+        while time.time() < t:
+            if self.rig("status").returncode == 0:
+                return True
+            time.sleep(0.2)
+        return False
+
+    def stop(self):
+        stop(self.p)
+
+
+jobs = 0
+
+
+def scan(sim, extra=(), limit=None, at100=None, region=None):
+    """One job; at100: called when the scan has printed its 100% line (the
+    last reading is in: the job is fitting and exporting)."""
+    global jobs
+    jobs += 1
+    jnl = os.path.join(T, "%s-%d.jnl" % (sim.name, jobs))
+    args = [CF, "scan", "--stage", sim.stage, "--probe", sim.probe, "--nominal", NOM, "--journal", jnl,
+            "--region", "%g:%g:%g:%g" % (region or REGION), "--step", str(STEP), "--home", "--json"] + list(extra)
+    if at100 is None:
+        r = run(args, limit=limit)
+        return jnl, r.returncode, r.stdout, r.stderr
+    errf = os.path.join(T, "job%d.err" % jobs)
+    with open(errf, "w") as e:
+        p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=e, text=True)
+        procs.append(p)
+        done = False
+        while p.poll() is None and not done:
+            with open(errf) as f:
+                done = "(100%)" in f.read()
+            time.sleep(0.002)
+        if done:
+            at100()
+        out = p.communicate(timeout=60)[0]
+    with open(errf) as f:
+        return jnl, p.returncode, out, f.read()
+
+
+def summary(out):
+    try:
+        return json.loads(out.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return {}
+
+
+def fits_equal(a, b):
+    ea = run([CF, "eval", a, os.path.join(T, "part", "check.uv")])
+    eb = run([CF, "eval", b, os.path.join(T, "part", "check.uv")])
+    return ea.returncode == 0 and ea.stdout == eb.stdout
+
+
+def judge(tag, jnl, rc, out, err, want_rc, want_code, cause, fit=None):
+    """The checks of one cell; returns the outcome for the table."""
+    s = summary(out)
+    lines = [ln for ln in err.splitlines() if ln.startswith("cellfit scan:")]
+    good = check(rc == want_rc, tag + ": exit %d" % want_rc, "exit %d, %s" % (rc, err.strip()[-300:]))
+    if want_rc == 1:
+        good &= check(len(lines) == 1 and cause in lines[0] and ("[%d]" % want_code) in lines[0],
+                      tag + ": one line, '%s' [%d]" % (cause, want_code), " | ".join(lines))
+    if want_rc == 2:
+        good &= check(len(lines) == 1 and cause in lines[0] and not os.path.exists(jnl),
+                      tag + ": refused before the scan, one line, no journal", " | ".join(lines))
+        return "2 refused" if good else "FAIL"
+    if not os.path.exists(jnl):
+        # Refused before the first record (the rig or the journal could not
+        # be opened): nothing measured, no journal left behind.
+        good &= check(rc == 1 and "nothing measured" in " ".join(lines), tag + ": nothing measured, no journal left",
+                      " | ".join(lines))
+        return ("1 %s before the job" % rig_name(want_code)) if good else "FAIL"
+    j = parse_journal(jnl)
+    info = summary(run([CF, "journal", "info", jnl, "--json"]).stdout)
+    acked = s.get("acknowledged_records", 0)
+    if not check(j is not None and info.get("records") == j["records"], tag + ": journal readable by both readers",
+                 str(info)):
+        return "FAIL"
+    good &= check(j["tail_bytes"] == 0 and info.get("torn_tail") == 0, tag + ": no torn tail")
+    good &= check(j["records"] >= acked and acked >= j["synced"],
+                  tag + ": %d acknowledged records kept (%d in the journal)" % (acked, j["records"]),
+                  "journal %d, acked %d, synced field %d" % (j["records"], acked, j["synced"]))
+    good &= check(on_plan(j["stages"]) and len(j["stages"]) == s.get("done", -1),
+                  tag + ": %d grid points, each once, in plan order" % len(j["stages"]),
+                  "done %s" % s.get("done"))
+    if want_code != -215:  # a full disk leaves no room for the end record
+        good &= check(j["ended"] == 1 and j["end_code"] == want_code, tag + ": end record with code %d" % want_code,
+                      "ended %d code %s" % (j["ended"], j["end_code"]))
+    if fit is not None:
+        replay = jnl + ".replay.igs"
+        rf = run([CF, "journal", "fit", jnl, "--nominal", NOM, "--out", replay])
+        good &= check(rf.returncode == 0, tag + ": journal fit of the acknowledged points", rf.stderr.strip())
+        if rc == 0 and os.path.exists(fit):
+            good &= check(fits_equal(fit, replay), tag + ": streamed fit = fit replayed from the journal")
+        elif rc != 0:
+            good &= check(not os.path.exists(fit), tag + ": no fit file left by the failed job")
+    if not good:
+        return "FAIL"
+    if rc == 0:
+        n = err.count("hal: ")  # HAL_DEBUG: one line per retried request
+        return "0" + (", %d retr%s" % (n, "y" if n == 1 else "ies") if n else "") + \
+            (", %d flagged" % s.get("flagged", 0) if s.get("flagged") else "")
+    return "1 %s" % rig_name(want_code)
+
+
+NAMES = {-202: "ETIMEOUT", -205: "EEXCEPTION", -206: "EDISCONNECT", -209: "EFAULT", -215: "EFULL"}
+
+
+def rig_name(code):
+    return "RIG_" + NAMES.get(code, str(code))
+
+
+def next_job(sim, tag, code):
+    """The cell takes the next job: a latched drive fault is reset first
+    (the drive refuses motion until then), a lost line is waited for."""
+    note = ""
+    if code == -209:
+        r = sim.rig("reset")
+        check(r.returncode == 0, tag + ": fault reset", r.stderr.strip())
+        note = "reset, "
+    if code == -206:
+        check(sim.wait_line(), tag + ": line back")
+        note = "line back, "
+    jnl, rc, out, err = scan(sim, region=(0.0, 20.0, 0.0, 10.0))
+    s = summary(out)
+    good = check(rc == 0 and s.get("done") == 6, tag + ": next job takes the cell",
+                 "exit %d %s" % (rc, err.strip()[-200:]))
+    return note + ("next ok" if good else "next FAIL")
+
+
+# Rows: fault name, cellsim spec (K filled per phase), per phase the K, the
+# expected exit and code, and the cause the error line names. Requests:
+# opening reads limits and range (2), preflight status (3), homing's
+# status, counter, command, counter, polls (4..): K 6 is the home command.
+# A grid point is about 9 requests: K 100 is near point 11 of 24.
+WIRE_OK = [("crc", "crc:n%d"), ("garble", "garble:n%d"), ("drop", "drop:n%d"), ("slow 800 ms", "slow:n%d:800"),
+           ("silent", "silent:n%d"), ("busy", "busy:n%d"), ("disconnect 1 s", "disconnect:n%d:1000")]
+
+
+def row_cells(name):
+    """(phase -> (spec K, want rc, want code, cause)) for a row."""
+    if name == "disconnect 4 s":
+        c = (1, -206, "line or connection lost")
+        return {"homing": (6,) + c, "scanning": (100,) + c, "fitting": (100,) + c, "exporting": (1, 0, 0, "")}
+    if name == "probe out of range":
+        return {"homing": None, "scanning": (10, 0, 0, ""), "fitting": (10, 0, 0, ""), "exporting": (1, 0, 0, "")}
+    if name == "probe error":
+        c = (1, -205, "device refused the request")
+        return {"homing": None, "scanning": (10,) + c, "fitting": (10,) + c, "exporting": (1, 0, 0, "")}
+    if name == "stage fault":
+        c = (1, -209, "stage drive fault")
+        return {"homing": (1,) + c, "scanning": (10,) + c, "fitting": (10,) + c, "exporting": (1, 0, 0, "")}
+    return {"homing": (6, 0, 0, ""), "scanning": (100, 0, 0, ""), "fitting": (100, 0, 0, ""),
+            "exporting": (1, 0, 0, "")}
+
+
+ROWS = WIRE_OK + [("disconnect 4 s", "disconnect:n%d:4000"), ("probe out of range", "nosurf:n%d"),
+                  ("probe error", "proberr:n%d"), ("stage fault", "stagefault:n%d")]
+PHASES = ["homing", "scanning", "fitting", "exporting"]
+table = []
+
+
+def device_row(name, spec):
+    sim = Sim(name.split()[0] + str(len(table)))
+    cells = row_cells(name)
+    res = []
+    for ph in PHASES:
+        c = cells[ph]
+        tag = "%s x %s" % (name, ph)
+        if c is None:
+            res.append("n/a")
+            continue
+        k, want_rc, code, cause = c
+        before = sim.fired()
+        fit = os.path.join(T, "%s-%d.igs" % (sim.name, jobs + 1)) if ph in ("fitting", "exporting") else None
+        extra = ["--fit", fit] if fit else []
+        if ph == "exporting":
+            # Armed when the last reading is in: the fit and the report are
+            # written without the rig; the next job meets the fault.
+            rep = fit + ".json"
+            arm = (lambda: sim.control("stagefault")) if name == "stage fault" else \
+                (lambda: sim.control("fault " + spec % k))
+            jnl, rc, out, err = scan(sim, extra + ["--report", rep], at100=arm)
+            outc = judge(tag, jnl, rc, out, err, 0, 0, "", fit=fit)
+            check(os.path.exists(rep) and summary(open(rep).read()).get("done") == len(PLAN), tag + ": report written")
+            # The next job meets the pending fault: it ends as the scanning
+            # cell says (the first request, reading or move).
+            jnl2, rc2, out2, err2 = scan(sim)
+            want = {"disconnect 4 s": (1, -206, "line or connection lost"), "probe error":
+                    (1, -205, "device refused the request"), "stage fault": (1, -209, "stage drive fault")}
+            w = want.get(name, (0, 0, ""))
+            if name == "disconnect 4 s":
+                w = (1, -206, "lost")  # refused at opening the line: "line lost, reopening failed"
+            o2 = judge(tag + " (next job)", jnl2, rc2, out2, err2, w[0], w[1], w[2])
+            if name != "stage fault":  # latched at once, not counted: the next job's EFAULT shows it
+                check(sim.fired() > before, tag + ": the fault fired (cellsim's log)")
+            outc += "; next job " + o2
+            if w[0]:
+                outc += "; " + next_job(sim, tag, w[1])
+            res.append(outc)
+            continue
+        sim.control("fault " + spec % k)
+        jnl, rc, out, err = scan(sim, extra)
+        outc = judge(tag, jnl, rc, out, err, want_rc, code, cause, fit=fit)
+        check(sim.fired() > before, tag + ": the fault fired (cellsim's log)")
+        if name == "stage fault" and ph == "homing":
+            st = summary(sim.rig("status").stdout)
+            check(st.get("fault") == 1 and st.get("homed") == 0, tag + ": drive fault latched, not homed", str(st))
+        outc += "; " + next_job(sim, tag, code)
+        res.append(outc)
+    sim.stop()
+    table.append((name, res))
+
+
+def disk_row():
+    """A full disk (RLIMIT_FSIZE: EFBIG, as ENOSPC -> RIG_EFULL) and
+    /dev/full for the report."""
+    sim = Sim("disk")
+    res = []
+    # homing: the header cannot be written: refused before any motion.
+    jnl, rc, out, err = scan(sim, limit=64)
+    outc = judge("disk full x homing", jnl, rc, out, err, 1, -215, "storage full")
+    st = summary(sim.rig("status").stdout)
+    check(st.get("homed") == 0 and st.get("x") == 37.5, "disk full x homing: the stage did not move", str(st))
+    res.append(outc + " (before motion); " + next_job(sim, "disk full x homing", 0))
+    # scanning: room for the header and 15 records; the 16th is cut.
+    lim = 128 + 15 * 80 + 40
+    jnl, rc, out, err = scan(sim, limit=lim)
+    outc = judge("disk full x scanning", jnl, rc, out, err, 1, -215, "storage full")
+    j = parse_journal(jnl)
+    check(j and j["records"] == 15 and os.path.getsize(jnl) == 128 + 15 * 80,
+          "disk full x scanning: the torn 16th record cut, 15 whole records left")
+    res.append(outc + "; " + next_job(sim, "disk full x scanning", 0))
+    # fitting: the journal fits, the surface (about 100 KB) does not.
+    fit = os.path.join(T, "disk-fit.igs")
+    jnl, rc, out, err = scan(sim, ["--fit", fit], limit=16384)
+    lines = [ln for ln in err.splitlines() if ln.startswith("cellfit scan:")]
+    good = check(rc == 1 and len(lines) == 1 and fit in lines[0] and "File too large" in lines[0],
+                 "disk full x fitting: exit 1, one line naming the fit file", err.strip()[-300:])
+    j = parse_journal(jnl)
+    good &= check(j and j["ended"] and j["end_code"] == 0 and j["points"] == len(PLAN) and not os.path.exists(fit),
+                  "disk full x fitting: journal complete and ended 0, no partial fit file")
+    rf = run([CF, "journal", "fit", jnl, "--nominal", NOM, "--out", fit + ".replay"])
+    good &= check(rf.returncode == 0, "disk full x fitting: the fit is re-run from the journal")
+    res.append(("1 EFBIG, journal ended 0" if good else "FAIL") + "; " + next_job(sim, "disk full x fitting", 0))
+    # exporting: the report goes to a full device.
+    fit = os.path.join(T, "disk-exp.igs")
+    jnl, rc, out, err = scan(sim, ["--fit", fit, "--report", "/dev/full"])
+    lines = [ln for ln in err.splitlines() if ln.startswith("cellfit scan:")]
+    good = check(rc == 1 and len(lines) == 1 and "/dev/full" in lines[0] and "No space" in lines[0],
+                 "disk full x exporting: exit 1, one line naming the report", err.strip()[-300:])
+    j = parse_journal(jnl)
+    good &= check(j and j["ended"] and j["end_code"] == 0 and os.path.exists(fit),
+                  "disk full x exporting: journal ended 0, the fit written")
+    res.append(("1 ENOSPC, fit kept" if good else "FAIL") + "; " + next_job(sim, "disk full x exporting", 0))
+    table.append(("disk full", res))
+    # An output nobody can write: refused before the job moves anything.
+    res = ["n/a", "n/a"]
+    for ph, opt in (("fitting", "--fit"), ("exporting", "--report")):
+        jnl, rc, out, err = scan(sim, [opt, os.path.join(T, "no-such-dir", "out")])
+        res.append(judge("unwritable output x " + ph, jnl, rc, out, err, 2, 0, "no-such-dir") + "; " +
+                   next_job(sim, "unwritable output x " + ph, 0))
+    table.append(("unwritable output", res))
+    sim.stop()
+
+
+def power_cuts(n):
+    """n kills of `cellfit scan` at seeded random moments."""
+    sim = Sim("cut", homed=True)
+    rng = random.Random(7)
+    global REGION, PLAN
+    REGION, PLAN = (0.0, 100.0, 0.0, 50.0), None
+    PLAN = plan()  # 11 x 6 = 66 points, synced at each row end
+    kept_all = acked_all = dropped = torn = early = 0
+    bad = []
+    for i in range(n):
+        jnl = os.path.join(T, "cut%d.jnl" % i)
+        args = [CF, "scan", "--stage", sim.stage, "--probe", sim.probe, "--nominal", NOM, "--journal", jnl,
+                "--region", "%g:%g:%g:%g" % REGION, "--step", str(STEP)]
+        errf = os.path.join(T, "cut%d.err" % i)
+        with open(errf, "w") as e:
+            p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=e)
+            procs.append(p)
+            time.sleep(rng.uniform(0.03, 0.45))
+            p.kill()
+            p.wait()
+        with open(errf) as f:
+            said = [int(ln.split(", ")[-1].split()[0]) for ln in f if ln.startswith("scan: ")]
+        if not os.path.exists(jnl) or os.path.getsize(jnl) < 128:
+            early += 1  # killed before the header was durable: nothing promised
+            continue
+        j = parse_journal(jnl)
+        if j is None:
+            bad.append("run %d: header unreadable" % i)
+            continue
+        acked = max([j["synced"]] + said)
+        # The power cut: what was not synced may be lost, from any byte on.
+        size = os.path.getsize(jnl)
+        cut = rng.randint(128 + acked * 80, size)
+        with open(jnl, "r+b") as f:
+            f.truncate(cut)
+            if i % 2 and size > cut:
+                f.seek(cut)
+                f.write(bytes(size - cut))  # blocks allocated, never written
+        whole = (cut - 128) // 80
+        info = summary(run([CF, "journal", "info", jnl, "--json"]).stdout)
+        tb = info.get("torn_tail_bytes", -1)
+        want_tb = (size if i % 2 else cut) - (128 + whole * 80)
+        r = run([CF, "journal", "recover", jnl])
+        j2 = parse_journal(jnl)
+        kept = j2["records"] if j2 else -1
+        if r.returncode or kept != whole or kept < acked or os.path.getsize(jnl) != 128 + kept * 80 or \
+                tb != want_tb or \
+                not on_plan(j2["stages"]):
+            bad.append("run %d: acked %d, cut at %d of %d, kept %d, tail %d: %s" %
+                       (i, acked, cut, size, kept, tb, r.stderr.strip()))
+            continue
+        torn += tb > 0
+        kept_all += kept
+        acked_all += acked
+        dropped += (size - 128) // 80 - kept
+        if j2["points"] > 0:
+            rf = run([CF, "journal", "fit", jnl, "--nominal", NOM, "--out", jnl + ".igs", "--json"])
+            if rf.returncode or summary(rf.stdout).get("points") != j2["points"]:
+                bad.append("run %d: journal fit after recovery: %s" % (i, rf.stderr.strip()))
+    sim.stop()
+    for b in bad:
+        print("     " + b)
+    check(not bad, "power cut x %d: every acknowledged record kept, only the torn tail dropped, fit works" % n)
+    print("power cuts: %d kills (%d before the header was durable), %d acknowledged records, %d kept, "
+          "%d unsynced records lost, %d torn tails cut" % (n, early, acked_all, kept_all, dropped, torn))
+
+
+def main():
+    t0 = time.time()
+    r = run([CF, "gen", "--dir", os.path.join(T, "part"), "--nu", "40", "--nv", "30", "--points", "1000"])
+    if r.returncode:
+        no("gen: " + r.stderr)
+        return
+    only = os.environ.get("FAULTS_ONLY")
+    for name, spec in ROWS:
+        if not only or only in name.split()[0]:
+            t = time.time()
+            device_row(name, spec)
+            print("row %s: %.1f s" % (name, time.time() - t))
+    if not only or only == "disk":
+        disk_row()
+    w = max([len(n) for n, _ in table] + [5])
+    print("\nfault matrix (exit and code; then the next job on the same cellsim)")
+    print("| %-*s | %s |" % (w, "fault", " | ".join(PHASES)))
+    print("|%s|%s" % ("-" * (w + 2), "---|" * len(PHASES)))
+    for name, res in table:
+        print("| %-*s | %s |" % (w, name, " | ".join(res)))
+    print("matrix: %d jobs in %.1f s" % (jobs, time.time() - t0))
+    if CUTS > 0 and (not only or only == "cut"):
+        t1 = time.time()
+        power_cuts(CUTS)
+        print("power cuts: %.1f s" % (time.time() - t1))
+
+
+try:
+    main()
+finally:
+    for p in procs:
+        stop(p)
+    subprocess.run(["rm", "-rf", T])
+print("faults: %d passed, %d failed" % (passed, failed))
+sys.exit(1 if failed else 0)
