@@ -140,25 +140,43 @@ def on_plan(stages):
 
 
 class Sim:
-    def __init__(self, name, *extra, homed=False):
+    """cellsim on Modbus TCP (127.0.0.1, a free port), or on Modbus RTU at
+    115200 baud over a socat pty pair (stage and probe on one line)."""
+
+    def __init__(self, name, *extra, homed=False, rtu=False):
         self.name = name
         self.ctl = os.path.join(T, name + ".ctl")
         self.err = os.path.join(T, name + ".sim.err")
         out = os.path.join(T, name + ".sim.out")
-        args = [SIM, "--tcp", "0", "--part", NOM, "--speed", "5000", "--verbose", "--control", self.ctl]
+        wire = ["--tcp", "0"]
+        if rtu:
+            a, b, log = (os.path.join(T, name + x) for x in (".a", ".b", ".socat"))
+            sp = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0,link=" + a, "pty,raw,echo=0,link=" + b],
+                                  stderr=open(log, "w"))
+            procs.append(sp)
+            self.socat = sp
+            for _ in range(200):
+                with open(log) as f:
+                    if "starting data transfer loop" in f.read():
+                        break
+                time.sleep(0.05)
+            time.sleep(0.1)  # socat is ready about 100 ms after its line
+            wire = ["--rtu", b]
+        args = [SIM] + wire + ["--part", NOM, "--speed", "5000", "--verbose", "--control", self.ctl]
         args += ["--homed"] if homed else []
         self.p = subprocess.Popen(args + list(extra), stdout=open(out, "w"), stderr=open(self.err, "w"))
         procs.append(self.p)
-        self.port = None
         for _ in range(200):
             with open(out) as f:
                 s = f.read()
             if "cellsim: ready" in s:
-                self.port = int(s.split("cellsim: tcp 127.0.0.1 ")[1].split()[0])
                 break
             time.sleep(0.05)
-        self.stage = "tcp:127.0.0.1:%d:1" % self.port
-        self.probe = "tcp:127.0.0.1:%d:2" % self.port
+        if rtu:
+            self.stage, self.probe = ("rtu:%s:115200:8N1:%d" % (a, u) for u in (1, 2))
+        else:
+            port = int(s.split("cellsim: tcp 127.0.0.1 ")[1].split()[0])
+            self.stage, self.probe = ("tcp:127.0.0.1:%d:%d" % (port, u) for u in (1, 2))
 
     def control(self, line, wait=True):
         """Write the control file (renamed into place: cellsim never reads
@@ -190,14 +208,17 @@ class Sim:
 
     def stop(self):
         stop(self.p)
+        if hasattr(self, "socat"):
+            stop(self.socat)
 
 
 jobs = 0
 
 
-def scan(sim, extra=(), limit=None, at100=None, region=None):
-    """One job; at100: called when the scan has printed its 100% line (the
-    last reading is in: the job is fitting and exporting)."""
+def scan(sim, extra=(), limit=None, at100=None, region=None, at_pct=100):
+    """One job; at100: called when the scan has printed a progress line of
+    at_pct % or more (100: the last reading is in, the job is fitting and
+    exporting)."""
     global jobs
     jobs += 1
     jnl = os.path.join(T, "%s-%d.jnl" % (sim.name, jobs))
@@ -213,13 +234,55 @@ def scan(sim, extra=(), limit=None, at100=None, region=None):
         done = False
         while p.poll() is None and not done:
             with open(errf) as f:
-                done = "(100%)" in f.read()
+                done = any(int(ln.split("(")[1].split("%")[0]) >= at_pct for ln in f if ln.startswith("scan: "))
             time.sleep(0.002)
         if done:
             at100()
         out = p.communicate(timeout=60)[0]
     with open(errf) as f:
         return jnl, p.returncode, out, f.read()
+
+
+def mb_write(sim, addr, value):
+    """Modbus TCP function 06 to the stage (unit 1), as a PLC or a panel
+    would: cellsim's register 100 is its E-stop button."""
+    import socket
+    port = int(sim.stage.split(":")[2])
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as c:
+        c.sendall(struct.pack(">HHHBBHH", 7, 0, 6, 1, 6, addr, value))
+        c.recv(64)
+
+
+def estop_row():
+    """The E-stop pressed (cellsim's register 100) before homing, during the
+    scan (at the 30% line), during the streamed fit, and when the last
+    reading is in; released before the next job."""
+    sim = Sim("estop")
+    res = []
+    cause = "emergency stop active"
+    for ph in PHASES:
+        tag = "e-stop x " + ph
+        fit = os.path.join(T, "estop-%d.igs" % (jobs + 1)) if ph in ("fitting", "exporting") else None
+        extra = ["--fit", fit] if fit else []
+        press = lambda: mb_write(sim, 100, 1)  # noqa: E731
+        if ph == "homing":
+            press()
+            jnl, rc, out, err = scan(sim)
+            outc = judge(tag, jnl, rc, out, err, 1, -210, cause) + " (before motion)"
+            st = summary(sim.rig("status").stdout)
+            check(st.get("homed") == 0 and st.get("estop") == 1, tag + ": not homed, e-stop shown", str(st))
+        elif ph in ("scanning", "fitting"):
+            jnl, rc, out, err = scan(sim, extra, at100=press, at_pct=30)
+            outc = judge(tag, jnl, rc, out, err, 1, -210, cause, fit=fit)
+        else:
+            jnl, rc, out, err = scan(sim, extra, at100=press)
+            outc = judge(tag, jnl, rc, out, err, 0, 0, "", fit=fit)
+            jnl, rc, out, err = scan(sim)
+            outc += "; next job " + judge(tag + " (next job)", jnl, rc, out, err, 1, -210, cause)
+        mb_write(sim, 100, 0)
+        res.append(outc + "; released, " + next_job(sim, tag, 0))
+    sim.stop()
+    table.append(("e-stop", res))
 
 
 def summary(out):
@@ -279,6 +342,8 @@ def judge(tag, jnl, rc, out, err, want_rc, want_code, cause, fit=None):
             good &= check(not os.path.exists(fit), tag + ": no fit file left by the failed job")
     if not good:
         return "FAIL"
+    if os.environ.get("FAULTS_SHOW"):
+        print("     " + tag + ": " + " | ".join(ln for ln in err.splitlines() if ln.startswith("hal: ")))
     if rc == 0:
         n = err.count("hal: ")  # HAL_DEBUG: one line per retried request
         return "0" + (", %d retr%s" % (n, "y" if n == 1 else "ies") if n else "") + \
@@ -286,7 +351,7 @@ def judge(tag, jnl, rc, out, err, want_rc, want_code, cause, fit=None):
     return "1 %s" % rig_name(want_code)
 
 
-NAMES = {-202: "ETIMEOUT", -205: "EEXCEPTION", -206: "EDISCONNECT", -209: "EFAULT", -215: "EFULL"}
+NAMES = {-202: "ETIMEOUT", -205: "EEXCEPTION", -206: "EDISCONNECT", -209: "EFAULT", -210: "EESTOP", -215: "EFULL"}
 
 
 def rig_name(code):
@@ -316,8 +381,13 @@ def next_job(sim, tag, code):
 # opening reads limits and range (2), preflight status (3), homing's
 # status, counter, command, counter, polls (4..): K 6 is the home command.
 # A grid point is about 9 requests: K 100 is near point 11 of 24.
-WIRE_OK = [("crc", "crc:n%d"), ("garble", "garble:n%d"), ("drop", "drop:n%d"), ("slow 800 ms", "slow:n%d:800"),
-           ("silent", "silent:n%d"), ("busy", "busy:n%d"), ("disconnect 1 s", "disconnect:n%d:1000")]
+# On TCP cellsim's crc and garble both flip the transaction id (TCP frames
+# carry no checksum): one row; on RTU a flipped CRC bit and a changed data
+# byte are two faults.
+WIRE_OK = [("crc (RTU)", "crc:n%d"), ("garble (RTU)", "garble:n%d"), ("drop (RTU)", "drop:n%d"),
+           ("disconnect 0.5 s (RTU)", "disconnect:n%d:500"), ("crc/garble (TCP)", "crc:n%d"),
+           ("drop (TCP)", "drop:n%d"), ("slow 600 ms", "slow:n%d:600"), ("silent", "silent:n%d"),
+           ("busy", "busy:n%d"), ("disconnect 0.5 s", "disconnect:n%d:500")]
 
 
 def row_cells(name):
@@ -344,7 +414,7 @@ table = []
 
 
 def device_row(name, spec):
-    sim = Sim(name.split()[0] + str(len(table)))
+    sim = Sim(name.split()[0].replace("/", "") + str(len(table)), rtu="RTU" in name)
     cells = row_cells(name)
     res = []
     for ph in PHASES:
@@ -386,6 +456,9 @@ def device_row(name, spec):
         jnl, rc, out, err = scan(sim, extra)
         outc = judge(tag, jnl, rc, out, err, want_rc, code, cause, fit=fit)
         check(sim.fired() > before, tag + ": the fault fired (cellsim's log)")
+        if ph == "homing" and rc == 0:
+            check("unit 1: writing 1 register at 4:" in err or "slave 1: writing 1 register at 4:" in err,
+                  tag + ": the home command was the request retried", err.strip()[-300:])
         if name == "stage fault" and ph == "homing":
             st = summary(sim.rig("status").stdout)
             check(st.get("fault") == 1 and st.get("homed") == 0, tag + ": drive fault latched, not homed", str(st))
@@ -464,7 +537,7 @@ def power_cuts(n):
         with open(errf, "w") as e:
             p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=e)
             procs.append(p)
-            time.sleep(rng.uniform(0.03, 0.45))
+            time.sleep(rng.uniform(0.0, 0.45))
             p.kill()
             p.wait()
         with open(errf) as f:
@@ -522,10 +595,12 @@ def main():
         return
     only = os.environ.get("FAULTS_ONLY")
     for name, spec in ROWS:
-        if not only or only in name.split()[0]:
+        if not only or only in name:
             t = time.time()
             device_row(name, spec)
             print("row %s: %.1f s" % (name, time.time() - t))
+    if not only or only == "e-stop":
+        estop_row()
     if not only or only == "disk":
         disk_row()
     w = max([len(n) for n, _ in table] + [5])
