@@ -587,6 +587,176 @@ def power_cuts(n):
           "%d unsynced records lost, %d torn tails cut" % (n, early, acked_all, kept_all, dropped, torn))
 
 
+class Plc:
+    """A PLC on Modbus TCP (functions 03 and 16), word order 0 (low word
+    first), as docs/plc-register-map.md describes the handshake."""
+
+    def __init__(self, port):
+        import socket
+        self.s = socket.create_connection(("127.0.0.1", port), timeout=10)
+        self.tid = 0
+        self.seq = 0
+
+    def _recv(self, n):
+        b = b""
+        while len(b) < n:
+            c = self.s.recv(n - len(b))
+            if not c:
+                raise IOError("cell closed the connection")
+            b += c
+        return b
+
+    def _req(self, pdu):
+        self.tid = (self.tid + 1) & 0xFFFF
+        self.s.sendall(struct.pack(">HHHB", self.tid, 0, len(pdu) + 1, 1) + pdu)
+        tid, _, ln, _ = struct.unpack(">HHHB", self._recv(7))
+        body = self._recv(ln - 1)
+        if body[0] & 0x80:
+            raise IOError("exception %d" % body[1])
+        return body
+
+    def read(self, addr, n=1):
+        body = self._req(struct.pack(">BHH", 3, addr, n))
+        return list(struct.unpack(">%dH" % n, body[2:2 + 2 * n]))
+
+    def write(self, addr, regs):
+        self._req(struct.pack(">BHHB", 16, addr, len(regs), 2 * len(regs)) + struct.pack(">%dH" % len(regs), *regs))
+
+    def region(self, x0, y0, x1, y1, step):
+        regs = []
+        for v in (x0, y0, x1, y1, step):
+            u = struct.unpack(">I", struct.pack(">f", v))[0]
+            regs += [u & 0xFFFF, u >> 16]
+        self.write(72, regs)
+
+    def job(self, code, secs=60):
+        """Command, acknowledged, ended: (CMD_RESULT, STATE, ERROR_CODE)."""
+        self.seq = self.seq % 65535 + 1
+        self.write(20, [code, self.seq])
+        t = time.time() + secs
+        while time.time() < t:
+            st, ack, done, state, _, err, _, res = self.read(40, 8)
+            if ack == self.seq and res:
+                return res, state, err
+            if ack == self.seq and (code not in (1, 2, 3, 4, 7) or done == self.seq and not st & 2):
+                return 0, state, err  # RESET, ABORT, ACK_RESULTS: taken is done
+            time.sleep(0.01)
+        return -1, -1, -1
+
+
+def plc_codes():
+    """PLC_E_* from firmware/plc_err.h (the names the mapping is stated in)."""
+    import re
+    src = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "firmware", "plc_err.h")
+    with open(src) as f:
+        return {m.group(1): int(m.group(2)) for m in re.finditer(r"(PLC_E_\w+) = (\d+)", f.read())}
+
+
+def serve_has_rig():
+    r = run([CF, "serve", "--plc", "tcp:127.0.0.1:0", "--stage", "x"], timeout=10)
+    return "needs both --stage URI and --probe URI" in r.stderr
+
+
+def plc_column():
+    """The scanning column as the PLC sees it: `cellfit serve` on the rig,
+    a PLC client homing and scanning, each fault armed before its SCAN; the
+    code in ERROR_CODE, then RESET, HOME, and the next SCAN must end clean."""
+    pc = plc_codes()
+    want = {0: 0, -206: pc.get("PLC_E_RIG_LINK"), -205: pc.get("PLC_E_PROBE"), -209: pc.get("PLC_E_STAGE"),
+            -210: pc.get("PLC_E_ESTOP", pc.get("PLC_E_STAGE")), -215: pc.get("PLC_E_RIG")}
+    names = {v: k for k, v in pc.items()}
+    col = {}
+
+    def serve(sim, tag, limit=None):
+        jd = os.path.join(T, "plc-" + tag)
+        os.mkdir(jd)
+        pf = os.path.join(jd, "port")
+
+        def pre():
+            if limit is not None:
+                signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+                resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+        p = subprocess.Popen([CF, "serve", "--plc", "tcp:127.0.0.1:0", "--port-file", pf, "--stage", sim.stage,
+                              "--probe", sim.probe, "--nominal", NOM, "--journal-dir", jd, "--watchdog-ms", "0"],
+                             stdout=subprocess.DEVNULL, stderr=open(jd + ".log", "w"), preexec_fn=pre)
+        procs.append(p)
+        for _ in range(200):
+            if os.path.exists(pf) and open(pf).read().strip():
+                break
+            time.sleep(0.05)
+        plc = Plc(int(open(pf).read().split()[0]))
+        plc.region(REGION[0], REGION[2], REGION[1], REGION[3], STEP)
+        return p, plc, jd
+
+    def cell(plc, jd, tag, code, after_error=None):
+        before = set(os.listdir(jd))
+        res, state, err = plc.job(2)
+        w = want[code]
+        new = sorted(set(os.listdir(jd)) - before)
+        jn = [os.path.join(jd, n) for n in new if n.endswith(".jnl")]
+        j = parse_journal(jn[0]) if jn else None
+        good = check(res == 0 and err == w and state == (6 if w else 0),
+                     "plc %s: SCAN ends with ERROR_CODE %s (%s)" % (tag, w, names.get(w, "none")),
+                     "CMD_RESULT %d, STATE %d, ERROR_CODE %d" % (res, state, err))
+        good &= check(j is not None and j["tail_bytes"] == 0 and on_plan(j["stages"]) and
+                      (code == -215 or (j["ended"] and j["end_code"] == code)),
+                      "plc %s: its journal consistent, ended %d" % (tag, code), str(j and {k: j[k] for k in j if k != "stages"}))
+        if w:
+            if after_error:
+                after_error()
+            r1 = plc.job(6)
+            r2 = plc.job(1)
+            good &= check(r1[:2] == (0, 0) and r2 == (0, 0, 0), "plc %s: RESET, HOME" % tag, "%s %s" % (r1, r2))
+        return ("%d %s" % (err, names.get(err, "")) if err else "0") if good else "FAIL"
+
+    sim = Sim("plc", homed=False)
+    p, plc, jd = serve(sim, "tcp")
+    check(plc.job(1) == (0, 0, 0), "plc: HOME")
+    for name, spec in ROWS:
+        if "RTU" in name:
+            continue
+        c = row_cells(name)["scanning"]
+        k, _, code, _ = c
+        before = sim.fired()
+        sim.control("fault " + spec % k)
+        after = (lambda: sim.wait_line()) if code == -206 else None
+        col[name] = cell(plc, jd, name, code, after)
+        check(sim.fired() > before, "plc %s: the fault fired (cellsim's log)" % name)
+        r = plc.job(2)  # the cell takes the next job
+        check(r == (0, 0, 0), "plc %s: next SCAN clean" % name, str(r))
+    # E-stop pressed mid-scan (at 30 % PROGRESS), released, RESET, HOME.
+    plc.seq = plc.seq % 65535 + 1
+    plc.write(20, [2, plc.seq])
+    t = time.time() + 30
+    while time.time() < t and plc.read(44)[0] < 30:
+        time.sleep(0.002)
+    mb_write(sim, 100, 1)
+    while time.time() < t and plc.read(42)[0] != plc.seq:
+        time.sleep(0.01)
+    st, _, _, state, _, err, _, _ = plc.read(40, 8)
+    mb_write(sim, 100, 0)
+    w = want[-210]
+    good = check(state == 6 and err == w, "plc e-stop: SCAN ends with ERROR_CODE %s" % w, "STATE %d ERROR_CODE %d" % (state, err))
+    r1, r2, r3 = plc.job(6), plc.job(1), plc.job(2)
+    good &= check(r1[:2] == (0, 0) and r2 == (0, 0, 0) and r3 == (0, 0, 0), "plc e-stop: RESET, HOME, next SCAN",
+                  "%s %s %s" % (r1, r2, r3))
+    col["e-stop"] = ("%d %s" % (err, names.get(err, ""))) if good else "FAIL"
+    stop(p)
+    sim.stop()
+    # A full disk under the cell's journal: 15 records fit, the 16th not.
+    sim = Sim("plcdisk")
+    p, plc, jd = serve(sim, "disk", limit=128 + 15 * 80 + 40)
+    check(plc.job(1) == (0, 0, 0), "plc disk full: HOME")
+    col["disk full"] = cell(plc, jd, "disk full", -215)
+    plc.region(0, 0, 20, 10, STEP)  # a job of 6 points fits
+    r = plc.job(2)
+    check(r == (0, 0, 0), "plc disk full: next (smaller) SCAN clean", str(r))
+    stop(p)
+    sim.stop()
+    return col
+
+
 def main():
     t0 = time.time()
     r = run([CF, "gen", "--dir", os.path.join(T, "part"), "--nu", "40", "--nv", "30", "--points", "1000"])
@@ -603,12 +773,21 @@ def main():
         estop_row()
     if not only or only == "disk":
         disk_row()
+    col = None
+    if not only or only == "plc":
+        if serve_has_rig():
+            t = time.time()
+            col = plc_column()
+            print("plc column: %.1f s" % (time.time() - t))
+        else:
+            print("skip plc column: this cellfit serve has no --stage/--probe")
     w = max([len(n) for n, _ in table] + [5])
     print("\nfault matrix (exit and code; then the next job on the same cellsim)")
-    print("| %-*s | %s |" % (w, "fault", " | ".join(PHASES)))
-    print("|%s|%s" % ("-" * (w + 2), "---|" * len(PHASES)))
+    print("| %-*s | %s |%s" % (w, "fault", " | ".join(PHASES), " PLC: ERROR_CODE after SCAN |" if col else ""))
+    print("|%s|%s%s" % ("-" * (w + 2), "---|" * len(PHASES), "---|" if col else ""))
     for name, res in table:
-        print("| %-*s | %s |" % (w, name, " | ".join(res)))
+        extra = (" %s |" % col.get(name, "(TCP rows)" if "RTU" in name else "n/a")) if col else ""
+        print("| %-*s | %s |%s" % (w, name, " | ".join(res), extra))
     print("matrix: %d jobs in %.1f s" % (jobs, time.time() - t0))
     if CUTS > 0 and (not only or only == "cut"):
         t1 = time.time()
