@@ -23,6 +23,7 @@
 import json
 import os
 import random
+import re
 import resource
 import signal
 import struct
@@ -541,7 +542,7 @@ def power_cuts(n):
             p.kill()
             p.wait()
         with open(errf) as f:
-            said = [int(ln.split(", ")[-1].split()[0]) for ln in f if ln.startswith("scan: ")]
+            said = [int(m.group(1)) for m in re.finditer(r"^scan: .*, (\d+) acknowledged$", f.read(), re.M)]
         if not os.path.exists(jnl) or os.path.getsize(jnl) < 128:
             early += 1  # killed before the header was durable: nothing promised
             continue
@@ -646,7 +647,6 @@ class Plc:
 
 def plc_codes():
     """PLC_E_* from firmware/plc_err.h (the names the mapping is stated in)."""
-    import re
     src = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "firmware", "plc_err.h")
     with open(src) as f:
         return {m.group(1): int(m.group(2)) for m in re.finditer(r"(PLC_E_\w+) = (\d+)", f.read())}
