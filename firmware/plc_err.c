@@ -17,6 +17,8 @@ const char *plc_strerror(int code)
     case PLC_E_TOO_BIG: return "control net exceeds the board's budget";
     case PLC_E_NO_JOB_FILES: return "fit not configured (nominal and points files)";
     case PLC_E_WATCHDOG: return "watchdog: PLC heartbeat stopped";
+    case PLC_E_RIG_LINK: return "rig line failed (stage or probe not answering)";
+    case PLC_E_RIG_GONE: return "rig process ended";
     case PLC_E_NOMINAL: return "cannot read the nominal surface";
     case PLC_E_POINTS: return "cannot read the measured points";
     case PLC_E_NO_POINTS: return "no points";
@@ -27,6 +29,7 @@ const char *plc_strerror(int code)
     case PLC_E_PROBE: return "probe fault";
     case PLC_E_RIG: return "rig failure";
     case PLC_E_INTERNAL: return "internal error";
+    case PLC_E_ESTOP: return "emergency stop";
     }
     return "unknown error code";
 }

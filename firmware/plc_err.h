@@ -23,6 +23,8 @@ typedef enum plc_err {
     PLC_E_NO_JOB_FILES = 111,    /* fit: no nominal / points configured */
     /* 2xx: communication */
     PLC_E_WATCHDOG = 201, /* PLC heartbeat unchanged for WATCHDOG_MS */
+    PLC_E_RIG_LINK = 202, /* the line to the stage or probe failed (timeout, lost) */
+    PLC_E_RIG_GONE = 203, /* the rig's process (the simulator) ended */
     /* 3xx: measurement and job */
     PLC_E_NOMINAL = 301,   /* cannot read the nominal surface */
     PLC_E_POINTS = 302,    /* cannot read the points */
@@ -33,7 +35,8 @@ typedef enum plc_err {
     PLC_E_STAGE = 307,     /* stage fault, limit or emergency stop */
     PLC_E_PROBE = 308,     /* probe or its line failed */
     PLC_E_RIG = 309,       /* other rig failure (journal, storage) */
-    PLC_E_INTERNAL = 310   /* a bug: please report */
+    PLC_E_INTERNAL = 310,  /* a bug: please report */
+    PLC_E_ESTOP = 311      /* emergency stop pressed during the job */
 } plc_err_t;
 
 /* A static string for every value above; "unknown error code" otherwise. */

@@ -147,6 +147,7 @@ static void params_from_map(const plc_map_t *m, plc_params_t *p, uint16_t seq)
     p->net_u = plc_map_u16(m, PLC_R_NET_U);
     p->net_v = plc_map_u16(m, PLC_R_NET_V);
     p->seq = seq;
+    p->cmd = 0;
     p->tol = plc_map_f32(m, PLC_R_TOLERANCE);
     p->alpha = plc_map_f32(m, PLC_R_ALPHA);
     p->beta = plc_map_f32(m, PLC_R_BETA);
@@ -206,6 +207,7 @@ plc_action_t plc_fsm_command(plc_fsm_t *f, int cmd, uint16_t seq, uint32_t now_m
     uint16_t code = r.code;
     if (r.kind != PLC_K_REJECT) {
         params_from_map(f->map, &p, seq);
+        p.cmd = (uint16_t)cmd;
         code = guard(f, cmd, &p);
     }
     f->ack_seq = seq;
@@ -277,7 +279,8 @@ int plc_fsm_event(plc_fsm_t *f, plc_event_t ev, int code, const plc_results_t *r
             job_end(f, PLC_S_IDLE, 0, 0);
         }
     } else if (to == PLC_S_ERROR) {
-        if (from == PLC_S_HOMING)
+        /* A stage that faulted or was e-stopped has to be referenced again. */
+        if (from == PLC_S_HOMING || code == PLC_E_STAGE || code == PLC_E_ESTOP)
             f->homed = 0;
         job_end(f, PLC_S_ERROR, (uint16_t)(code ? code : PLC_E_INTERNAL), 0);
     } else {
@@ -300,6 +303,33 @@ void plc_fsm_progress(plc_fsm_t *f, int pct)
     publish(f);
 }
 
+/* Abort a running job to end in ERROR code, or go to ERROR when idle. */
+static plc_action_t raise_error(plc_fsm_t *f, uint16_t code)
+{
+    if (plc_state_busy(f->state)) {
+        f->pending_error = code;
+        f->state = PLC_S_ABORTING;
+        return PLC_ACT_ABORT;
+    }
+    if (f->state != PLC_S_ERROR) { /* an earlier error stays the one shown */
+        f->state = PLC_S_ERROR;
+        f->error = code;
+        return PLC_ACT_ABORT;
+    }
+    return PLC_ACT_NONE;
+}
+
+plc_action_t plc_fsm_fault(plc_fsm_t *f, uint16_t code, int lose_rig)
+{
+    if (lose_rig) {
+        f->rig = 0;
+        f->homed = 0;
+    }
+    plc_action_t act = raise_error(f, code);
+    publish(f);
+    return act;
+}
+
 plc_action_t plc_fsm_tick(plc_fsm_t *f, uint32_t now_ms)
 {
     plc_action_t act = PLC_ACT_NONE;
@@ -312,15 +342,7 @@ plc_action_t plc_fsm_tick(plc_fsm_t *f, uint32_t now_ms)
         /* The PLC is gone: stop motion, raise 201, disarm until it
          * heartbeats again. */
         f->wd_armed = 0;
-        if (plc_state_busy(f->state)) {
-            f->pending_error = PLC_E_WATCHDOG;
-            f->state = PLC_S_ABORTING;
-            act = PLC_ACT_ABORT;
-        } else if (f->state != PLC_S_ERROR) { /* an earlier error stays the one shown */
-            f->state = PLC_S_ERROR;
-            f->error = PLC_E_WATCHDOG;
-            act = PLC_ACT_ABORT;
-        }
+        act = raise_error(f, PLC_E_WATCHDOG);
     }
     publish(f);
     return act;
@@ -333,6 +355,13 @@ int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint3
     int ex = plc_map_check_write(f->map, a, n, v);
     if (ex)
         return ex;
+    /* A running job's parameters and the cell's settings stay as they were:
+     * only the command (ABORT) and the heartbeat get through. */
+    if (plc_state_busy(f->state)) {
+        int cmd = a == PLC_R_COMMAND && n == 2, hb = a == PLC_R_PLC_HEARTBEAT && n == 1;
+        if (!cmd && !hb)
+            return PLC_EX_BUSY;
+    }
     plc_map_t *m = f->map;
     uint16_t old_order = m->reg[PLC_R_WORD_ORDER];
     plc_map_store(m, a, n, v);
@@ -342,6 +371,8 @@ int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint3
         m->reg[PLC_R_WORD_ORDER] = old_order;
         plc_map_set_order(m, v[PLC_R_WORD_ORDER - a]);
     }
+    if (a <= PLC_R_WATCHDOG_MS && PLC_R_WATCHDOG_MS < a + n)
+        f->hb_ms = now_ms; /* a new timeout counts from now, not from an old heartbeat */
     if (a <= PLC_R_PLC_HEARTBEAT && PLC_R_PLC_HEARTBEAT < a + n) {
         uint16_t hb = v[PLC_R_PLC_HEARTBEAT - a];
         if (hb != f->plc_hb) { /* armed by the first change */

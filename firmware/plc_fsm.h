@@ -58,6 +58,7 @@ typedef enum plc_action {
 typedef struct plc_params {
     uint32_t part;
     uint16_t program, folder, net_u, net_v, seq;
+    uint16_t cmd; /* the job's command (plc_cmd_t) */
     float tol, alpha, beta, x0, y0, x1, y1, step;
 } plc_params_t;
 
@@ -96,7 +97,9 @@ void plc_fsm_init(plc_fsm_t *f, plc_map_t *m, int rig, uint16_t watchdog_ms, plc
 
 /* A Modbus write of n registers at a: 0 and the registers stored (and a
  * command taken, the heartbeat noted), or a Modbus exception code and
- * nothing changed. *act says what the caller must do. */
+ * nothing changed. While a job runs (or aborts) only COMMAND (whose rule
+ * refuses all but ABORT with 102) and PLC_HEARTBEAT may be written; any
+ * other write is PLC_EX_BUSY (06). *act says what the caller must do. */
 int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint32_t now_ms,
                   plc_action_t *act);
 
@@ -107,6 +110,12 @@ plc_action_t plc_fsm_command(plc_fsm_t *f, int cmd, uint16_t seq, uint32_t now_m
  * was FITTING, else NULL), FAIL with a 3xx code, or ABORTED. Returns the new
  * state; a state among HOMING..EXPORTING means: run that phase next. */
 int plc_fsm_event(plc_fsm_t *f, plc_event_t ev, int code, const plc_results_t *res);
+
+/* A fault of the cell outside the handshake (the rig's process ended):
+ * as the watchdog, a running job is aborted and ends in ERROR code, an idle
+ * cell goes to ERROR code (an earlier error stays the one shown). With
+ * lose_rig the rig is gone for good: RIG clears, HOME and SCAN are 106. */
+plc_action_t plc_fsm_fault(plc_fsm_t *f, uint16_t code, int lose_rig);
 
 /* Progress of the running job, 0..100. */
 void plc_fsm_progress(plc_fsm_t *f, int pct);

@@ -27,7 +27,7 @@ enum {
 };
 
 /* Modbus exception codes the map gives. */
-enum { PLC_EX_FUNCTION = 1, PLC_EX_ADDRESS = 2, PLC_EX_VALUE = 3 };
+enum { PLC_EX_FUNCTION = 1, PLC_EX_ADDRESS = 2, PLC_EX_VALUE = 3, PLC_EX_BUSY = 6 };
 
 /* Register types. CMD is two u16 written together: command code, sequence. */
 enum { PLC_T_U16, PLC_T_BITS, PLC_T_U32, PLC_T_F32, PLC_T_STR16, PLC_T_CMD };

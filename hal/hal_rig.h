@@ -19,6 +19,12 @@ typedef struct hal_stage {
     int poll_ms;         /* status polling interval (default 5) */
     double tol_mm;       /* position read back must match the target within (0.002) */
     char err[320];       /* detail of the last failure */
+    /* Appended: asked at every status poll of a move or homing (and between
+     * slices of the wait before polling); non-zero stops the stage and the
+     * call returns RIG_EABORTED. The caller's own line sends the stop, so a
+     * job's thread never shares its transport. NULL: never. */
+    int (*should_stop)(void *ctx);
+    void *stop_ctx;
 } hal_stage_t;
 
 /* Bind a stage to an open Modbus transport (its unit id is the URI's) and

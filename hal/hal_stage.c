@@ -137,9 +137,18 @@ static int command(hal_stage_t *s, uint16_t cmd, const int32_t *tgt, const char 
 static int wait_for(hal_stage_t *s, unsigned want, double first_wait_ms, int timeout_ms,
                     const char *what)
 {
-    double t_end = hal_now_ms() + timeout_ms;
-    hal_sleep_ms(first_wait_ms);
+    double t_end = hal_now_ms() + timeout_ms, t_poll = hal_now_ms() + first_wait_ms;
     for (;;) {
+        if (s->should_stop && s->should_stop(s->stop_ctx)) {
+            uint16_t stop = STG_CMD_STOP;
+            hal_write_regs(s->h, STG_COMMAND, 1, &stop);
+            return sfail(s, RIG_EABORTED, "stage: %s stopped on request", what);
+        }
+        double left = t_poll - hal_now_ms();
+        if (left > 0) { /* the wait before polling, in slices that see a stop */
+            hal_sleep_ms(left < 20 ? left : 20);
+            continue;
+        }
         uint16_t st;
         int rc = rd(s, STG_STATUS, 1, &st, "reading status");
         if (rc)

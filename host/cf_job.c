@@ -61,7 +61,7 @@ static int refine_dir(nf_surf_t *s, int n, int in_u, char *msg, size_t ml)
 }
 
 /* The nominal, refined to the net asked, and the fit's byte count. */
-static int load_base(const cf_job_fit_opts_t *o, nf_surf_t *s, long *need, char *msg, size_t ml)
+int cf_job_load_base(const cf_job_fit_opts_t *o, nf_surf_t *s, long *need, char *msg, size_t ml)
 {
     int rc = cf_iges_read(o->nominal, 0, s, msg, ml);
     if (rc)
@@ -92,7 +92,7 @@ int cf_job_check(const cf_job_fit_opts_t *o, char *msg, size_t ml)
     nf_surf_t s;
     long need;
     /* Cheap enough to do at every command: one IGES read, a few inserts. */
-    int rc = load_base(o, &s, &need, msg, ml);
+    int rc = cf_job_load_base(o, &s, &need, msg, ml);
     if (!rc)
         cf_surf_free(&s);
     return rc;
@@ -202,7 +202,7 @@ int cf_job_fit(const cf_job_fit_opts_t *o, const cf_job_ctl_t *ctl, cf_job_resul
     nf_surf_t base;
     long need = 0;
     progress(ctl, 0);
-    int rc = load_base(o, &base, &need, msg, ml);
+    int rc = cf_job_load_base(o, &base, &need, msg, ml);
     if (rc)
         return rc;
     out->bytes = need;
@@ -314,7 +314,9 @@ int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const cha
     cli_json_int(&j, "utc", (long)meta->utc);
     cli_json_str(&j, "board", meta->board);
     cli_json_str(&j, "nominal", meta->nominal);
-    cli_json_str(&j, "points_file", meta->points);
+    cli_json_str(&j, "points_file", meta->points ? meta->points : "");
+    if (meta->journal)
+        cli_json_str(&j, "journal", meta->journal);
     cli_json_str(&j, "verdict", st->max_abs <= st->tol ? "pass" : "fail");
     cli_json_int(&j, "control_points", (long)r->fitted.nu * r->fitted.nv);
     cli_json_int(&j, "nu", r->fitted.nu);

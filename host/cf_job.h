@@ -40,6 +40,10 @@ typedef struct cf_job_result {
  * NF_EBUDGET (too big), CF_EARG (net smaller than the nominal's). */
 int cf_job_check(const cf_job_fit_opts_t *o, char *msg, size_t ml);
 
+/* The nominal read and refined to the net asked (s: heap, cf_surf_free),
+ * and the fit's byte count; the errors of cf_job_check. */
+int cf_job_load_base(const cf_job_fit_opts_t *o, nf_surf_t *s, long *need, char *msg, size_t ml);
+
 /* Run the fit. 0 with *out filled (free with cf_job_result_free);
  * RIG_EABORTED when ctl asked to stop; otherwise CF_E* / NF_E* with msg
  * naming file and line. On failure *out owns nothing. */
@@ -52,7 +56,8 @@ typedef struct cf_job_meta {
     unsigned long part;
     unsigned program, seq;
     const char *nominal, *points, *board;
-    long long utc; /* seconds since 1970 */
+    long long utc;       /* seconds since 1970 */
+    const char *journal; /* the scan's journal (SCAN_FIT), or NULL */
 } cf_job_meta_t;
 
 /* Folder name for a result: "<part>_<YYYYMMDDTHHMMSSZ>" into buf. */

@@ -1,29 +1,51 @@
 /* cf_plcrun.h: the job runner `cellfit serve` uses (cf_plcsrv.h's table):
- *   fit    = fit the configured points file against the configured nominal
- *            (cf_job), results from the deviation statistics;
- *   export = the last fit's IGES and report JSON into the results folder
- *            chosen by RESULTS_FOLDER, in "<part>_<UTC timestamp>";
- *   home, scan = the rig. RIG WIRING: they wait for the stage and probe
- *            drivers (hal/, branch rig) and the scan job (firmware/scan.h,
- *            branch journal); until those are wired the runner has no rig,
- *            so the state machine refuses HOME / SCAN / SCAN_FIT with 106
- *            "rig not configured". */
+ *   home     = reference the stage (a latched drive fault is reset first);
+ *   scan     = the raster over SCAN_X0..SCAN_Y1 at SCAN_STEP measured into
+ *              a new journal "<part>_<UTC>.jnl" in the journal folder (or
+ *              the results folder RESULTS_FOLDER chooses) (cf_scanjob.h);
+ *   fit      = FIT: the configured points file against the nominal
+ *              (cf_job); SCAN_FIT: the journal just measured (cf_scanjob);
+ *              results from the deviation statistics;
+ *   export   = the last fit's IGES and report JSON (with the journal's
+ *              path) into the results folder RESULTS_FOLDER chooses, in
+ *              "<part>_<UTC timestamp>".
+ * The rig's lines belong to the job's thread while a phase runs (rig_mu);
+ * an abort sets the server's stop flag, which the stage driver polls while
+ * it waits for a move or homing (hal_stage_t.should_stop) and the scan
+ * between points: the stage is stopped from the job's own line within one
+ * poll. With no job running, an abort stops the stage at once. */
 #ifndef CF_PLCRUN_H
 #define CF_PLCRUN_H
 
 #include "cf_plcsrv.h"
+#include "cf_simchild.h"
+#include "hal_rig.h"
+#include <pthread.h>
 
 typedef struct cf_plcrun {
     const char *nominal, *points;             /* fit inputs (config) */
     const char *results_dir[PLC_MAX_FOLDERS]; /* RESULTS_FOLDER choices */
+    const char *journal_dir;                  /* scans' journals; NULL: the results folder */
+    double z0, cal[3];                        /* kinematics of the probe (scan.h) */
+    hal_rig_t *rig;                           /* NULL: no rig */
+    cf_simchild_t *sim;                       /* --sim: the simulator, watched */
+    pthread_mutex_t rig_mu;                   /* the rig's lines: one user at a time */
+    const cf_job_ctl_t *ctl;                  /* the running phase's (under rig_mu) */
     cf_job_result_t last;                     /* the latched fit's result */
-    int have_last;
+    int have_last, last_scan, sim_lost;
     unsigned long last_part;
-    char last_export[4096]; /* folder of the last export */
+    double job_t0;           /* start of the running job (SCAN_FIT's duration) */
+    char journal[4096];      /* the last scan's journal */
+    char last_journal[4096]; /* the journal of the latched fit ("" for FIT) */
+    char last_export[4096];  /* folder of the last export */
 } cf_plcrun_t;
 
-/* The runner table over rr (rig: 0 until the rig is wired). */
+/* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */
 void cf_plcrun_init(cf_plcrun_t *rr, cf_runner_t *out);
 void cf_plcrun_free(cf_plcrun_t *rr);
+
+/* PLC error code (3xx, 2xx) for a rig_err_t that ended a job at where
+ * (SCAN_AT_*); CF_PLC_ABORTED for RIG_EABORTED. */
+int cf_plcrun_rig_code(int rc, int where);
 
 #endif

@@ -1,19 +1,26 @@
 /* cf_plcsrv.h: the cell's Modbus TCP server. Several clients at once (a
- * PLC and HMIs) are served by one thread with select() over their sockets
- * (one libmodbus context, modbus_set_socket before each receive); reads and
- * writes go through the register map and the state machine (plc_map.h,
- * plc_fsm.h) under one mutex. A job runs in a worker thread behind a job
- * runner (the table below) and keeps running while clients come and go.
- * Function codes: 03 read, 06 write single, 16 write multiple holding
- * registers; anything else is exception 01. */
+ * PLC and HMIs) are served by one thread with select() over non-blocking
+ * sockets; each client's bytes are framed by the MBAP header here (no call
+ * ever waits for a slow or broken client: a malformed header closes that
+ * connection, a frame left half-sent for FRAME_MS too), so the heartbeat
+ * and the watchdog never stall. Reads and writes go through the register
+ * map and the state machine (plc_map.h, plc_fsm.h) under one mutex. A job
+ * runs in a worker thread behind a job runner (the table below) and keeps
+ * running while clients come and go. Function codes: 03 read, 06 write
+ * single, 16 write multiple holding registers; anything else is exception
+ * 01. Hardening: at most max_clients connections, an optional allow-list
+ * of client addresses, and a request rate limit per client (a token
+ * bucket: requests beyond it are answered exception 06, server busy). */
 #ifndef CF_PLCSRV_H
 #define CF_PLCSRV_H
 
 #include "cf_job.h"
 #include "plc_fsm.h"
 #include <signal.h>
+#include <stdint.h>
 
 #define CF_PLC_ABORTED (-1) /* a phase's return: it stopped on request */
+#define CF_PLC_MAX_ALLOW 16 /* allow-list entries */
 
 /* What runs the jobs. Phases run in the worker thread and return 0, a 3xx
  * PLC code (plc_err.h), or CF_PLC_ABORTED; ctl gives progress and the stop
@@ -27,6 +34,9 @@ typedef struct cf_runner {
     int (*fit)(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, plc_results_t *res);
     int (*export_result)(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl);
     void (*abort)(void *ctx);
+    /* server thread, every tick: 0, or a 2xx code once when the rig is
+     * gone for good (the simulator's process ended); may be NULL */
+    int (*health)(void *ctx);
     void *ctx;
     int rig; /* 1: a stage and probe are configured (home and scan possible) */
 } cf_runner_t;
@@ -39,6 +49,11 @@ typedef struct cf_plcsrv_opts {
     unsigned watchdog_ms;
     const char *port_file;  /* the port actually bound is written here */
     float tol, alpha, beta; /* parameter defaults in the registers */
+    /* clients allowed: address & mask == net for one of the nallow entries
+     * (host byte order); nallow 0: any */
+    int nallow;
+    uint32_t allow_net[CF_PLC_MAX_ALLOW], allow_mask[CF_PLC_MAX_ALLOW];
+    double max_rate; /* requests a second per client (burst the same), 0: no limit */
 } cf_plcsrv_opts_t;
 
 /* Serve until *stop becomes non-zero (SIGTERM). Returns 0 after a clean

@@ -1,8 +1,10 @@
 /* cmd_serve.c: `cellfit serve`: the cell headless, driven by a PLC over
  * Modbus TCP (docs/plc-register-map.md). Options override the config file
  * (key = value, cf_conf.h; keys are the long options without "--", '-' as
- * '_'); logs with levels to stderr or syslog; SIGTERM or SIGINT stops it
- * cleanly (a running job is aborted). */
+ * '_'); logs with levels to stderr or syslog; the rig from --stage and
+ * --probe URIs (hal_rig.h), or cellsim started as a child with --sim;
+ * SIGTERM or SIGINT stops it cleanly (a running job is aborted, the
+ * simulator stopped). */
 #include "cf_cli.h"
 #include "cf_conf.h"
 #include "cf_err.h"
@@ -10,6 +12,8 @@
 #include "cf_plcdoc.h"
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
+#include "cf_simchild.h"
+#include "hal_rig.h"
 #include <arpa/inet.h>
 #include <signal.h>
 #include <stdlib.h>
@@ -20,6 +24,9 @@
 typedef struct serve_conf {
     char addr[64];
     long port, watchdog_ms, max_clients;
+    double max_rate;
+    const char *sim_args;
+    cf_plcsrv_opts_t so; /* the allow-list lands here */
     int order, use_syslog, sim;
     cf_log_level_t level;
     double tol, alpha, beta;
@@ -65,6 +72,32 @@ static int parse_plc(serve_conf_t *c, const char *v)
     return cli_int(colon + 1, 0, 65535, &c->port);
 }
 
+/* "a.b.c.d[/bits],..." into the allow-list. */
+static int parse_allow(cf_plcsrv_opts_t *o, const char *v)
+{
+    char buf[512];
+    if (strlen(v) >= sizeof buf)
+        return -1;
+    strcpy(buf, v);
+    o->nallow = 0;
+    for (char *save = NULL, *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
+        long bits = 32;
+        char *sl = strchr(t, '/');
+        if (sl) {
+            *sl = 0;
+            if (cli_int(sl + 1, 0, 32, &bits))
+                return -1;
+        }
+        struct in_addr ia;
+        if (o->nallow >= CF_PLC_MAX_ALLOW || inet_pton(AF_INET, t, &ia) != 1)
+            return -1;
+        uint32_t mask = bits ? 0xFFFFFFFFu << (32 - bits) : 0;
+        o->allow_mask[o->nallow] = mask;
+        o->allow_net[o->nallow++] = ntohl(ia.s_addr) & mask;
+    }
+    return o->nallow ? 0 : -1;
+}
+
 /* One setting, from the config file or an option. */
 static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
 {
@@ -97,6 +130,25 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
     } else if (!strcmp(k, "sim")) {
         if (yesno(v, &c->sim))
             return cf_fail(msg, ml, CF_EARG, "sim '%s': yes or no", v);
+    } else if (!strcmp(k, "max_rate")) {
+        if (cli_double(v, &c->max_rate) || c->max_rate < 0 || c->max_rate > 1e6)
+            return cf_fail(msg, ml, CF_EARG, "max_rate '%s': need 0 (off) .. 1e6 requests/s", v);
+    } else if (!strcmp(k, "allow")) {
+        if (parse_allow(&c->so, v))
+            return cf_fail(msg, ml, CF_EARG,
+                           "allow '%s': need IPv4 addresses or ADDR/BITS, comma-separated (at "
+                           "most %d)",
+                           v, CF_PLC_MAX_ALLOW);
+    } else if (!strcmp(k, "z0")) {
+        if (cli_double(v, &r->z0))
+            return cf_fail(msg, ml, CF_EARG, "z0 '%s': need a height (mm)", v);
+    } else if (!strcmp(k, "cal")) {
+        char *e1, *e2, *e3;
+        r->cal[0] = strtod(v, &e1);
+        r->cal[1] = *e1 == ',' ? strtod(e1 + 1, &e2) : (e2 = e1, 0);
+        r->cal[2] = *e2 == ',' ? strtod(e2 + 1, &e3) : (e3 = e2, 0);
+        if (e1 == v || *e1 != ',' || *e2 != ',' || *e3)
+            return cf_fail(msg, ml, CF_EARG, "cal '%s': need CX,CY,CZ (mm)", v);
     } else if (!strcmp(k, "tolerance") || !strcmp(k, "alpha") || !strcmp(k, "beta")) {
         double x;
         int tol = k[0] == 't';
@@ -120,6 +172,10 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         c->stage = keep(c, v);
     else if (!strcmp(k, "probe"))
         c->probe = keep(c, v);
+    else if (!strcmp(k, "sim_args"))
+        c->sim_args = keep(c, v);
+    else if (!strcmp(k, "journal_dir"))
+        r->journal_dir = keep(c, v);
     else if (!strcmp(k, "board"))
         c->board = keep(c, v);
     else
@@ -143,7 +199,9 @@ static int serve_usage(void)
                      "usage: cellfit serve --plc tcp:ADDR:PORT [--config FILE] [--nominal F "
                      "--points F] [--results DIR] [--word-order lo-hi|hi-lo] [--watchdog-ms T] "
                      "[--port-file F] [--max-clients N] [--log-level L] [--syslog] [--board B] "
-                     "[--stage URI --probe URI | --sim] [--print-map]");
+                     "[--stage URI --probe URI | --sim [--sim-args ARGS]] [--journal-dir D] "
+                     "[--z0 MM] [--cal CX,CY,CZ] [--allow ADDR[/BITS],...] [--max-rate R] "
+                     "[--print-map]");
 }
 
 static volatile sig_atomic_t stop_flag;
@@ -206,6 +264,8 @@ int cmd_serve(int argc, char **argv)
     c.tol = 0.05;
     c.alpha = NF_ALPHA_DEFAULT;
     c.beta = NF_BETA_DEFAULT;
+    c.max_rate = 1000;
+    c.run.z0 = 50.0; /* cellsim's beam height */
     int print_map = 0, ec = parse(argc, argv, &c, &print_map);
     if (ec)
         goto done;
@@ -222,21 +282,15 @@ int cmd_serve(int argc, char **argv)
                        c.board, BOARD_NAME);
         goto done;
     }
-    /* RIG WIRING (issue 4): build the stage and probe from these URIs (or
-     * cellsim's with --sim) with hal/ once it is merged, and give them to
-     * the runner (cf_runner_t.rig = 1). Until then refuse rather than run
-     * a cell that would pretend to have a rig. */
-    if (c.stage || c.probe || c.sim) {
-        ec = cli_error("serve", CLI_USAGE,
-                       "%s: the rig drivers (hal/, issue 4) are not in this build; serve "
-                       "without --stage/--probe/--sim fits the configured points file",
-                       c.sim     ? "--sim"
-                       : c.stage ? "--stage"
-                                 : "--probe");
+    if (c.sim && (c.stage || c.probe)) {
+        ec = cli_error("serve", CLI_USAGE, "--sim or --stage/--probe, not both");
         goto done;
     }
-    cf_runner_t runner;
-    cf_plcrun_init(&c.run, &runner);
+    if (!c.sim && (!c.stage) != (!c.probe)) {
+        ec = cli_error("serve", CLI_USAGE, "%s: the rig needs both --stage URI and --probe URI",
+                       c.stage ? "--stage" : "--probe");
+        goto done;
+    }
     cf_log_open(c.level, c.use_syslog);
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
@@ -245,14 +299,57 @@ int cmd_serve(int argc, char **argv)
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
     signal(SIGPIPE, SIG_IGN);
-    cf_plcsrv_opts_t so = {
-        c.addr,      (int)c.port,  (int)c.max_clients, c.order,      (unsigned)c.watchdog_ms,
-        c.port_file, (float)c.tol, (float)c.alpha,     (float)c.beta};
+    /* The simulator first (fork before any thread), then the rig on it. */
+    cf_simchild_t sim;
+    memset(&sim, 0, sizeof sim);
+    char msg[512];
+    if (c.sim) {
+        if (cf_simchild_start(&sim, c.sim_args, 10000, msg, sizeof msg)) {
+            ec = cli_error("serve", CLI_FAIL, "%s", msg);
+            goto done_log;
+        }
+        c.stage = sim.stage;
+        c.probe = sim.probe;
+        c.run.sim = &sim;
+        cf_log(CF_LOG_INFO, "rig: cellsim pid %ld on 127.0.0.1:%d", (long)sim.pid, sim.port);
+    }
+    if (c.stage) {
+        hal_opts_t ho = HAL_OPTS_DEFAULT;
+        int rc = hal_rig_open(c.stage, c.probe, &ho, &c.run.rig, msg, sizeof msg);
+        if (rc) {
+            ec = cli_error("serve", rc == RIG_EARG ? CLI_USAGE : CLI_FAIL, "rig: %s", msg);
+            goto done_sim;
+        }
+        cf_log(CF_LOG_INFO, "rig: stage %s, probe %s", c.stage, c.probe);
+    }
+    cf_runner_t runner;
+    cf_plcrun_init(&c.run, &runner);
+    cf_plcsrv_opts_t so = c.so;
+    so.addr = c.addr;
+    so.port = (int)c.port;
+    so.max_clients = (int)c.max_clients;
+    so.word_order = c.order;
+    so.watchdog_ms = (unsigned)c.watchdog_ms;
+    so.port_file = c.port_file;
+    so.tol = (float)c.tol;
+    so.alpha = (float)c.alpha;
+    so.beta = (float)c.beta;
+    so.max_rate = c.max_rate;
     cf_log(CF_LOG_INFO, "cellfit serve: board %s, nominal %s, points %s, results %s", BOARD_NAME,
            c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
            c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
     cf_plcrun_free(&c.run);
+    if (c.run.rig)
+        hal_rig_close(c.run.rig);
+done_sim:
+    if (c.sim) {
+        int lost = sim.ended;
+        cf_simchild_stop(&sim);
+        if (!lost)
+            cf_log(CF_LOG_INFO, "rig: cellsim pid %ld stopped", (long)sim.pid);
+    }
+done_log:
     cf_log_close();
 done:
     for (int i = 0; i < c.nstrs; i++)

@@ -3,10 +3,13 @@
  * both word orders against hand-made words, write validation, every command
  * in every state against a matrix written out here (accepted, or refused
  * with its code and nothing else changed), the sequence handshake, the
- * results latch and the watchdog on a logical clock. */
+ * results latch and the watchdog on a logical clock; writes refused while
+ * a job runs, faults raised outside the handshake, rig errors to PLC codes. */
 #include "cf_plcdoc.h"
+#include "cf_plcrun.h"
 #include "cf_test.h"
 #include "plc_fsm.h"
+#include "scan.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -84,8 +87,8 @@ static void test_docs_match(void **state)
         if (!strstr(doc, line))
             fail_msg("docs/plc-register-map.md lacks the state row\n%s", row);
     }
-    static const int codes[] = {101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 111,
-                                201, 301, 302, 303, 304, 305, 306, 307, 308, 309, 310};
+    static const int codes[] = {101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 111, 201, 202,
+                                203, 301, 302, 303, 304, 305, 306, 307, 308, 309, 310, 311};
     for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++) {
         snprintf(line, sizeof line, "\n| %d | ", codes[i]);
         if (!strstr(doc, line))
@@ -474,6 +477,103 @@ static void test_handshake(void **state)
     assert_memory_equal(&F, &f0, sizeof F);
 }
 
+/* While a job runs only COMMAND and the heartbeat may be written. */
+static void test_busy_writes(void **state)
+{
+    (void)state;
+    fresh(1);
+    plc_action_t act;
+    uint16_t tol[2], hb = 7, wd = 500, order = 1, part[2] = {4711, 0};
+    plc_pack_u32(plc_f32_bits(0.5f), PLC_ORDER_LO_HI, tol);
+    cmd(PLC_C_HOME);
+    assert_true(M.reg[PLC_R_STATUS] & PLC_ST_BUSY);
+    plc_map_t m0 = M;
+    assert_int_equal(plc_fsm_write(&F, PLC_R_TOLERANCE, 2, tol, 0, &act), PLC_EX_BUSY);
+    assert_int_equal(plc_fsm_write(&F, PLC_R_PART_NUMBER, 2, part, 0, &act), PLC_EX_BUSY);
+    assert_int_equal(plc_fsm_write(&F, PLC_R_WATCHDOG_MS, 1, &wd, 0, &act), PLC_EX_BUSY);
+    assert_int_equal(plc_fsm_write(&F, PLC_R_WORD_ORDER, 1, &order, 0, &act), PLC_EX_BUSY);
+    /* heartbeat and command together: refused whole too */
+    uint16_t three[3] = {PLC_C_ABORT, (uint16_t)(SEQ + 1), 9};
+    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 3, three, 0, &act), PLC_EX_BUSY);
+    assert_memory_equal(&M, &m0, sizeof M);
+    /* Read-only and range errors keep their own exceptions. */
+    assert_int_equal(plc_fsm_write(&F, PLC_R_MAGIC, 1, &hb, 0, &act), PLC_EX_ADDRESS);
+    assert_int_equal(plc_fsm_write(&F, PLC_R_PLC_HEARTBEAT, 1, &hb, 0, &act), 0);
+    assert_true(M.reg[PLC_R_STATUS] & PLC_ST_WD_ARMED);
+    assert_int_equal(cmd(PLC_C_FIT), PLC_ACT_NONE); /* the 1xx refusal, not an exception */
+    assert_int_equal(F.cmd_result, PLC_E_BUSY);
+    assert_int_equal(cmd(PLC_C_ABORT), PLC_ACT_ABORT);
+    assert_int_equal(plc_fsm_write(&F, PLC_R_TOLERANCE, 2, tol, 0, &act), PLC_EX_BUSY);
+    plc_fsm_event(&F, PLC_EV_ABORTED, 0, NULL);
+    assert_int_equal(plc_fsm_write(&F, PLC_R_TOLERANCE, 2, tol, 0, &act), 0); /* idle again */
+    assert_true(plc_map_f32(&M, PLC_R_TOLERANCE) == 0.5f);
+}
+
+/* A fault outside the handshake (the rig's process ended). */
+static void test_fault(void **state)
+{
+    (void)state;
+    fresh(1);
+    cmd(PLC_C_HOME);
+    plc_fsm_event(&F, PLC_EV_OK, 0, NULL);
+    cmd(PLC_C_SCAN);
+    uint16_t job = SEQ;
+    assert_int_equal(plc_fsm_fault(&F, PLC_E_RIG_GONE, 1), PLC_ACT_ABORT);
+    assert_int_equal(F.state, PLC_S_ABORTING);
+    assert_false(M.reg[PLC_R_STATUS] & (PLC_ST_RIG | PLC_ST_HOMED));
+    assert_int_equal(plc_fsm_event(&F, PLC_EV_FAIL, PLC_E_RIG_LINK, NULL), PLC_S_ERROR);
+    assert_int_equal(M.reg[PLC_R_ERROR_CODE], PLC_E_RIG_GONE); /* the fault, not the scan's */
+    assert_int_equal(M.reg[PLC_R_DONE_SEQ], job);
+    cmd(PLC_C_RESET);
+    assert_int_equal(F.state, PLC_S_IDLE);
+    cmd(PLC_C_HOME);
+    assert_int_equal(F.cmd_result, PLC_E_NO_RIG); /* the rig is gone for good */
+    /* Idle: straight to ERROR; an earlier error stays shown. */
+    fresh(1);
+    assert_int_equal(plc_fsm_fault(&F, PLC_E_RIG_GONE, 0), PLC_ACT_ABORT);
+    assert_int_equal(M.reg[PLC_R_ERROR_CODE], PLC_E_RIG_GONE);
+    assert_true(M.reg[PLC_R_STATUS] & PLC_ST_RIG);
+    assert_int_equal(plc_fsm_fault(&F, PLC_E_WATCHDOG, 0), PLC_ACT_NONE);
+    assert_int_equal(M.reg[PLC_R_ERROR_CODE], PLC_E_RIG_GONE);
+    /* A stage fault or e-stop during a scan loses the reference. */
+    for (int k = 0; k < 3; k++) {
+        static const uint16_t codes[3] = {PLC_E_STAGE, PLC_E_ESTOP, PLC_E_PROBE};
+        fresh(1);
+        cmd(PLC_C_HOME);
+        plc_fsm_event(&F, PLC_EV_OK, 0, NULL);
+        cmd(PLC_C_SCAN);
+        plc_fsm_event(&F, PLC_EV_FAIL, codes[k], NULL);
+        assert_int_equal(M.reg[PLC_R_ERROR_CODE], codes[k]);
+        assert_int_equal(!!(M.reg[PLC_R_STATUS] & PLC_ST_HOMED), k == 2);
+    }
+}
+
+/* The rig's errors as a PLC sees them (the table in the docs). */
+static void test_rig_codes(void **state)
+{
+    (void)state;
+    static const struct {
+        int rc, where, want;
+    } t[] = {
+        {RIG_OK, SCAN_AT_NONE, 0},
+        {RIG_EABORTED, SCAN_AT_STOP, CF_PLC_ABORTED},
+        {RIG_EABORTED, SCAN_AT_STAGE, CF_PLC_ABORTED},
+        {RIG_ETIMEOUT, SCAN_AT_PROBE, PLC_E_RIG_LINK},
+        {RIG_EDISCONNECT, SCAN_AT_STAGE, PLC_E_RIG_LINK},
+        {RIG_ECRC, SCAN_AT_STAGE, PLC_E_RIG_LINK},
+        {RIG_EESTOP, SCAN_AT_STAGE, PLC_E_ESTOP},
+        {RIG_EFAULT, SCAN_AT_STAGE, PLC_E_STAGE},
+        {RIG_ELIMIT, SCAN_AT_STAGE, PLC_E_STAGE},
+        {RIG_ENOTHOMED, SCAN_AT_STAGE, PLC_E_STAGE},
+        {RIG_EEXCEPTION, SCAN_AT_PROBE, PLC_E_PROBE},
+        {RIG_EPROTO, SCAN_AT_PROBE, PLC_E_PROBE},
+        {RIG_EFULL, SCAN_AT_JOURNAL, PLC_E_RIG},
+        {RIG_EIO, SCAN_AT_JOURNAL, PLC_E_RIG},
+    };
+    for (size_t i = 0; i < sizeof t / sizeof t[0]; i++)
+        assert_int_equal(cf_plcrun_rig_code(t[i].rc, t[i].where), t[i].want);
+}
+
 static void heartbeat(uint16_t hb, uint32_t t)
 {
     plc_action_t act;
@@ -504,6 +604,17 @@ static void test_watchdog(void **state)
     assert_int_equal(M.reg[PLC_R_ERROR_CODE], PLC_E_WATCHDOG);
     assert_true(M.reg[PLC_R_STATUS] & PLC_ST_ABORTED);
     assert_int_equal(plc_fsm_tick(&F, 200000), PLC_ACT_NONE); /* disarmed */
+    /* A timeout set long after the last heartbeat counts from the write. */
+    cmd(PLC_C_RESET);
+    wd = 0;
+    plc_fsm_write(&F, PLC_R_WATCHDOG_MS, 1, &wd, 200000, &act);
+    heartbeat(9, 200000);
+    assert_int_equal(plc_fsm_tick(&F, 300000), PLC_ACT_NONE); /* off */
+    wd = 300;
+    plc_fsm_write(&F, PLC_R_WATCHDOG_MS, 1, &wd, 300000, &act);
+    assert_int_equal(plc_fsm_tick(&F, 300300), PLC_ACT_NONE);
+    assert_int_equal(plc_fsm_tick(&F, 300301), PLC_ACT_ABORT);
+    assert_int_equal(F.state, PLC_S_ERROR);
     cmd(PLC_C_RESET);
     assert_int_equal(F.state, PLC_S_IDLE);
     /* Idle trip, across the clock's wrap. */
@@ -552,6 +663,9 @@ int main(void)
         cmocka_unit_test(test_handshake),
         cmocka_unit_test(test_watchdog),
         cmocka_unit_test(test_cell_heartbeat),
+        cmocka_unit_test(test_busy_writes),
+        cmocka_unit_test(test_fault),
+        cmocka_unit_test(test_rig_codes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

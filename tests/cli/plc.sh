@@ -66,10 +66,15 @@ mkdir -p "$T/results"
 # Usage errors: exit 2, one line naming what.
 expect 2 "serve without --plc: exit 2" "$CF" serve
 expect 2 "serve --plc udp:...: exit 2" "$CF" serve --plc udp:127.0.0.1:0
-expect 2 "serve --stage without the rig drivers: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 \
-    --stage modbus-rtu:/dev/null
-grep -q "rig drivers" "$T/err" && ok "  ... says the rig drivers are not in this build" ||
+expect 2 "serve --stage without --probe: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 \
+    --stage tcp:127.0.0.1:1
+grep -q "needs both --stage URI and --probe URI" "$T/err" && ok "  ... says the rig needs both" ||
     no "--stage message: $(cat "$T/err")"
+expect 2 "serve --sim with --stage: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --sim \
+    --stage tcp:127.0.0.1:1
+expect 2 "serve --allow 300.1.1.1: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --allow 300.1.1.1
+expect 2 "serve --stage rtu:... bad URI: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 \
+    --stage modbus-rtu:/dev/null --probe tcp:127.0.0.1:1
 expect 2 "serve --board other: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --board nosuch
 printf 'plc = tcp:127.0.0.1:0\n# comment\nnominal = %s\nwatchdog = 5\n' "$T/nominal.igs" >"$T/bad.conf"
 expect 2 "config with an unknown key: exit 2" "$CF" serve --config "$T/bad.conf"

@@ -55,6 +55,9 @@ wait_gone() {
 # start_sim NAME ARGS...: cellsim in the background, waits for its ready line
 start_sim() {
     n=$1; shift
+    # The old ready line must not be seen before the new process truncates
+    # the file (the redirection happens in the background child).
+    rm -f "$T/$n.out"
     "$SIM" "$@" >"$T/$n.out" 2>"$T/$n.err" &
     PIDS="$PIDS $!"
     wait_for "$T/$n.out" "cellsim: ready" || { no "$n: cellsim did not come up"; cat "$T/$n.err"; }

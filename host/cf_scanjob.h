@@ -1,0 +1,45 @@
+/* cf_scanjob.h: the cell's scan job for `cellfit serve`: the raster over
+ * a region measured on the rig (firmware/scan.h) into a new journal file
+ * (cf_store_file.h), with progress and a stop check; and the fit of such a
+ * journal onto the nominal (refined to the net asked, as cf_job): every
+ * valid point projected onto the nominal and streamed into the stripes
+ * (Eq. 7), solved, then the signed normal deviations of the points to the
+ * fit read back from the journal (cf_stats). Nothing is kept per point:
+ * memory is the fit's byte formula and the seed grid. */
+#ifndef CF_SCANJOB_H
+#define CF_SCANJOB_H
+
+#include "cf_job.h"
+#include "rig.h"
+#include "scan.h"
+#include <stddef.h>
+
+typedef struct cf_scanjob_opts {
+    rig_stage_t stage;
+    rig_probe_t probe;
+    double x0, y0, x1, y1, step; /* region (corners in any order) and grid step, mm */
+    double z0, cal[3];           /* kinematics (scan.h) */
+    const char *journal;         /* created; never overwritten */
+    const char *nominal;         /* identity in the header, or NULL */
+    unsigned long long job_id;
+    int pct0, pct1; /* progress reported over this span */
+} cf_scanjob_opts_t;
+
+/* The plan of the region (RIG_EARG when it has no point or too many). */
+int cf_scanjob_plan(const cf_scanjob_opts_t *o, scan_plan_t *pl);
+
+/* Measure into o->journal. Returns RIG_OK or the job's rig_err_t (res->where
+ * says which part failed), RIG_EOPEN / RIG_EIO when the journal cannot be
+ * created (msg says why; nothing measured, no file left). The journal is
+ * consistent whatever the ending (scan.h). */
+int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_result_t *res,
+                   char *msg, size_t ml);
+
+/* Fit the journal's points onto f->nominal (f->points unused) with f's
+ * weights, net and tolerance; progress over pct0..pct1. 0 with *out filled
+ * (free with cf_job_result_free), RIG_EABORTED, CF_EEMPTY (no point), or
+ * CF_E* / NF_E* / RIG_E* with msg. */
+int cf_scanjob_fit(const char *journal, const cf_job_fit_opts_t *f, const cf_job_ctl_t *ctl,
+                   int pct0, int pct1, cf_job_result_t *out, char *msg, size_t ml);
+
+#endif

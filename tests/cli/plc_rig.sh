@@ -1,0 +1,164 @@
+#!/bin/sh
+# tests/cli/plc_rig.sh CELLFIT: `cellfit serve --sim` (cellsim started as
+# its child, beside CELLFIT) driven through its registers only by pymodbus
+# and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig,
+# results, EXPORT, ACK_RESULTS; the journal checked by `cellfit journal`;
+# invalid commands while scanning; an abort and a watchdog trip mid-scan
+# (cellsim's stage seen stopped, journal consistent); a drive fault and an
+# e-stop injected in cellsim (307, 311), RESET, HOME, next job; cellsim
+# killed (203); SIGTERM stops serve and its child. Then the server's
+# hardening: malformed frames, the rate limit, the allow-list, and a soak
+# (tests/cli/plc_soak.py, PLC_SOAK_TX transactions, 20000 here).
+set -u
+CF=$(realpath "$1")
+HERE=$(cd "$(dirname "$0")" && pwd)
+PY=/usr/bin/python3
+if [ ! -x "$(dirname "$CF")/cellsim" ]; then
+    echo "skip plc_rig: no cellsim beside $CF"
+    echo "plc_rig: 0 passed, 0 failed"
+    exit 0
+fi
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plcrig.XXXXXX")
+pids=""
+stop_all() { # TERM, wait, then KILL
+    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
+    for p in $pids; do
+        i=0
+        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+        kill -KILL "$p" 2>/dev/null
+    done
+    pids=""
+}
+trap 'stop_all; rm -rf "$T"' EXIT
+trap 'exit 1' INT TERM
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); echo "ok   $1"; }
+no() { fail=$((fail + 1)); echo "FAIL $1"; }
+json() {
+    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
+}
+# py STEP ARGS...: one client step, its ok/FAIL lines counted.
+py() {
+    timeout 120 "$PY" "$HERE/$PYS" "$@" >"$T/py.out" 2>&1
+    rc=$?
+    cat "$T/py.out"
+    pass=$((pass + $(grep -c '^ok ' "$T/py.out")))
+    fail=$((fail + $(grep -c '^FAIL' "$T/py.out")))
+    [ $rc -eq 0 ] || [ "$(grep -c '^FAIL' "$T/py.out")" -gt 0 ] || no "$PYS $1 exited $rc"
+}
+PYS=plc_rig.py
+# start NAME ARGS...: cellfit serve in the background; sets $port, $pid,
+# and with --sim $simport and $simpid (from its log).
+start() {
+    name=$1; shift
+    rm -f "$T/$name.port"
+    "$CF" serve --plc tcp:127.0.0.1:0 --port-file "$T/$name.port" "$@" 2>"$T/$name.log" &
+    pid=$!
+    pids="$pid $pids"
+    i=0
+    while [ ! -s "$T/$name.port" ] && kill -0 "$pid" 2>/dev/null && [ $i -lt 100 ]; do
+        sleep 0.1; i=$((i + 1))
+    done
+    port=$(cat "$T/$name.port" 2>/dev/null)
+    simport=$(sed -n 's/.*rig: cellsim pid [0-9]* on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/$name.log")
+    simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/$name.log")
+    [ -n "$port" ] && ok "serve $name listening on 127.0.0.1:$port" ||
+        { no "serve $name did not start"; sed 's/^/     /' "$T/$name.log" | head -5; }
+}
+
+"$CF" gen --dir "$T/part" --nu 40 --nv 30 --points 1000 >/dev/null
+mkdir -p "$T/res"
+SIMARGS="--speed 5000 --seed 1 --part $T/part/nominal.igs --control $T/a.ctl"
+start a --sim --sim-args "$SIMARGS" --nominal "$T/part/nominal.igs" --results "$T/res"
+[ -n "$simport" ] && kill -0 "$simpid" 2>/dev/null && ok "cellsim pid $simpid started by serve, port $simport" ||
+    no "no cellsim child in the log"
+py cycle "$port" "$simport" "$T/res" "$(command -v mbpoll)" "$T/cycle.out"
+jnl=$(sed -n 2p "$T/cycle.out")
+if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
+    [ "$(json "$T/info.json" records)" = 862 ] && [ "$(json "$T/info.json" points)" = 861 ] &&
+        [ "$(json "$T/info.json" ended)" = 1 ] && [ "$(json "$T/info.json" end_code)" = 0 ] &&
+        [ "$(json "$T/info.json" torn_tail)" = 0 ] &&
+        ok "journal info: 861 points + end record, ended 0, no torn tail" || no "journal info: $(cat "$T/info.json")"
+    # The fit the cell exported = the journal replayed by `cellfit journal fit`
+    # (alpha, beta as float32 in the registers: equal to 1e-6 mm).
+    d=$(sed -n 1p "$T/cycle.out")
+    if "$CF" journal fit "$jnl" --nominal "$T/part/nominal.igs" --out "$T/replay.igs" >/dev/null 2>&1; then
+        "$CF" eval "$d/fitted.igs" "$T/part/check.uv" >"$T/e1"
+        "$CF" eval "$T/replay.igs" "$T/part/check.uv" >"$T/e2"
+        paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
+            END { exit !(NR > 0 && m < 1e-6) }' && ok "exported fit = the journal replayed by cellfit journal fit" ||
+            no "exported fit differs from the replayed journal"
+    else
+        no "cellfit journal fit on the cell's journal"
+    fi
+else
+    no "no journal from the cycle ($jnl)"
+fi
+py abort "$port" "$simport" "$T/res" "$T/abort.out"
+jnl=$(cat "$T/abort.out")
+if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
+    n=$(json "$T/info.json" points); f=$(json "$T/info.json" flagged)
+    [ "$(json "$T/info.json" torn_tail)" = 0 ] && [ "$(json "$T/info.json" ended)" = 1 ] &&
+        [ "$(json "$T/info.json" end_code)" = -217 ] && [ "$(json "$T/info.json" records)" = $((n + f + 1)) ] &&
+        [ "$n" -gt 0 ] && [ "$n" -lt 7676 ] &&
+        ok "aborted journal: $n of 7676 points + end record (RIG_EABORTED), no torn tail" ||
+        no "aborted journal: $(cat "$T/info.json")"
+else
+    no "no journal from the abort ($jnl)"
+fi
+py watchdog "$port" "$simport"
+py fault "$port" "$simport" "$T/a.ctl" stagefault 307
+py fault "$port" "$simport" "$T/a.ctl" "estop on" 311
+grep -q "error job SCAN_FIT seq [0-9]*: SCANNING failed: error 307" "$T/a.log" &&
+    ok "log: the stage fault, with its code" || no "log lacks the stage fault"
+# cellsim killed under the cell: the PLC sees 203.
+kill -KILL "$simpid"
+py gone "$port" "$simport"
+grep -q "rig: cellsim (pid $simpid) killed by signal 9: error 203" "$T/a.log" && ok "log: cellsim's end" ||
+    no "log lacks cellsim's end"
+kill -TERM "$pid"; wait "$pid"; rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+[ $rc -eq 0 ] && ok "SIGTERM: serve a exits 0" || no "SIGTERM: serve a exit $rc"
+
+# SIGTERM to serve stops its cellsim.
+start b --sim --sim-args "--speed 5000"
+spid=$simpid
+[ -n "$spid" ] && kill -0 "$spid" 2>/dev/null && ok "serve b: cellsim pid $spid running" || no "serve b: no cellsim"
+kill -TERM "$pid"; wait "$pid"; rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+i=0
+while [ -n "$spid" ] && kill -0 "$spid" 2>/dev/null && [ $i -lt 30 ]; do sleep 0.1; i=$((i + 1)); done
+[ $rc -eq 0 ] && [ -n "$spid" ] && ! kill -0 "$spid" 2>/dev/null && ok "SIGTERM: serve exits 0, cellsim stopped" ||
+    no "SIGTERM: serve exit $rc, cellsim $spid still there"
+grep -q "rig: cellsim pid $spid stopped" "$T/b.log" && ok "log: cellsim stopped" || no "log: cellsim stop"
+
+# Hardening on a cell without a rig: malformed frames, rate, allow-list.
+start c --max-rate 50
+py garbage "$port" 0
+py rate "$port" 0
+grep -q "over 50 requests/s" "$T/c.log" && ok "log: the rate limit, once a second" || no "log: rate limit"
+grep -q "malformed MBAP header" "$T/c.log" && ok "log: malformed headers" || no "log: malformed"
+start d --allow 10.0.0.0/8,192.168.1.7
+py allow "$port" 0 refused
+grep -q "refused: not in the allow-list" "$T/d.log" && ok "log: allow-list refusal" || no "log: allow-list"
+start e --allow 10.0.0.0/8,127.0.0.1
+py allow "$port" 0 served
+
+# The soak: transactions from several clients while scan jobs run.
+PYS=plc_soak.py
+start s --sim --sim-args "--speed 5000 --seed 2 --part $T/part/nominal.igs" --nominal "$T/part/nominal.igs" \
+    --results "$T/res" --max-rate 0
+py soak "$port" "$simport" "$pid" "${PLC_SOAK_TX:-20000}" "${PLC_SOAK_MAX_GAP_MS:-1000}"
+kill -TERM "$pid"; wait "$pid"; rc=$?
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+[ $rc -eq 0 ] && ok "SIGTERM after the soak: serve exits 0" || no "SIGTERM after the soak: exit $rc"
+
+if grep -E "Sanitizer|runtime error" "$T"/*.log >/dev/null; then
+    no "sanitizer reports in the server logs"
+else
+    ok "no sanitizer report in the server logs"
+fi
+stop_all
+echo "plc_rig: $pass passed, $fail failed"
+[ $fail -eq 0 ]
