@@ -13,6 +13,7 @@
 #include "nf_err.h"
 #include "rig_err.h"
 #include "scan.h"
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdlib.h>
@@ -191,6 +192,20 @@ static void nominal_extent(const nf_surf_t *s, double r[4])
         }
 }
 
+/* The directory an output goes to exists and takes files: a job whose
+ * results cannot be written is refused before the stage moves, not after
+ * the scan. */
+static int dir_writable(const char *path)
+{
+    char dir[4096];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else
+        snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+    return access(dir, W_OK | X_OK) == 0;
+}
+
 static volatile sig_atomic_t stop_flag;
 
 static void on_signal(int sig)
@@ -326,6 +341,15 @@ int cmd_scan(int argc, char **argv)
         cf_surf_free(&nom);
         return ec;
     }
+    const char *outs[2] = {o.fit, o.report};
+    for (int i = 0; i < 2; i++)
+        if (outs[i] && !dir_writable(outs[i])) {
+            ec = cli_error(CMD, CLI_USAGE,
+                           "%s: its directory does not exist or is not writable (checked before "
+                           "the scan)",
+                           outs[i]);
+            goto out;
+        }
     cf_store_file_t f;
     rig_store_t st;
     f.fd = -1;
@@ -338,7 +362,8 @@ int cmd_scan(int argc, char **argv)
     if (rc) {
         cf_store_file_close(&f);
         unlink(o.journal); /* nothing measured: leave no empty journal behind */
-        ec = cli_error(CMD, rc == RIG_EARG ? CLI_USAGE : CLI_FAIL, "%s", msg);
+        ec = cli_error(CMD, rc == RIG_EARG ? CLI_USAGE : CLI_FAIL, "%s [%d]; nothing measured", msg,
+                       rc);
         goto out;
     }
     h.sync_every = (uint32_t)o.sync_every;
@@ -347,7 +372,9 @@ int cmd_scan(int argc, char **argv)
     scan_header(&job, &h);
     jnl_t j;
     if ((rc = jnl_create(&j, st, &h)) != RIG_OK) {
-        ec = cli_error(CMD, CLI_FAIL, "%s: %s (%s)", o.journal, rig_strerror(rc), f.err);
+        ec = cli_error(CMD, CLI_FAIL, "%s: %s [%d] (%s); nothing measured", o.journal,
+                       rig_strerror(rc), rc, f.err);
+        unlink(o.journal); /* jnl_create cut it to 0 bytes: no empty journal behind */
         goto out_dev;
     }
     struct sigaction sa;
@@ -373,11 +400,11 @@ int cmd_scan(int argc, char **argv)
         static const char *const at[] = {"", "stage", "probe", "journal", "fit", "stop"};
         const char *det = rig_detail(&job, res.where);
         ec = cli_error(CMD, CLI_FAIL,
-                       "job ended at grid point %ld (x %g, y %g): %s: %s%s%s; %s holds %llu "
+                       "job ended at grid point %ld (x %g, y %g): %s: %s [%d]%s%s; %s holds %llu "
                        "acknowledged records",
                        res.fail_index, x, y, at[res.where],
-                       sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), *det ? ": " : "",
-                       det, o.journal, (unsigned long long)jnl_acked(&j));
+                       sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), rc,
+                       *det ? ": " : "", det, o.journal, (unsigned long long)jnl_acked(&j));
     } else if (o.fit) {
         if (cf_surf_copy(&fit, &nom)) {
             ec = cli_error(CMD, CLI_FAIL, "out of memory");
@@ -404,14 +431,17 @@ int cmd_scan(int argc, char **argv)
     double secs = cli_now() - t0;
     if (o.report) {
         FILE *rf = fopen(o.report, "w");
+        int werr = rf ? 0 : errno;
         if (rf) {
             summary(rf, &o, &job.plan, &res, &j, fitted ? &sf : NULL, fitted ? &rs : NULL, &sst,
                     secs);
-            if (fclose(rf))
-                rf = NULL;
+            werr = ferror(rf) ? errno : 0;
+            if (fclose(rf) && !werr)
+                werr = errno ? errno : EIO;
         }
-        if (!rf && !ec)
-            ec = cli_error(CMD, CLI_FAIL, "%s: cannot write the report", o.report);
+        if (werr && !ec)
+            ec = cli_error(CMD, CLI_FAIL, "%s: cannot write the report: %s", o.report,
+                           strerror(werr));
     }
     if (o.json)
         summary(stdout, &o, &job.plan, &res, &j, fitted ? &sf : NULL, fitted ? &rs : NULL, &sst,
