@@ -39,7 +39,7 @@ int nf_curvefit_add(nf_curvefit_t *f, double t, const double Q[3])
     if (!(t - t == 0.0) || !(Q[0] - Q[0] == 0.0) || !(Q[1] - Q[1] == 0.0) || !(Q[2] - Q[2] == 0.0))
         return NF_ENONFINITE;
     t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
-    int n = f->n, l = nf_find_span(n, P3, t, f->U);
+    int n = f->n, l = nf_find_span(n - 1, P3, t, f->U); /* its n: last index */
     nf_basis_funs(l, t, P3, f->U, f->N);
     /* Row N_{l-p..l}(t) of the overdetermined system: outer product into A. */
     for (int r = 0; r <= P3; r++) {

@@ -12,8 +12,10 @@
 #include "nf_curve.h"
 
 #define NF_CURVEFIT_DEGREE 3
+/* a sane bound for the dense n x n system */
+#define NF_CURVEFIT_MAX_CP 256
 /* knots, normal matrix, three right-hand sides, basis scratch */
-#define NF_CURVEFIT_DOUBLES(n) ((long)(n) * (n) + 4L * (n) + NF_CURVEFIT_DEGREE + 2L)
+#define NF_CURVEFIT_DOUBLES(n) ((long)(n) * (n) + 4L * (n) + 2L * (NF_CURVEFIT_DEGREE + 1))
 
 typedef struct nf_curvefit {
     int n;      /* control points (>= 4) */
