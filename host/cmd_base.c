@@ -4,7 +4,9 @@
  * or from four boundary curves (IGES 126) the bilinear Coons patch, the
  * bicubic Coons patch with cross derivatives fitted to a random subset of
  * the points, or a tensor-product fit to such a subset, the subset's
- * parameters coming from projection onto the bilinear patch. Points are
+ * parameters coming from projection onto the bilinear patch; without
+ * --curves the four curves are fitted to the points near the edges of
+ * their rectangle in their plane (nf_curvefit). Points are
  * streamed (one or two passes); memory is a function of the nets only.
  * `cellfit base --extract SURF.igs --out CURVES.igs` writes a surface's
  * four boundary curves as entities 126. */
@@ -16,6 +18,7 @@
 #include "cf_surf.h"
 #include "nf_base.h"
 #include "nf_coons.h"
+#include "nf_curvefit.h"
 #include "nf_err.h"
 #include "nf_fit.h"
 #include "nf_project.h"
@@ -32,9 +35,11 @@ static const char *const method_name[] = {"plane", "bilinear", "bicubic", "tenso
 
 typedef struct base_opts {
     const char *points, *curves, *out, *extract;
+    const char *cname; /* the curves' file, or what made them */
     int method, json, scale, have_de;
     long de[4], nu, nv, degree, seed, entity;
-    double subset, tol, margin;
+    double subset, tol, margin, band;
+    long edge_cp;
 } base_opts_t;
 
 static int parse_de(const char *s, long de[4])
@@ -58,6 +63,8 @@ static int parse(int argc, char **argv, base_opts_t *o)
     o->seed = 1;
     o->tol = 1e-3;
     o->margin = 0.02;
+    o->band = 3.0;
+    o->edge_cp = 8;
     for (int i = 1; i < argc;) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int takes = 1;
@@ -110,6 +117,14 @@ static int parse(int argc, char **argv, base_opts_t *o)
         } else if (!strcmp(a, "--tol")) {
             if (cli_double(v, &o->tol) || !(o->tol >= 0))
                 return cli_error("base", CLI_USAGE, "--tol '%s': corner tolerance, mm >= 0", v);
+        } else if (!strcmp(a, "--edge-band")) {
+            if (cli_double(v, &o->band) || !(o->band > 0) || o->band > 50)
+                return cli_error("base", CLI_USAGE,
+                                 "--edge-band '%s': percent of the rectangle, 0..50", v);
+        } else if (!strcmp(a, "--edge-cp")) {
+            if (cli_int(v, 4, NF_CURVEFIT_MAX_CP, &o->edge_cp))
+                return cli_error("base", CLI_USAGE, "--edge-cp '%s': control points, 4..%d", v,
+                                 NF_CURVEFIT_MAX_CP);
         } else if (!strcmp(a, "--margin")) {
             if (cli_double(v, &o->margin) || !(o->margin >= 0) || o->margin > 1)
                 return cli_error("base", CLI_USAGE, "--margin '%s': fraction 0..1", v);
@@ -122,14 +137,18 @@ static int parse(int argc, char **argv, base_opts_t *o)
             "base", CLI_USAGE,
             "usage: cellfit base --points FILE [--curves CURVES.igs [--de a,b,c,d]] "
             "[--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S] [--scale] "
-            "[--nu N --nv N --degree P] --out BASE.igs [--json]; or cellfit base "
+            "[--nu N --nv N --degree P] [--edge-band PCT] [--edge-cp N] --out BASE.igs [--json]; "
+            "or cellfit base "
             "--extract SURF.igs --out CURVES.igs");
     if (o->extract)
         return CLI_OK;
+    o->cname = o->curves ? o->curves : "edges fitted to the points";
     if (o->method < 0)
         o->method = o->curves ? M_BILINEAR : M_PLANE;
-    if (o->method != M_PLANE && !o->curves)
-        return cli_error("base", CLI_USAGE, "--method %s needs --curves CURVES.igs",
+    if (o->method != M_PLANE && !o->curves && !o->points)
+        return cli_error("base", CLI_USAGE,
+                         "--method %s needs --curves CURVES.igs or --points FILE (edges "
+                         "fitted from the data)",
                          method_name[o->method]);
     if (o->method == M_PLANE && o->curves)
         return cli_error("base", CLI_USAGE, "--method plane takes no --curves");
@@ -387,12 +406,148 @@ static int read_curves(const base_opts_t *o, nf_curve_t c[4])
     return CLI_OK;
 }
 
+/* Boundary curves from the data (no --curves): the points' plane and
+ * rectangle (passes 1 and 2, as for the plane base), then the points near
+ * each edge (pass 3) fitted by a cubic curve, parameter = position along
+ * the edge. The four are made to meet at the averaged corners. */
+typedef struct edge_ctx {
+    plane_ctx_t pc;
+    nf_curvefit_t f[4];    /* C0 (v = 0), C1 (v = 1), D0 (u = 0), D1 (u = 1) */
+    double band[2];        /* band half-widths across e[0] and e[1] */
+    double glo[2], ghi[2]; /* the rectangle grown by --margin: the curves' sides */
+} edge_ctx_t;
+
+/* Replace the in-plane component of P along axis a by the value x. */
+static void snap(const nf_base_plane_t *pl, int a, double x, double P[3])
+{
+    double d = 0.0;
+    for (int k = 0; k < 3; k++)
+        d += (P[k] - pl->c[k]) * pl->e[a][k];
+    for (int k = 0; k < 3; k++)
+        P[k] += (x - d) * pl->e[a][k];
+}
+
+static int edge_point(void *ctx, const double Q[3], long line)
+{
+    edge_ctx_t *c = ctx;
+    if (c->pc.pass < 3)
+        return plane_point(&c->pc, Q, line);
+    const nf_base_plane_t *pl = &c->pc.pl;
+    double d[3] = {Q[0] - pl->c[0], Q[1] - pl->c[1], Q[2] - pl->c[2]}, x[2];
+    for (int a = 0; a < 2; a++)
+        x[a] = d[0] * pl->e[a][0] + d[1] * pl->e[a][1] + d[2] * pl->e[a][2];
+    double tu = (x[0] - c->glo[0]) / (c->ghi[0] - c->glo[0]);
+    double tv = (x[1] - c->glo[1]) / (c->ghi[1] - c->glo[1]);
+    int rc = NF_OK;
+    if (fabs(x[1] - pl->lo[1]) <= c->band[1])
+        rc = nf_curvefit_add(&c->f[0], tu, Q);
+    if (!rc && fabs(x[1] - pl->hi[1]) <= c->band[1])
+        rc = nf_curvefit_add(&c->f[1], tu, Q);
+    if (!rc && fabs(x[0] - pl->lo[0]) <= c->band[0])
+        rc = nf_curvefit_add(&c->f[2], tv, Q);
+    if (!rc && fabs(x[0] - pl->hi[0]) <= c->band[0])
+        rc = nf_curvefit_add(&c->f[3], tv, Q);
+    if (rc)
+        return cli_error("base", CLI_USAGE, "%s:%ld: %s", c->pc.path, line, nf_strerror(rc));
+    return CLI_OK;
+}
+
+#define EDGE_RIDGE 1e-6 /* relative to the mean diagonal: a pull of ~1e-6 of the offset */
+
+static int fit_edges(const base_opts_t *o, cf_points_t *r, nf_curve_t c[4], result_t *res)
+{
+    static const char *const en[4] = {"C0 (v = 0)", "C1 (v = 1)", "D0 (u = 0)", "D1 (u = 1)"};
+    edge_ctx_t e;
+    memset(&e, 0, sizeof e);
+    memset(c, 0, 4 * sizeof *c);
+    nf_base_plane_init(&e.pc.pl);
+    e.pc.path = o->points;
+    e.pc.pass = 1;
+    int n = (int)o->edge_cp;
+    long len = NF_CURVEFIT_DOUBLES(n);
+    double *mem = malloc(sizeof(double) * (size_t)(4 * len));
+    if (!mem)
+        return cli_error("base", CLI_FAIL, "out of memory");
+    int ec = stream(o, r, 1.0, edge_point, &e, &res->points, &res->used);
+    int rc = ec ? NF_OK : nf_base_plane_axes(&e.pc.pl);
+    if (!ec && rc == NF_ENODATA)
+        ec = cli_error("base", CLI_USAGE, "%s: %ld points; edges need at least 3", o->points,
+                       res->points);
+    else if (!ec && rc)
+        ec = cli_error("base", CLI_USAGE, "%s: the points lie on a line: no rectangle for edges",
+                       o->points);
+    e.pc.pass = 2;
+    if (!ec)
+        ec = stream(o, r, 1.0, edge_point, &e, &res->points, &res->used);
+    const nf_base_plane_t *pl = &e.pc.pl;
+    for (int a = 0; a < 2 && !ec; a++) {
+        double w = pl->hi[a] - pl->lo[a];
+        e.band[a] = o->band / 100.0 * w;
+        e.glo[a] = pl->lo[a] - o->margin * w;
+        e.ghi[a] = pl->hi[a] + o->margin * w;
+    }
+    for (int k = 0; k < 4 && !ec; k++)
+        if (nf_curvefit_init(&e.f[k], n, mem + k * len, len) || cf_curve_alloc(&c[k], 3, n))
+            ec = cli_error("base", CLI_FAIL, "out of memory");
+    e.pc.pass = 3;
+    if (!ec)
+        ec = stream(o, r, 1.0, edge_point, &e, &res->points, &res->used);
+    /* Ridge targets: the rectangle's sides, corners (x, y) in the plane. */
+    double X[4][3];
+    for (int q = 0; q < 4; q++) {
+        double x = (q & 1) ? e.ghi[0] : e.glo[0], y = (q & 2) ? e.ghi[1] : e.glo[1];
+        for (int k = 0; k < 3; k++)
+            X[q][k] = pl->c[k] + x * pl->e[0][k] + y * pl->e[1][k];
+    }
+    static const int ends[4][2] = {{0, 1}, {2, 3}, {0, 2}, {1, 3}};
+    for (int k = 0; k < 4 && !ec; k++) {
+        if (e.f[k].npts < n) {
+            ec = cli_error("base", CLI_USAGE,
+                           "%s: edge %s has %ld points within --edge-band %g %%; %d control "
+                           "points need at least as many",
+                           o->points, en[k], e.f[k].npts, o->band, n);
+            break;
+        }
+        rc = nf_curvefit_solve(&e.f[k], X[ends[k][0]], X[ends[k][1]], EDGE_RIDGE, &c[k]);
+        if (rc)
+            ec = cli_error("base", CLI_USAGE, "%s: edge %s: %s", o->points, en[k], nf_strerror(rc));
+    }
+    free(mem);
+    /* The band's points lie inside the data's edge: each curve is put on
+     * its side of the grown rectangle (its across component snapped; the
+     * curve is linear in its control points), so every point projects
+     * inside the patch; along and height stay fitted. */
+    for (int k = 0; k < 4 && !ec; k++) {
+        int a = k < 2 ? 1 : 0;
+        double x = (k & 1) ? e.ghi[a] : e.glo[a];
+        for (int i = 0; i < n; i++)
+            snap(pl, a, x, c[k].cp + 3 * i);
+    }
+    if (!ec) { /* clamped cubic: end control point = end point; meet at the
+                * mean, in the plane at the rectangle's corner */
+        static const int at[4][4] = {{0, 0, 2, 0}, {0, 1, 3, 0}, {1, 0, 2, 1}, {1, 1, 3, 1}};
+        for (int q = 0; q < 4; q++) {
+            double *a = c[at[q][0]].cp + 3 * (at[q][1] ? n - 1 : 0);
+            double *b = c[at[q][2]].cp + 3 * (at[q][3] ? n - 1 : 0);
+            for (int k = 0; k < 3; k++)
+                a[k] = 0.5 * (a[k] + b[k]);
+            snap(pl, 0, (q & 1) ? e.ghi[0] : e.glo[0], a);
+            snap(pl, 1, (q & 2) ? e.ghi[1] : e.glo[1], a);
+            memcpy(b, a, 3 * sizeof(double));
+        }
+    }
+    if (ec)
+        for (int k = 0; k < 4; k++)
+            cf_curve_free(&c[k]);
+    return ec;
+}
+
 static int prepare(const base_opts_t *o, const nf_curve_t c[4], int pmin, nf_coons_t *cs,
                    double **mem)
 {
     long need = nf_coons_doubles(c, pmin);
     if (need < 0)
-        return cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror((int)need));
+        return cli_error("base", CLI_USAGE, "%s: %s", o->cname, nf_coons_strerror((int)need));
     *mem = malloc(sizeof(double) * (size_t)need);
     if (!*mem)
         return cli_error("base", CLI_FAIL, "out of memory");
@@ -406,10 +561,10 @@ static int prepare(const base_opts_t *o, const nf_curve_t c[4], int pmin, nf_coo
         return cli_error("base", CLI_USAGE,
                          "%s: boundary curves (%s) do not meet at corner (u,v) = %s: gap %.6g mm "
                          "> --tol %g",
-                         o->curves, which, cn[cs->corner], cs->gap, o->tol);
+                         o->cname, which, cn[cs->corner], cs->gap, o->tol);
     }
     if (rc)
-        return cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror(rc));
+        return cli_error("base", CLI_USAGE, "%s: %s", o->cname, nf_coons_strerror(rc));
     return CLI_OK;
 }
 
@@ -440,7 +595,7 @@ static int proj_point(void *ctx, const double Q[3], long line)
 static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, result_t *res)
 {
     nf_curve_t c[4];
-    int ec = read_curves(o, c);
+    int ec = o->curves ? read_curves(o, c) : fit_edges(o, r, c, res);
     if (ec)
         return ec;
     nf_coons_t cs;
@@ -468,7 +623,7 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
     }
     int rc = nf_coons_bilinear(&cs, &bil);
     if (rc) {
-        ec = cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror(rc));
+        ec = cli_error("base", CLI_USAGE, "%s: %s", o->cname, nf_coons_strerror(rc));
         goto done;
     }
     if (o->method == M_BILINEAR) {
@@ -493,7 +648,7 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
             goto done;
         }
         if ((rc = nf_coons3_init(&b3, &cs, mem3, need))) {
-            ec = cli_error("base", CLI_USAGE, "%s: %s", o->curves, nf_coons_strerror(rc));
+            ec = cli_error("base", CLI_USAGE, "%s: %s", o->cname, nf_coons_strerror(rc));
             goto done;
         }
         pc.b3 = &b3;
@@ -642,6 +797,7 @@ int cmd_base(int argc, char **argv)
             cli_json_int(&j, "iterations", res.iters);
         } else {
             cli_json_num(&j, "corner_gap", res.gap);
+            cli_json_str(&j, "curves", o.curves ? o.curves : "fitted");
         }
         if (res.has_rms)
             cli_json_num(&j, "rms_to_bilinear", res.rms);
@@ -655,7 +811,7 @@ int cmd_base(int argc, char **argv)
             printf("  plane through %ld points: normal (%.6f, %.6f, %.6f), %d power iterations\n",
                    res.points, res.normal[0], res.normal[1], res.normal[2], res.iters);
         else
-            printf("  boundary curves from %s, corners within %.3g mm\n", o.curves, res.gap);
+            printf("  boundary curves from %s, corners within %.3g mm\n", o.cname, res.gap);
         if (res.has_rms)
             printf("  %ld of %ld points (%.3g %%, seed %ld) projected onto the bilinear patch, rms "
                    "distance %.6g\n",

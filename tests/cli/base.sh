@@ -126,7 +126,7 @@ grep -q "do not meet at corner" "$T/err" && ok "message names the corner" || no 
 expect 2 "a surface is not a curve (--de on a 128)" "$CF" base --curves "$T/nominal.igs" --out "$T/x.igs"
 oneline "no curves"
 expect 2 "--de needs four DE numbers" "$CF" base --curves "$T/curves.igs" --de 1,3,5 --out "$T/x.igs"
-expect 2 "bicubic without curves" "$CF" base --points "$T/points.xyz" --method bicubic --out "$T/x.igs"
+expect 2 "bicubic without curves or points" "$CF" base --method bicubic --out "$T/x.igs"
 expect 2 "plane without points" "$CF" base --out "$T/x.igs"
 expect 2 "unknown method" "$CF" base --points "$T/points.xyz" --method spline --out "$T/x.igs"
 expect 2 "missing curves file" "$CF" base --curves "$T/none.igs" --out "$T/x.igs"
