@@ -10,6 +10,7 @@
 #include "cf_sfit.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
+#include "hal_rig.h"
 #include "nf_err.h"
 #include "rig_err.h"
 #include "scan.h"
@@ -23,20 +24,11 @@
 
 #define CMD "scan"
 
-/* The device drivers of hal/ (hal_rig.h: hal_rig_open opens the stage and
- * the probe from their URIs into rig.h tables). A build without them still
- * has `cellfit journal`; `cellfit scan` then says so. */
-#if defined(__has_include)
-#if __has_include("hal_rig.h")
-#include "hal_rig.h"
-#define CF_HAVE_HAL_RIG 1
-#endif
-#endif
-
+/* The device drivers of hal/: hal_rig_open opens the stage and the probe
+ * from their URIs into rig.h tables. */
 static int rig_open(const char *stage, const char *probe, rig_stage_t *st, rig_probe_t *pr,
                     void **handle, char *msg, size_t len)
 {
-#ifdef CF_HAVE_HAL_RIG
     hal_opts_t o = HAL_OPTS_DEFAULT;
     hal_rig_t *r = NULL;
     int rc = hal_rig_open(stage, probe, &o, &r, msg, len);
@@ -46,36 +38,22 @@ static int rig_open(const char *stage, const char *probe, rig_stage_t *st, rig_p
     *pr = r->probe;
     *handle = r;
     return RIG_OK;
-#else
-    (void)stage, (void)probe, (void)st, (void)pr;
-    *handle = NULL;
-    snprintf(msg, len, "device drivers (hal/hal_rig.h) are not in this build");
-    return RIG_EUNSUPPORTED;
-#endif
 }
 
 /* Detail of a device failure (the driver's last error), "" if none. */
 static const char *rig_detail(const scan_job_t *job, int where)
 {
-#ifdef CF_HAVE_HAL_RIG
     if (where == SCAN_AT_STAGE)
         return hal_stage_error(job->stage.ctx);
     if (where == SCAN_AT_PROBE)
         return hal_probe_error(job->probe.ctx);
-#else
-    (void)job, (void)where;
-#endif
     return "";
 }
 
 static void rig_close(void *handle)
 {
-#ifdef CF_HAVE_HAL_RIG
     if (handle)
         hal_rig_close(handle);
-#else
-    (void)handle;
-#endif
 }
 
 typedef struct scan_opts {

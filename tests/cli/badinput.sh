@@ -6,13 +6,10 @@
 # it). Covers point files, IGES surfaces and option values for fit, eval,
 # info, report and base, and serve's configuration file.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-bad.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
 OUT="$T/out/result.igs"
 mkdir -p "$T/out"
 # bad NAME PATTERN CMD...: exit 2, one stderr line matching the extended

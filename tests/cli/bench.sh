@@ -4,24 +4,10 @@
 # two-core accumulation, solved, gives the one-core residual (the shard's
 # sums are the same sums). Prints figures only as fields; no timing checks.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-bench.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
-expect() {
-    want=$1; name=$2; shift 2
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok "$name"; else
-        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
-}
-json() { # json FILE KEY: a number or string field of a one-line JSON object
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
-}
 
 for t in 1 2; do
     for o in raster random; do

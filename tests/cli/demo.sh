@@ -8,6 +8,7 @@
 # grid nodes); and every process it started gone, also after a SIGTERM in
 # the middle of the scan. Without cellsim or socat there is nothing to run.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 SIM=$(dirname "$CF")/cellsim
 HERE=$(dirname "$0")
@@ -18,7 +19,6 @@ if [ ! -x "$SIM" ] || ! command -v socat >/dev/null 2>&1; then
     exit 0
 fi
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-demo-test.XXXXXX")
-PIDS=""
 stop_all() { # reverse order: TERM, wait a little, KILL
     for p in $(echo $PIDS | tr ' ' '\n' | sed '1!G;h;$!d'); do kill -TERM "$p" 2>/dev/null; done
     for p in $PIDS; do
@@ -31,14 +31,9 @@ stop_all() { # reverse order: TERM, wait a little, KILL
 }
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
 json() {
     sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
 }
-le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 wait_for() {
     i=0
     while ! grep -q "$2" "$1" 2>/dev/null; do

@@ -7,6 +7,7 @@
 # work (docs/reliability-faults.md). FAULTS_CUTS=N for more power cuts.
 # Without cellsim (a build without sim/) there is nothing to run.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 if [ ! -x "$(dirname "$CF")/cellsim" ]; then
     echo "skip faults: no cellsim beside $CF"

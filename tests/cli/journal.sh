@@ -7,6 +7,7 @@
 # after which recovery keeps every acknowledged record and drops only a
 # torn tail, many times over.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-journal.XXXXXX")
 WPID=
@@ -16,11 +17,6 @@ cleanup() {
 }
 trap cleanup EXIT
 trap 'exit 1' INT TERM
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
 expect() {
     want=$1; name=$2; shift 2
     timeout 60 "$@" >"$T/out" 2>"$T/err"
@@ -28,10 +24,6 @@ expect() {
     if [ "$got" -eq "$want" ]; then ok "$name"; else
         no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
 }
-json() { # json FILE KEY: a number or string field of a one-line JSON object
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
-}
-le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 one_line() { [ "$(wc -l <"$T/err")" -eq 1 ]; }
 size() { wc -c <"$1" | tr -d ' '; }
 

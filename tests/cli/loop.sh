@@ -8,28 +8,15 @@
 # uniform; a robust fit recovers the part under 1 % gross outliers where
 # the plain fit is pulled; memory stays flat in the number of points.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-loop.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
-expect() {
-    want=$1; name=$2; shift 2
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok "$name"; else
-        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
-}
 json() { # json FILE KEY: the first number, string or boolean field KEY of a one-line JSON object
     sed -n "s/^{.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1" | head -1
 }
 # top FILE KEY: a top-level field (after the rounds array, or without one)
 top() { sed 's/"rounds": \[[^]]*\]//' "$1" >"$T/top.json"; json "$T/top.json" "$2"; }
-# le A B: A <= B as numbers
-le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 # maxdev FIT TRUTHDIR: largest normal distance of the true check points to FIT
 maxdev() {
     "$CF" project "$1" "$2/check.xyz" | awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4g", m }'

@@ -6,6 +6,7 @@
 # identity and status as a second client; both word orders; usage errors;
 # SIGTERM stops the server cleanly. Servers on 127.0.0.1, port 0.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY=/usr/bin/python3
@@ -21,17 +22,6 @@ stop_all() { # reverse order: TERM, wait, then KILL
     pids=""
 }
 trap 'stop_all; rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-expect() {
-    want=$1; name=$2; shift 2
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok "$name"; else
-        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
-}
 # py STEP ARGS...: run a client step, count its ok/FAIL lines.
 py() {
     timeout 300 "$PY" "$HERE/plc_cycle.py" "$@" >"$T/py.out" 2>&1

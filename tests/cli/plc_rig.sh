@@ -10,6 +10,7 @@
 # hardening: malformed frames, the rate limit, the allow-list, and a soak
 # (tests/cli/plc_soak.py, PLC_SOAK_TX transactions, 20000 here).
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY=/usr/bin/python3
@@ -31,10 +32,6 @@ stop_all() { # TERM, wait, then KILL
 }
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
 json() {
     sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
 }

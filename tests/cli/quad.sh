@@ -5,26 +5,10 @@
 # tolerance keeps more) and `cellfit bench project` (JSON fields, accuracy
 # against the generator's true parameters).
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-quad.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
-expect() {
-    want=$1; name=$2; shift 2
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok "$name"; else
-        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
-}
-json() { # json FILE KEY: a number or string field of a one-line JSON object
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
-}
-# le A B: A <= B as numbers
-le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 one_line() { [ "$(wc -l <"$T/err")" -eq 1 ] && ok "$1: one-line error" || no "$1: error not one line"; }
 
 expect 0 "gen part" "$CF" gen --dir "$T" --nu 16 --nv 12 --points 20000 --noise 0.002

@@ -7,26 +7,12 @@
 # agree with the part's truth computed here from the nominal (cellfit gen
 # and eval) and cf_part's dent and warp formula.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 SIM=$(dirname "$CF")/cellsim
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-rig.XXXXXX")
-PIDS=""
-stop_all() { # reverse order: TERM, wait a little, KILL
-    for p in $(echo $PIDS | tr ' ' '\n' | sed '1!G;h;$!d'); do kill -TERM "$p" 2>/dev/null; done
-    for p in $PIDS; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 20 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-        wait "$p" 2>/dev/null
-    done
-    PIDS=""
-}
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
 # expect CODE NAME CMD...: run under timeout, check the exit code, keep stdout/stderr.
 expect() {
     want=$1; name=$2; shift 2
@@ -35,9 +21,6 @@ expect() {
     if [ "$got" -eq "$want" ]; then ok "$name"; else
         no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
     ! grep -q "Sanitizer\|runtime error" "$T/err" || no "$name: sanitizer report"
-}
-json() { # json FILE KEY: a number or string field of a one-line JSON object
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
 }
 near() { awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= t) }'; }
 # wait_for FILE PATTERN: until a line matches (at most 10 s; a wait, not a timing assertion)

@@ -4,26 +4,10 @@
 # part's truth, memory flat in the number of points, and (when OpenCASCADE
 # is installed) that a written IGES evaluates the same in a CAD kernel.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-cli.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
-expect() {
-    want=$1; name=$2; shift 2
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok "$name"; else
-        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
-}
-json() { # json FILE KEY: a number or string field of a one-line JSON object
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
-}
-# le A B: A <= B as numbers
-le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 
 # A small synthetic part, fitted with each solver.
 expect 0 "gen small part" "$CF" gen --dir "$T" --nu 16 --nv 12 --points 20000 --noise 0.002

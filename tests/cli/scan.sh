@@ -7,6 +7,7 @@
 # drive fault, a lost line, an e-stop and an abort (job ends with the code,
 # journal consistent and synced). Without cellsim (a build without sim/) there is nothing to run.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 SIM=$(dirname "$CF")/cellsim
 if [ ! -x "$SIM" ]; then
@@ -15,23 +16,8 @@ if [ ! -x "$SIM" ]; then
     exit 0
 fi
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-scan.XXXXXX")
-PIDS=""
-stop_all() { # reverse order: TERM, wait a little, KILL
-    for p in $(echo $PIDS | tr ' ' '\n' | sed '1!G;h;$!d'); do kill -TERM "$p" 2>/dev/null; done
-    for p in $PIDS; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 20 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-        wait "$p" 2>/dev/null
-    done
-    PIDS=""
-}
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
 expect() {
     want=$1; name=$2; shift 2
     timeout 120 "$@" >"$T/out" 2>"$T/err"
@@ -42,7 +28,6 @@ expect() {
 json() {
     sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
 }
-le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 wait_for() {
     i=0
     while ! grep -q "$2" "$1" 2>/dev/null; do

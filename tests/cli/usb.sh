@@ -7,25 +7,11 @@
 # is told (its distance table; its encoder model x = 100 k, y = 1000 - 3 k
 # for trigger k at k * period us, docs/rig-usb.md), never from cellfit.
 set -u
+. "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 SIM=${SIM_UMOCK:-$(dirname "$CF")/sim-umock}
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-usb.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); echo "ok   $1"; }
-no() { fail=$((fail + 1)); echo "FAIL $1"; }
-# expect CODE NAME CMD...: run, check the exit code, keep stdout/stderr.
-expect() {
-    want=$1; name=$2; shift 2
-    "$@" >"$T/out" 2>"$T/err"
-    got=$?
-    if [ "$got" -eq "$want" ]; then ok "$name"; else
-        no "$name (exit $got, want $want)"; sed 's/^/     /' "$T/err" | head -5; fi
-}
-json() { # json FILE KEY: a number or string field of a one-line JSON object
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
-}
 # field KEY WANT NAME: a JSON field of the last output
 field() {
     v=$(json "$T/out" "$1")
