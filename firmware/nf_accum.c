@@ -257,13 +257,16 @@ NF_INLINE void row_expand33(nf_accum_t *ac)
     for (int d = 0; d < 4; d++)
         C[b][d] = Nv[b] * Nv[d];
     const nf_v4 m1 = V4C(nf_lane_mask[1]);
-    for (int i = ac->g0; i <= ac->g1; i++) {
-        double *g = ac->G + 7 * (long)i, *gq = ac->Gq + 3 * (long)i;
+    /* the four v rows' first stripe row and right-hand side, stepped per column */
+    const long pt0 = ac->g0 + (ac->rowk - 3) * nu;
+    double *S = ac->A->S + pt0 * 25, *rh = ac->rhs + 3 * pt0;
+    double *g = ac->G + 7 * (long)ac->g0, *gq = ac->Gq + 3 * (long)ac->g0;
+    for (int i = ac->g0; i <= ac->g1; i++, S += 25, rh += 3, g += 7, gq += 3) {
         const nf_v4 glo = V4C(g), ghi = V4C(g + 3) * m1, gd = V4C(g + 3);
+        const double q0 = gq[0], q1 = gq[1], q2 = gq[2];
         NF_UNROLL
         for (int b = 0; b < 4; b++) {
-            const long pt = i + (ac->rowk - 3 + b) * nu;
-            double *row = ac->A->S + pt * 25;
+            double *row = S + b * nu * 25;
             V4(row) += gd * C[b][b];
             NF_UNROLL
             for (int d = b + 1; d < 4; d++) {
@@ -271,10 +274,10 @@ NF_INLINE void row_expand33(nf_accum_t *ac)
                 V4(sl) += glo * C[b][d];
                 V4(sl + 3) += ghi * C[b][d];
             }
-            double *r = ac->rhs + 3 * pt;
-            r[0] += gq[0] * Nv[b];
-            r[1] += gq[1] * Nv[b];
-            r[2] += gq[2] * Nv[b];
+            double *r = rh + b * nu * 3;
+            r[0] += q0 * Nv[b];
+            r[1] += q1 * Nv[b];
+            r[2] += q2 * Nv[b];
         }
         NF_UNROLL
         for (int t = 0; t < 7; t++)
@@ -637,6 +640,149 @@ static void point33(nf_accum_t *ac, double u, double v, int l, int k, const doub
     buffer_row(ac, R, qw, 16);
 }
 #endif
+
+#if NF_ACCUM_VECTOR
+/* The 6 reciprocals of a cubic span's knot differences in basis3's order
+ * (nf_basis_recip, p = 3): two vector divisions. */
+static inline void recip3(const double *U, int l, double *rc)
+{
+    const nf_v4 one = {1.0, 1.0, 1.0, 1.0};
+    const nf_v4 d0 = {U[l + 1] - U[l], U[l + 1] - U[l - 1], U[l + 2] - U[l], U[l + 1] - U[l - 2]};
+    const nf_v4 d1 = {U[l + 2] - U[l - 1], U[l + 3] - U[l], 1.0, 1.0};
+    const nf_v4 r0 = one / d0, r1 = one / d1;
+    rc[0] = r0[0];
+    rc[1] = r0[1];
+    rc[2] = r0[2];
+    rc[3] = r0[3];
+    rc[4] = r1[0];
+    rc[5] = r1[1];
+}
+
+/* A span's sums of the row kernel into G and Gq: Su row a (N_a N_c, c = 0..3)
+ * at band offsets c - a of column l - 3 + a; Sq per coordinate (a-major)
+ * transposed into Gq's x y z per column (3 vectors of 12 doubles). */
+NF_INLINE void row_span_out(double *G, double *Gq, int l, const nf_v4 su[4], const nf_v4 sq[3])
+{
+    double *g = G + 7 * (long)(l - 3) + 3;
+    NF_UNROLL
+    for (int a = 0; a < 4; a++)
+        V4(g + 6 * a) += su[a];
+    double *gq = Gq + 3 * (long)(l - 3);
+    const nf_v4 a01 = __builtin_shufflevector(sq[0], sq[1], 0, 4, 1, 5); /* x0 y0 x1 y1 */
+    const nf_v4 b23 = __builtin_shufflevector(sq[0], sq[1], 2, 6, 3, 7); /* x2 y2 x3 y3 */
+    const nf_v4 c1 = __builtin_shufflevector(a01, sq[2], 3, 5, 0, 0);    /* y1 z1 - - */
+    V4(gq) += __builtin_shufflevector(a01, sq[2], 0, 1, 4, 2);           /* x0 y0 z0 x1 */
+    V4(gq + 4) += __builtin_shufflevector(c1, b23, 0, 1, 4, 5);          /* y1 z1 x2 y2 */
+    V4(gq + 8) += __builtin_shufflevector(b23, sq[2], 6, 2, 3, 7);       /* z2 x3 y3 z3 */
+}
+#endif
+
+long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double lim[4],
+                     const double dom[4])
+{
+#if NF_ACCUM_VECTOR
+    if (!ac->fast || ac->rational || !ac->G || n <= 0)
+        return 0;
+    const nf_surf_t *s = ac->s;
+    const double *U = s->U, *V = s->V;
+    double *G = ac->G, *Gq = ac->Gq;
+    const int nu1 = s->nu - 1, nv1 = s->nv - 1;
+    /* The limits in registers: the stores into G could alias them. */
+    const double lo_u = lim[0], hi_u = lim[1], lo_v = lim[2], hi_v = lim[3];
+    const double d0 = dom[0], d1 = dom[1], d2 = dom[2], d3 = dom[3];
+    /* A row already open in G (mode 3) goes on; its points count as a long run. */
+    long run = ac->mode == 3 ? NF_ROW_MIN : 0, t = 0, taken = 0;
+    double rowv = ac->rowv, ru[6];
+    int l = ac->lu, g0 = ac->g0, g1 = ac->g1, open = ac->mode == 3;
+    for (int c = 0; c < 6; c++)
+        ru[c] = ac->ru[c];
+    const nf_v4 z4 = {0.0, 0.0, 0.0, 0.0};
+    nf_v4 su[4] = {z4, z4, z4, z4}, sq[3] = {z4, z4, z4};
+    int sl = -1; /* span whose sums su, sq hold, -1 none */
+    for (; t < n; t++) {
+        const double *r = rows + 5 * t;
+        double u = r[0], v = r[1];
+        /* x - x is 0 for a finite x, NaN otherwise; one branch for all. */
+        const double fin = (r[2] - r[2]) + (r[3] - r[3]) + (r[4] - r[4]) + (u - u) + (v - v);
+        if (!(fin == 0.0) | (u < lo_u) | (u > hi_u) | (v < lo_v) | (v > hi_v))
+            break; /* nf_fit_add judges it */
+        u = u < d0 ? d0 : (u > d1 ? d1 : u);
+        v = v < d2 ? d2 : (v > d3 ? d3 : v);
+        if (!open || v != rowv) {
+            if (open && run < NF_ROW_MIN)
+                break; /* rows of one or two points: not a raster of rows */
+            if (sl >= 0)
+                row_span_out(G, Gq, sl, su, sq);
+            sl = -1;
+            if (taken) /* mode 3 only asks whether G holds a sum */
+                ac->npend = 1;
+            taken = 0;
+            ac->g0 = g0;
+            ac->g1 = g1;
+            nf_accum_flush(ac);
+            const int k = nf_find_span_from(ac->lv, nv1, 3, v, V, ac->hv);
+            if (k != ac->lv) {
+                recip3(V, k, ac->rv);
+                ac->lv = k;
+            }
+            basis3(k, v, V, ac->rv, ac->rowNv);
+            NF_UNROLL
+            for (int b = 0; b < 4; b++)
+                ac->Nvc[b] = ac->rowNv[b];
+            ac->vlast = v;
+            ac->vk = k;
+            ac->mode = 3;
+            ac->rowk = k;
+            ac->rowv = rowv = v;
+            g0 = nu1 + 1;
+            g1 = -1;
+            open = 1;
+            run = 0;
+        }
+        if (l < 0 || !(U[l] <= u && u < U[l + 1])) {
+            l = nf_find_span_from(l, nu1, 3, u, U, ac->hu);
+            recip3(U, l, ru);
+        }
+        if (l != sl) { /* a new span: the last one's sums into G */
+            if (sl >= 0)
+                row_span_out(G, Gq, sl, su, sq);
+            sl = l;
+            su[0] = su[1] = su[2] = su[3] = z4;
+            sq[0] = sq[1] = sq[2] = z4;
+            g0 = l - 3 < g0 ? l - 3 : g0;
+            g1 = l > g1 ? l : g1;
+        }
+        double Nu[4];
+        basis3(l, u, U, ru, Nu);
+        const nf_v4 nu4 = {Nu[0], Nu[1], Nu[2], Nu[3]};
+        NF_UNROLL
+        for (int a = 0; a < 4; a++)
+            su[a] += Nu[a] * nu4;
+        sq[0] += r[2] * nu4;
+        sq[1] += r[3] * nu4;
+        sq[2] += r[4] * nu4;
+        run++;
+        taken++;
+    }
+    if (sl >= 0)
+        row_span_out(G, Gq, sl, su, sq);
+    if (taken)
+        ac->npend = 1;
+    ac->g0 = g0;
+    ac->g1 = g1;
+    ac->lu = l;
+    for (int c = 0; c < 6; c++)
+        ac->ru[c] = ru[c];
+    return t;
+#else
+    (void)ac;
+    (void)rows;
+    (void)n;
+    (void)lim;
+    (void)dom;
+    return 0;
+#endif
+}
 
 void nf_accum_point_at(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3],
                        double wgt)

@@ -86,6 +86,18 @@ static inline void nf_accum_spans(const nf_accum_t *ac, double u, double v, int 
 void nf_accum_point_at(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3],
                        double wgt);
 
+/* Rows of one v (the raster rows of a scan) of a bicubic polynomial net,
+ * straight into the row band G with no per-point bookkeeping: rows r of
+ * 5 doubles (u v x y z, weight 1), each taken while lim (u0 u1 v0 v1)
+ * accepts it, clamped to dom; it stops at the first row lim rejects, or
+ * where a row of one v ended after fewer than NF_ROW_MIN points (not a
+ * raster: the caller's general path does better). Returns the rows taken,
+ * 0 when the net is not bicubic polynomial or G is not lent. Same sums as
+ * nf_accum_point, in another grouping (Eq. 9). */
+#define NF_ROW_MIN 4
+long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double lim[4],
+                     const double dom[4]);
+
 /* Empty the open block into the stripes (before solving or reading S). */
 void nf_accum_flush(nf_accum_t *ac);
 

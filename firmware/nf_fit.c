@@ -17,6 +17,8 @@ static int finite3(const double *x)
  * NF_BIN_MIN points, or ordered (a raster), are accumulated as they come. */
 #define NF_TILE 16
 #define NF_BIN_MIN 1024
+/* Points the general path takes after the row kernel stopped short. */
+#define NF_ROW_RETRY 1024
 
 /* Lend the raster row buffers and the bins from arena room the solver uses
  * later (idle while points stream in): at most half the job's solver term
@@ -383,9 +385,20 @@ int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
             *bad = 0;
         return NF_ESTATE;
     }
+    const double lim[4] = {f->dom[0] - f->dtol[0], f->dom[1] + f->dtol[0], f->dom[2] - f->dtol[1],
+                           f->dom[3] + f->dtol[1]};
     for (long i = 0; i < n;) {
+        /* Raster rows of one v first: the row kernel, while it applies. */
+        const long took = nf_accum_rows33(&f->acc, rows + 5 * i, n - i, lim, f->dom);
+        f->npoints += took;
+        f->sumw += (double)took;
+        i += took;
+        if (i >= n)
+            break;
         long w = n - i, at = -1;
         int rc;
+        if (took > 0 && w > NF_ROW_RETRY)
+            w = NF_ROW_RETRY; /* a short row or a bad point: the general path, then the kernel again */
         if (f->bin_cap > 0 && w >= NF_BIN_MIN) {
             w = w > f->bin_cap ? f->bin_cap : w;
             rc = add_binned(f, rows + 5 * i, w, &at);

@@ -44,7 +44,9 @@ static double max_abs(const double *a, long n)
  * v jittered per point (no two share v), 2 random, 3 random with each point
  * repeated 3 times (runs of one span and one v), 4 raster through the
  * interior knots exactly (span boundaries), 5 columns of one u (v varies
- * within each span: the block path). */
+ * within each span: the block path), 6 a serpentine raster (rows run left
+ * and right) with every third row cut to 2 points (the row kernel stops
+ * and the general path takes over, then the kernel again). */
 static double *points(const nf_surf_t *s, int kind, long *M)
 {
     double u0, u1, v0, v1;
@@ -56,7 +58,15 @@ static double *points(const nf_surf_t *s, int kind, long *M)
     double *pts = malloc(sizeof(double) * (size_t)(5 * m));
     for (long t = 0; t < m; t++) {
         double *r = pts + 5 * t, u, v;
-        if (kind == 0 || kind == 1) {
+        if (kind == 6) {
+            const long row = t / cols, c = t % cols;
+            const long cc = row % 3 == 2 ? c % 2 : c; /* a short row repeats 2 points */
+            u = u0 + (u1 - u0) * (double)(row % 2 ? cols - 1 - cc : cc) / (cols - 1);
+            v = v0 + (v1 - v0) * (double)row / (rows - 1);
+            if (row % 3 == 2 && c >= 2) /* short row: its other points go to a row of their own */
+                v = v0 + (v1 - v0) * ((double)row + 0.5) / (rows - 1);
+            v = v < v0 ? v0 : v > v1 ? v1 : v;
+        } else if (kind == 0 || kind == 1) {
             u = u0 + (u1 - u0) * (double)(t % cols) / (cols - 1);
             v = v0 + (v1 - v0) * (double)(t / cols) / (rows - 1);
             if (kind == 1 && t % cols && t % cols != cols - 1)
@@ -131,7 +141,7 @@ static void check_paths(int p, int q, int nu, int nv, double wlo)
 {
     nf_surf_t s;
     ref_surf_random(&s, p, q, nu, nv, 0, 1, 0, 2, wlo, wlo < 1 ? 2.0 : 1.0);
-    for (int kind = 0; kind < 6; kind++) {
+    for (int kind = 0; kind < 7; kind++) {
         long M;
         double *pts = points(&s, kind, &M), *A, *b;
         ref_eq7(&s, pts, M, 0.0, 0.0, &A, &b);
@@ -319,6 +329,45 @@ static void test_shard_budget(void **state)
     ref_surf_free(&s);
 }
 
+/* The row kernel alone: it takes a raster whole (sums as the dense R^T R),
+ * stops after a row of one v shorter than NF_ROW_MIN and at a bad row. */
+static void test_row_kernel(void **state)
+{
+    (void)state;
+    ref_seed(19);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 9, 7, 0, 1, 0, 2, 1.0, 1.0);
+    double dom[4];
+    nf_surf_domain(&s, &dom[0], &dom[1], &dom[2], &dom[3]);
+    long M;
+    double *pts = points(&s, 0, &M), *A, *b;
+    ref_eq7(&s, pts, M, 0.0, 0.0, &A, &b);
+    job_t j;
+    job_start(&j, &s, 0);
+    assert_int_equal(nf_accum_rows33(&j.f.acc, pts, M, dom, dom), M);
+    j.f.npoints = M;
+    j.f.sumw = (double)M;
+    assert_int_equal(nf_fit_finish(&j.f), NF_OK);
+    same_store(&j.f, (ref_t){NULL, A, b}, 1e-12);
+    free(j.mem);
+    free(A);
+    free(b);
+    free(pts);
+    /* rows 0 and 1 (61 points each), then row 2 of 2 points ends short */
+    pts = points(&s, 6, &M);
+    job_start(&j, &s, 0);
+    assert_int_equal(nf_accum_rows33(&j.f.acc, pts, M, dom, dom), 2 * 61 + 2);
+    free(j.mem);
+    pts[5 * 70 + 3] = NAN; /* a bad row inside row 1 */
+    job_start(&j, &s, 0);
+    assert_int_equal(nf_accum_rows33(&j.f.acc, pts, M, dom, dom), 70);
+    j.f.acc.fast = 0; /* not the bicubic kernels: it does not apply */
+    assert_int_equal(nf_accum_rows33(&j.f.acc, pts, M, dom, dom), 0);
+    free(j.mem);
+    free(pts);
+    ref_surf_free(&s);
+}
+
 /* A bad row is reported by its index in the chunk, from either half. */
 static void test_bad_row_index(void **state)
 {
@@ -423,7 +472,8 @@ int main(void)
         cmocka_unit_test(test_bicubic_polynomial), cmocka_unit_test(test_bicubic_rational),
         cmocka_unit_test(test_mixed_degrees),      cmocka_unit_test(test_weights_all_paths),
         cmocka_unit_test(test_span_search),        cmocka_unit_test(test_shard_budget),
-        cmocka_unit_test(test_bad_row_index),      cmocka_unit_test(test_binned_random),
+        cmocka_unit_test(test_bad_row_index),      cmocka_unit_test(test_row_kernel),
+        cmocka_unit_test(test_binned_random),
     };
     return cmocka_run_group_tests_name("accum", tests, NULL, NULL);
 }
