@@ -48,6 +48,7 @@ void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *r
             ac->Rb[k][t] = 0.0; /* the tails past nl stay zero */
     ac->mode = 0;
     ac->G = ac->Gq = 0;
+    ac->rtu = ac->rtv = 0;
     ac->vk = -1;
     ac->vlast = 0.0;
     ac->hu = (s->nu - s->p) / (s->U[s->nu] - s->U[s->p]);
@@ -325,6 +326,19 @@ void nf_accum_rowbuf(nf_accum_t *ac, double *G, double *Gq)
 {
     ac->G = G && Gq ? G : 0;
     ac->Gq = G && Gq ? Gq : 0;
+}
+
+void nf_accum_rtab(nf_accum_t *ac, double *tu, double *tv)
+{
+    ac->rtu = ac->rtv = 0;
+    if (!tu || !tv || ac->s->p != 3 || ac->s->q != 3)
+        return;
+    for (int l = 3; l < ac->s->nu; l++)
+        nf_basis_recip(l, 3, ac->s->U, tu + 6 * l);
+    for (int k = 3; k < ac->s->nv; k++)
+        nf_basis_recip(k, 3, ac->s->V, tv + 6 * k);
+    ac->rtu = tu;
+    ac->rtv = tv;
 }
 
 /* Runs of at most this many rows skip the block: straight to the stripes. */
@@ -677,6 +691,71 @@ NF_INLINE void row_span_out(double *G, double *Gq, int l, const nf_v4 su[4], con
 }
 #endif
 
+void nf_accum_lone33(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3])
+{
+#if NF_ACCUM_VECTOR
+    if (!ac->fast || ac->rational) {
+        nf_accum_point_at(ac, u, v, l, k, xyz, 1.0);
+        return;
+    }
+    if (ac->npend)
+        nf_accum_flush(ac);
+    const nf_surf_t *s = ac->s;
+    const double *rcu = ac->ru, *rcv = ac->rv;
+    if (ac->rtu) {
+        rcu = ac->rtu + 6 * l;
+        rcv = ac->rtv + 6 * k;
+    } else if (l != ac->lu || k != ac->lv) {
+        recip33(s->U, l, ac->ru, s->V, k, ac->rv, l != ac->lu, k != ac->lv);
+        ac->vk = -1;
+        ac->lu = l;
+        ac->lv = k;
+    }
+    double Nu[4], Nv[4];
+    basis3(l, u, s->U, rcu, Nu);
+    basis3(k, v, s->V, rcv, Nv);
+    const nf_v4 nu4 = {Nu[0], Nu[1], Nu[2], Nu[3]}, z4 = {0.0, 0.0, 0.0, 0.0};
+    nf_v4 su[4], s0[4];
+    NF_UNROLL
+    for (int a = 0; a < 4; a++)
+        su[a] = Nu[a] * nu4;
+    /* Slots 0..3-a of row a (offsets c - a, c >= a): su[a] shifted down by
+     * a lanes, zeros above: whole vectors at the row's start, so no store
+     * of one row overlaps another's. */
+    s0[0] = su[0];
+    s0[1] = __builtin_shufflevector(su[1], z4, 1, 2, 3, 4);
+    s0[2] = __builtin_shufflevector(su[2], z4, 2, 3, 4, 5);
+    s0[3] = __builtin_shufflevector(su[3], z4, 3, 4, 5, 6);
+    /* x y z of the 4 columns a (a-major, 3a + c), for the right-hand side */
+    const nf_v4 q0 = {xyz[0], xyz[1], xyz[2], xyz[0]}, q1 = {xyz[1], xyz[2], xyz[0], xyz[1]},
+                q2 = {xyz[2], xyz[0], xyz[1], xyz[2]};
+    const nf_v4 n0 = {Nu[0], Nu[0], Nu[0], Nu[1]}, n1 = {Nu[1], Nu[1], Nu[2], Nu[2]},
+                n2 = {Nu[2], Nu[3], Nu[3], Nu[3]};
+    const nf_v4 nq0 = n0 * q0, nq1 = n1 * q1, nq2 = n2 * q2;
+    const long nu = s->nu, base = (l - 3) + (long)(k - 3) * nu;
+    double *S = ac->A->S + base * 25, *rh = ac->rhs + 3 * base;
+    NF_UNROLL
+    for (int b = 0; b < 4; b++) {
+        double *rb = S + b * nu * 25;
+        const double cbb = Nv[b] * Nv[b];
+        NF_UNROLL
+        for (int a = 0; a < 4; a++) {
+            double *row = rb + 25 * a;
+            V4(row) += s0[a] * cbb;
+            NF_UNROLL
+            for (int d = b + 1; d < 4; d++)
+                V4(row + NF_SLOT33(a, d - b)) += su[a] * (Nv[b] * Nv[d]);
+        }
+        double *r = rh + b * nu * 3;
+        V4(r) += nq0 * Nv[b];
+        V4(r + 4) += nq1 * Nv[b];
+        V4(r + 8) += nq2 * Nv[b];
+    }
+#else
+    nf_accum_point_at(ac, u, v, l, k, xyz, 1.0);
+#endif
+}
+
 long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double lim[4],
                      const double dom[4])
 {
@@ -686,6 +765,7 @@ long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double li
     const nf_surf_t *s = ac->s;
     const double *U = s->U, *V = s->V;
     double *G = ac->G, *Gq = ac->Gq;
+    const double *rtu = ac->rtu;
     const int nu1 = s->nu - 1, nv1 = s->nv - 1;
     /* The limits in registers: the stores into G could alias them. */
     const double lo_u = lim[0], hi_u = lim[1], lo_v = lim[2], hi_v = lim[3];
@@ -741,7 +821,11 @@ long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double li
         }
         if (l < 0 || !(U[l] <= u && u < U[l + 1])) {
             l = nf_find_span_from(l, nu1, 3, u, U, ac->hu);
-            recip3(U, l, ru);
+            if (rtu)
+                for (int c = 0; c < 6; c++)
+                    ru[c] = rtu[6 * l + c];
+            else
+                recip3(U, l, ru);
         }
         if (l != sl) { /* a new span: the last one's sums into G */
             if (sl >= 0)

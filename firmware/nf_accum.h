@@ -53,6 +53,7 @@ typedef struct nf_accum {
     _Alignas(32) double Su[16]; /* factored run: sum of N(u) N(u)^T (4 x 4, full) */
     _Alignas(32) double Sq[12]; /* and of N(u) (x y z), a-major */
     double *G, *Gq;             /* row mode: 7 Nu band and 3 Nu right-hand side, or NULL */
+    const double *rtu, *rtv;    /* bicubic: 6 reciprocals per span (at 6 l), or NULL */
     int g0, g1, rowk;           /* columns touched, v span of the row */
     double rowv, rowNv[NF_MAX_ORDER];
     _Alignas(32) double Rb[NF_ACCUM_BUF][NF_LOCAL_PAD]; /* buffered rows of R, zero tails */
@@ -66,6 +67,11 @@ void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *r
 /* Lend the row buffers (G: 7 Nu doubles, Gq: 3 Nu, zeroed) or take them
  * back (NULL, after nf_accum_flush). Bicubic polynomial nets use them. */
 void nf_accum_rowbuf(nf_accum_t *ac, double *G, double *Gq);
+
+/* Lend tables of the 6 reciprocals of every cubic span (tu: 6 Nu doubles,
+ * tv: 6 Nv), filled here, or take them back (NULL). Bicubic nets use them:
+ * no division per span change in random order. */
+void nf_accum_rtab(nf_accum_t *ac, double *tu, double *tv);
 
 /* One point; (u, v) already checked and clamped to the domain, wgt > 0. */
 void nf_accum_point(nf_accum_t *ac, double u, double v, const double xyz[3], double wgt);
@@ -97,6 +103,12 @@ void nf_accum_point_at(nf_accum_t *ac, double u, double v, int l, int k, const d
 #define NF_ROW_MIN 4
 long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double lim[4],
                      const double dom[4]);
+
+/* One point of weight 1 straight into the stripes (random order: a point
+ * alone in its span), closing any open run first; bicubic polynomial nets
+ * take 40 whole-vector updates of its 16 stripe rows, others
+ * nf_accum_point_at. */
+void nf_accum_lone33(nf_accum_t *ac, double u, double v, int l, int k, const double xyz[3]);
 
 /* Empty the open block into the stripes (before solving or reading S). */
 void nf_accum_flush(nf_accum_t *ac);

@@ -10,9 +10,9 @@
  * (A2.1). u must lie in [U[p], U[n+1]]. */
 int nf_find_span(int n, int p, double u, const double *U);
 
-/* nf_find_span's result, fast: the span last or the next (raster scans), else
- * a guess from uniform spacing (h = spans per unit parameter) walked a few
- * steps, else the binary search. Each step keeps
+/* nf_find_span's result, fast: a guess from uniform spacing (h = spans per
+ * unit parameter), else the span last or the next (raster scans on uneven
+ * knots), else the guess walked a few steps, else the binary search. Each step keeps
  * p <= g <= n (U[p] < u < U[n+1] there) and moves toward the unique g with
  * U[g] <= u < U[g+1]: the result is nf_find_span's. */
 static inline int nf_find_span_from(int last, int n, int p, double u, const double *U, double h)
@@ -21,14 +21,17 @@ static inline int nf_find_span_from(int last, int n, int p, double u, const doub
         return n;
     if (u <= U[p])
         return p;
+    /* The guess first: on near-uniform knots it is the span, raster or not. */
+    double x = (u - U[p]) * h;
+    int g = x < (double)(n - p) ? p + (int)x : n;
+    if (U[g] <= u && u < U[g + 1])
+        return g;
     if (last >= 0) {
         if (U[last] <= u && u < U[last + 1])
             return last;
         if (last < n && U[last + 1] <= u && u < U[last + 2])
             return last + 1;
     }
-    double x = (u - U[p]) * h;
-    int g = x < (double)(n - p) ? p + (int)x : n;
     for (int t = 0; t < 4; t++) {
         if (u < U[g])
             g--;

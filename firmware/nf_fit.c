@@ -32,6 +32,14 @@ static void take_lent(nf_fit_t *f, nf_arena_t *a)
     long cap = (f->need_bytes - NF_BYTES_BASE(f->n, s->p, s->q) - NF_ARENA_SLACK) / 2 -
                8L * NF_ARENA_ALIGN;
     f->row_mark = nf_arena_mark(a);
+    if (f->acc.fast && cap >= 48L * (s->nu + s->nv)) {
+        double *tu = nf_arena_doubles(a, (size_t)6 * s->nu),
+               *tv = nf_arena_doubles(a, (size_t)6 * s->nv);
+        if (tu && tv) {
+            nf_accum_rtab(&f->acc, tu, tv);
+            cap -= 48L * (s->nu + s->nv) + 2L * NF_ARENA_ALIGN;
+        }
+    }
     if (f->acc.fast && !f->acc.rational && cap >= 80L * s->nu) {
         double *G = nf_arena_doubles(a, (size_t)7 * s->nu),
                *Gq = nf_arena_doubles(a, (size_t)3 * s->nu);
@@ -159,6 +167,7 @@ int nf_fit_shard_merge(nf_fit_t *f, nf_fit_t *sh)
     f->npoints += sh->npoints;
     f->sumw += sh->sumw;
     nf_accum_rowbuf(&sh->acc, 0, 0);
+    nf_accum_rtab(&sh->acc, 0, 0);
     nf_arena_release(sh->arena, sh->shard_mark);
     sh->finished = 1;
     return NF_OK;
@@ -287,6 +296,73 @@ static inline int row_spans(nf_fit_t *f, const double *r, double *u, double *v, 
     return 1;
 }
 
+/* Prefetch of a tile's stripe rows and right-hand side while the tile
+ * before it is accumulated: its (NF_TILE + q) rows of control points, each
+ * (NF_TILE + p) K doubles contiguous, walked a few cache lines a point so
+ * that the loads from memory overlap the arithmetic (random order's first
+ * touch of a row would otherwise wait for memory, ~8 lines a point). */
+typedef struct tile_pf {
+    const char *seg;   /* current segment (one control row of the tile) */
+    long seg_len, off; /* its bytes and the next offset */
+    int row, rows;     /* segment index, segments (2 per control row: S, rhs) */
+    int per;           /* lines a point */
+    const nf_fit_t *f;
+    long pt0; /* first control point of the tile */
+    long cols;
+} tile_pf_t;
+
+static void tile_pf_seg(tile_pf_t *pf)
+{
+    const nf_fit_t *f = pf->f;
+    const long pt = pf->pt0 + (long)(pf->row / 2) * f->base->nu;
+    if (pf->row % 2 == 0) {
+        pf->seg = (const char *)(f->A.S + pt * f->A.K);
+        pf->seg_len = pf->cols * f->A.K * (long)sizeof(double);
+    } else {
+        pf->seg = (const char *)(f->rhs + 3 * pt);
+        pf->seg_len = pf->cols * 3 * (long)sizeof(double);
+    }
+    pf->off = 0;
+}
+
+static void tile_pf_start(const nf_fit_t *f, long T, uint32_t npts, tile_pf_t *pf)
+{
+    const nf_surf_t *s = f->base;
+    pf->f = f;
+    pf->rows = 0;
+    if (T >= f->bin_tiles || npts == 0)
+        return;
+    const int c0 = (int)(T % f->bin_tx) * NF_TILE, r0 = (int)(T / f->bin_tx) * NF_TILE;
+    const int c1 = c0 + NF_TILE + s->p > s->nu ? s->nu : c0 + NF_TILE + s->p;
+    const int r1 = r0 + NF_TILE + s->q > s->nv ? s->nv : r0 + NF_TILE + s->q;
+    pf->cols = c1 - c0;
+    pf->pt0 = c0 + (long)r0 * s->nu;
+    pf->rows = 2 * (r1 - r0);
+    pf->row = 0;
+    const long lines = (long)(r1 - r0) * (pf->cols * (f->A.K + 3) * 8 / 64 + 2);
+    pf->per = (int)((lines + npts - 1) / npts);
+    pf->per = pf->per > 32 ? 32 : pf->per;
+    tile_pf_seg(pf);
+}
+
+/* pf->per lines of the current segment (a prefetch past its end is
+ * harmless: prefetches never fault), then the next segment when done. */
+static inline void tile_pf_step(tile_pf_t *pf)
+{
+#if defined(__GNUC__)
+    if (pf->row >= pf->rows)
+        return;
+    const char *a = pf->seg + pf->off;
+    for (int i = 0; i < pf->per; i++)
+        __builtin_prefetch(a + 64 * i, 1, 2);
+    pf->off += 64L * pf->per;
+    if (pf->off >= pf->seg_len + 63 && ++pf->row < pf->rows)
+        tile_pf_seg(pf);
+#else
+    (void)pf;
+#endif
+}
+
 /* n <= bin_cap rows: the valid prefix counting-sorted by tile and
  * accumulated tile by tile (Eq. 9's sums in another order), unless it is
  * ordered already; then the first bad row, if any, is reported. */
@@ -347,17 +423,31 @@ static int add_binned(nf_fit_t *f, const double *rows, long n, long *bad)
                 key[to] = kt;
                 idx[to] = e;
             }
-        for (long T = 0; T < f->bin_tiles; T++) {
+        long T1 = 0; /* the next tile with points: its stripe rows are prefetched meanwhile */
+        while (T1 < f->bin_tiles && cnt[T1 + 1] == (T1 ? cnt[T1] : 0))
+            T1++;
+        for (long T = T1; T < f->bin_tiles; T = T1) {
             const int l0 = p + (int)(T % f->bin_tx) * NF_TILE,
                       k0 = q + (int)(T / f->bin_tx) * NF_TILE;
-            for (uint32_t t = T ? cnt[T] : 0; t < cnt[T + 1]; t++) {
+            for (T1 = T + 1; T1 < f->bin_tiles && cnt[T1 + 1] == cnt[T1]; T1++)
+                ;
+            tile_pf_t pf = {0};
+            const uint32_t tb = T ? cnt[T] : 0;
+            tile_pf_start(f, T1, cnt[T + 1] - tb, &pf);
+            for (uint32_t t = tb; t < cnt[T + 1]; t++) {
+                tile_pf_step(&pf);
+                if (t + 16 < (uint32_t)m) {
+                    const double *ra = rows + 5 * (long)(idx[t + 16] & 0xFFFFFFu);
+                    __builtin_prefetch(ra);
+                    __builtin_prefetch(ra + 4);
+                }
                 const uint32_t e = idx[t];
                 const double *r = rows + 5 * (long)(e & 0xFFFFFFu);
                 double u = r[0], v = r[1];
                 u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
                 v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
-                nf_accum_point_at(&f->acc, u, v, l0 + (int)(e >> 24 & 15u), k0 + (int)(e >> 28),
-                                  r + 2, 1.0);
+                nf_accum_lone33(&f->acc, u, v, l0 + (int)(e >> 24 & 15u), k0 + (int)(e >> 28),
+                                r + 2);
             }
         }
         f->npoints += m;
@@ -397,8 +487,11 @@ int nf_fit_add_rows(nf_fit_t *f, const double *rows, long n, long *bad)
             break;
         long w = n - i, at = -1;
         int rc;
-        if (took > 0 && w > NF_ROW_RETRY)
-            w = NF_ROW_RETRY; /* a short row or a bad point: the general path, then the kernel again */
+        /* After a raster that ended in a short row or a bad point: the
+         * general path for a while, then the kernel again. Fewer taken: not
+         * a raster, the general path's whole window (random order bins). */
+        if (took >= NF_ROW_RETRY && w > NF_ROW_RETRY)
+            w = NF_ROW_RETRY;
         if (f->bin_cap > 0 && w >= NF_BIN_MIN) {
             w = w > f->bin_cap ? f->bin_cap : w;
             rc = add_binned(f, rows + 5 * i, w, &at);
@@ -460,6 +553,7 @@ int nf_fit_finish(nf_fit_t *f)
     nf_accum_flush(&f->acc);
     if (f->row_top) { /* give the lent buffers back to the solver (take_lent) */
         nf_accum_rowbuf(&f->acc, 0, 0);
+        nf_accum_rtab(&f->acc, 0, 0);
         f->bin_cap = 0;
         if (nf_arena_mark(f->arena) == f->row_top)
             nf_arena_release(f->arena, f->row_mark);

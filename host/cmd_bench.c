@@ -212,10 +212,7 @@ int cmd_bench(int argc, char **argv)
                          (long)NF_ARENA_BYTES);
     }
     void *mem = malloc((size_t)need);
-    double *rows = malloc(sizeof(double) * 5 * CHUNK);
-    if (!mem || !rows) {
-        free(mem);
-        free(rows);
+    if (!mem) {
         cf_surf_free(&s);
         return cli_error("bench", CLI_FAIL, "out of memory");
     }
@@ -227,10 +224,20 @@ int cmd_bench(int argc, char **argv)
     nf_fit_t sh;
     if (!rc && o.threads > 1)
         rc = nf_fit_shard_init(&sh, &f, &ar);
+    /* Chunks as large as the job bins at once (up to N points, its lent
+     * window), on T cores T windows: random order sorts whole windows. */
+    long chunk = rc ? CHUNK : f.bin_cap * (o.threads > 1 ? 2 : 1);
+    chunk = chunk < CHUNK ? CHUNK : chunk;
+    double *rows = malloc(sizeof(double) * 5 * (size_t)chunk);
+    if (!rows) {
+        free(mem);
+        cf_surf_free(&s);
+        return cli_error("bench", CLI_FAIL, "out of memory");
+    }
     double t_acc = 0.0, t_gen = 0.0, t_solve = 0.0, t_merge = 0.0;
     nf_solve_stats_t st = {o.solver, 0, 0.0};
-    for (long k = 0; !rc && k < o.points; k += CHUNK) {
-        long n = o.points - k < CHUNK ? o.points - k : CHUNK;
+    for (long k = 0; !rc && k < o.points; k += chunk) {
+        long n = o.points - k < chunk ? o.points - k : chunk;
         double t0 = cli_now();
         gen_chunk(&o, k, n, rows);
         double t1 = cli_now();
