@@ -60,8 +60,9 @@ int nf_surf_rbasis(const nf_surf_t *s, double u, double v, int *l, int *k, doubl
     const int p = s->p, q = s->q, o = p + 1;
     u = clampd(u, s->U[p], s->U[s->nu]);
     v = clampd(v, s->V[q], s->V[s->nv]);
-    *l = nf_find_span(s->nu - 1, p, u, s->U);
-    *k = nf_find_span(s->nv - 1, q, v, s->V);
+    /* the span from uniform spacing first: no binary search on even knots */
+    *l = nf_find_span_from(-1, s->nu - 1, p, u, s->U, (s->nu - p) / (s->U[s->nu] - s->U[p]));
+    *k = nf_find_span_from(-1, s->nv - 1, q, v, s->V, (s->nv - q) / (s->V[s->nv] - s->V[q]));
     nf_basis_funs(*l, u, p, s->U, Nu);
     nf_basis_funs(*k, v, q, s->V, Nv);
     if (!s->w) {
@@ -113,8 +114,8 @@ void nf_surf_derivs(const nf_surf_t *s, double u, double v, int d, double skl[27
         d = 2;
     u = clampd(u, s->U[p], s->U[s->nu]);
     v = clampd(v, s->V[q], s->V[s->nv]);
-    int l = nf_find_span(s->nu - 1, p, u, s->U);
-    int k = nf_find_span(s->nv - 1, q, v, s->V);
+    int l = nf_find_span_from(-1, s->nu - 1, p, u, s->U, (s->nu - p) / (s->U[s->nu] - s->U[p]));
+    int k = nf_find_span_from(-1, s->nv - 1, q, v, s->V, (s->nv - q) / (s->V[s->nv] - s->V[q]));
     int du_n = d < p ? d : p, dv_n = d < q ? d : q;
     nf_ders_basis_funs(l, u, p, du_n, s->U, du);
     nf_ders_basis_funs(k, v, q, dv_n, s->V, dv);

@@ -7,6 +7,7 @@
  * have been read, so a lying header cannot make it allocate much. */
 #include "cf_iges.h"
 #include "cf_err.h"
+#include "cf_fmt.h"
 #include "cf_surf.h"
 #include "nf_basis.h"
 #include "nf_err.h"
@@ -1299,7 +1300,7 @@ static void ig_tok(ig_w_t *w, const char *tok, char delim)
 /* %.17g (round-trip exact) with the decimal point and capital E IGES wants. */
 static void ig_fmt(double x, char *b, size_t bl)
 {
-    snprintf(b, bl, "%.17g", x);
+    cf_fmt17(x, b, bl); /* "%.17g", fast */
     char *e = strchr(b, 'e');
     if (e)
         *e = 'E';
