@@ -2,7 +2,7 @@
 # bench/run.sh CELLFIT: issue 6's benchmarks (`make bench`): accumulation,
 # solvers, CHOLMOD and FITPACK on the same problems, end to end, and the
 # machine's memory bandwidth; prints Markdown tables beside the paper's
-# Tables 2-4 (bench/tables.py) and keeps every raw JSON line in
+# Tables 2-4 (bench/tables.py), projection, and keeps every raw JSON line in
 # BUILD/bench/*.jsonl (BUILD: CELLFIT's directory). Measures, asserts nothing.
 # About 1.5 minutes on 2 cores. Environment: BENCH_REPS (3) runs per cell,
 # the fastest kept, while one run takes less than BENCH_REPEAT_S (5) seconds
@@ -224,6 +224,15 @@ while [ "$i" -lt "$REPS" ]; do
         >>"$OUT/e2e.jsonl"
 done
 table e2e
+
+# --- projection: closest points on a curved bicubic part, truth known --------
+say "projection: cellfit bench project (random and raster order)"
+for n in 1000 10000 100000; do
+    for o in random raster; do
+        cell "$OUT/project.jsonl" "$CF" bench project --points 200000 --cp "$n" --order "$o" --json
+    done
+done
+table project
 
 table targets
 secs=$(awk -v a="$start" -v b="$(now_ns)" 'BEGIN { printf "%.0f", (b - a) / 1e9 }')
