@@ -782,9 +782,10 @@ long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double li
     for (; t < n; t++) {
         const double *r = rows + 5 * t;
         double u = r[0], v = r[1];
-        /* x - x is 0 for a finite x, NaN otherwise; one branch for all. */
-        const double fin = (r[2] - r[2]) + (r[3] - r[3]) + (r[4] - r[4]) + (u - u) + (v - v);
-        if (!(fin == 0.0) | (u < lo_u) | (u > hi_u) | (v < lo_v) | (v > hi_v))
+        /* NaN fails every comparison; x - x is 0 for a finite x, NaN
+         * otherwise: nf_fit_add's test, as branches that are never taken. */
+        if (!(u >= lo_u && u <= hi_u && v >= lo_v && v <= hi_v &&
+              (r[2] - r[2]) + (r[3] - r[3]) + (r[4] - r[4]) == 0.0))
             break; /* nf_fit_add judges it */
         u = u < d0 ? d0 : (u > d1 ? d1 : u);
         v = v < d2 ? d2 : (v > d3 ? d3 : v);
