@@ -29,6 +29,7 @@ typedef double nf_v4u __attribute__((vector_size(32), aligned(8), may_alias));
 
 typedef struct pcg_ws {
     const nf_stripe_t *A;
+    double *x;     /* the iterate: 3 per point */
     double *r, *d; /* transformed residual, direction: 3 per point */
     double *q, *t; /* C^-1 A C^-T d and C^-T d: 4 per point, lane 3 D^1/2 (q), D^-1 (t) */
     long hi;       /* last row of the bicubic kernels, -1: generic loops only */
@@ -73,18 +74,41 @@ static void dot3(long n, const double *a, const double *b, double out[3])
     out[2] = s2;
 }
 
+#if defined(__GNUC__)
+#define NF_INLINE static inline __attribute__((always_inline))
+#else
+#define NF_INLINE static inline
+#endif
+
+/* The previous iteration's vector updates, done as the backward sweep
+ * reaches point i and before it overwrites t_i: x_i += alpha t_i and
+ * d_i = r_i + beta d_i (ab = alpha[3], beta[3]). Same operations as
+ * separate passes, one pass over x, t and d fewer. */
+NF_INLINE void fold_row(const pcg_ws_t *w, long i, const double ab[6])
+{
+    double *x = w->x + 3 * i, *d = w->d + 3 * i;
+    const double *r = w->r + 3 * i, *t = w->t + 4 * i;
+    for (int c = 0; c < 3; c++) {
+        x[c] += ab[c] * t[c];
+        d[c] = r[c] + ab[3 + c] * d[c];
+    }
+}
+
 /* Backward sweep, rows from..to descending: t_i = D^-1 s_i with
  * s_i = D^1/2 d_i - sum_{j > i} A_ij t_j, and q_i = D^1/2 d_i - s_i, the
  * forward sweep's input D^1/2 d - D t. The zero test skips the slots that
  * fall outside the grid (and so outside the vectors near the end). */
-static void bwd_rows(const nf_stripe_t *A, const double *d, double *t, double *q, long from,
-                     long to)
+static void bwd_rows(const pcg_ws_t *w, const double ab[6], long from, long to)
 {
+    const nf_stripe_t *A = w->A;
     const int K = A->K;
     const long *dl = A->delta;
+    const double *d = w->d;
+    double *t = w->t, *q = w->q;
     for (long i = from; i >= to; i--) {
         const double *row = A->S + i * K;
         const double dh = q[4 * i + 3], invd = t[4 * i + 3];
+        fold_row(w, i, ab);
         double s0 = dh * d[3 * i], s1 = dh * d[3 * i + 1], s2 = dh * d[3 * i + 2];
         const double w0 = s0, w1 = s1, w2 = s2;
         for (int s = 1; s < K; s++) {
@@ -143,17 +167,25 @@ static void fwd_rows(const nf_stripe_t *A, const double *d, const double *t, dou
  * i+1..i+3; for f = 1..3, the 7 slots from 4 + 7 (f-1) couple i with the 7
  * consecutive points from i + f Nu - 3. Slots outside the grid hold zeros
  * and multiply finite values, so rows i <= hi = N - 3 Nu - 4 need no tests. */
+/* Rows ahead of the current one whose stripes are fetched early. */
+#define NF_PCG_AHEAD 16
 #define G33(f) (4 + 7 * ((f)-1))
 
 /* Backward sweep, bicubic rows hi..0. t_{i+1..i+3}, the last rows done,
  * ride in registers; three more sums split the 24-term chain. */
-static void bwd_33(const nf_stripe_t *A, const double *d, double *t, double *q, long hi)
+static void bwd_33(const pcg_ws_t *w, const double ab[6], long hi)
 {
+    const nf_stripe_t *A = w->A;
     const long nu = A->nu;
+    const double *d = w->d;
+    double *t = w->t, *q = w->q;
     nf_v4 t1 = V4(t + 4 * (hi + 1)), t2 = V4(t + 4 * (hi + 2)), t3 = V4(t + 4 * (hi + 3));
     for (long i = hi; i >= 0; i--) {
         const double *a = A->S + 25 * i;
         const double dh = q[4 * i + 3], invd = t[4 * i + 3];
+        for (int l = 0; l < 4; l++) /* the stripes run ahead of the hardware prefetcher */
+            __builtin_prefetch(a - NF_PCG_AHEAD * 25 + 8 * l);
+        fold_row(w, i, ab);
         const double *g1 = t + 4 * (i + nu - 3), *g2 = g1 + 4 * nu, *g3 = g2 + 4 * nu;
         nf_v4 s1 = a[G33(1)] * V4(g1), s2 = a[G33(2)] * V4(g2), s3 = a[G33(3)] * V4(g3);
         NF_UNROLL7
@@ -162,9 +194,9 @@ static void bwd_33(const nf_stripe_t *A, const double *d, double *t, double *q, 
             s2 += a[G33(2) + k] * V4(g2 + 4 * k);
             s3 += a[G33(3) + k] * V4(g3 + 4 * k);
         }
-        const nf_v4 w = {dh * d[3 * i], dh * d[3 * i + 1], dh * d[3 * i + 2], 0.0};
-        const nf_v4 s = (w - a[3] * t3 - a[2] * t2 - (s1 + s2 + s3)) - a[1] * t1;
-        nf_v4 ti = s * invd, qi = w - s;
+        const nf_v4 wi = {dh * d[3 * i], dh * d[3 * i + 1], dh * d[3 * i + 2], 0.0};
+        const nf_v4 s = (wi - a[3] * t3 - a[2] * t2 - (s1 + s2 + s3)) - a[1] * t1;
+        nf_v4 ti = s * invd, qi = wi - s;
         ti[3] = invd;
         qi[3] = dh;
         V4(t + 4 * i) = ti;
@@ -186,6 +218,8 @@ static void fwd_33(const nf_stripe_t *A, const double *d, const double *t, doubl
     for (long i = 0; i <= hi; i++) {
         const double *a = A->S + 25 * i;
         const double dh = q[4 * i + 3], invd = t[4 * i + 3];
+        for (int l = 0; l < 4; l++)
+            __builtin_prefetch(a + NF_PCG_AHEAD * 25 + 8 * l);
         nf_v4 y = q0 * invd;
         y[3] = 0.0; /* keeps the fourth lanes of the targets */
         q0 = q1 - a[1] * y;
@@ -226,16 +260,17 @@ static long fast_rows(const nf_stripe_t *A)
 
 /* q = C^-1 A C^-T d and t = C^-T d (Eisenstat), dq = d . q, in two passes:
  * the backward sweep forms t and the forward sweep's input D^1/2 d - D t,
- * the forward sweep finishes q and the dot product as each row completes. */
-static void apply(pcg_ws_t *w, double dq[3])
+ * the forward sweep finishes q and the dot product as each row completes.
+ * First x += alpha t, d = r + beta d (fold_row). */
+static void apply(pcg_ws_t *w, const double ab[6], double dq[3])
 {
     const nf_stripe_t *A = w->A;
     const long hi = w->hi;
-    bwd_rows(A, w->d, w->t, w->q, A->n - 1, hi + 1);
+    bwd_rows(w, ab, A->n - 1, hi + 1);
     dq[0] = dq[1] = dq[2] = 0.0;
 #if NF_PCG_VECTOR
     if (hi >= 0) {
-        bwd_33(A, w->d, w->t, w->q, hi);
+        bwd_33(w, ab, hi);
         fwd_33(A, w->d, w->t, w->q, hi, dq);
     }
 #endif
@@ -252,6 +287,7 @@ static int pcg_run(pcg_ws_t *w, const double *b, double *x, double tol, int max_
     const nf_stripe_t *A = w->A;
     const long n = A->n;
     double *r = w->r, *d = w->d;
+    w->x = x;
     const double *t = w->t, *q = w->q;
     double rr[3], r0[3], bb[3] = {0, 0, 0}, lim[3], dq[3];
     int live[3];
@@ -276,9 +312,10 @@ static int pcg_run(pcg_ws_t *w, const double *b, double *x, double tol, int max_
     for (long i = 0; i < 3 * n; i++)
         d[i] = r[i];
     int it = 0;
+    double ab[6] = {0, 0, 0, 0, 0, 0}; /* alpha, beta: nothing to fold yet */
     while ((live[0] || live[1] || live[2]) && it < max_iter) {
-        apply(w, dq);
-        double al[3], be[3];
+        apply(w, ab, dq);
+        double *al = ab, *be = ab + 3;
         for (int c = 0; c < 3; c++) {
             if (live[c] && !(dq[c] > 0.0))
                 return -1;
@@ -286,9 +323,6 @@ static int pcg_run(pcg_ws_t *w, const double *b, double *x, double tol, int max_
         }
         double rn0 = 0.0, rn1 = 0.0, rn2 = 0.0;
         for (long i = 0; i < n; i++) {
-            x[3 * i] += al[0] * t[4 * i];
-            x[3 * i + 1] += al[1] * t[4 * i + 1];
-            x[3 * i + 2] += al[2] * t[4 * i + 2];
             const double e0 = r[3 * i] - al[0] * q[4 * i];
             const double e1 = r[3 * i + 1] - al[1] * q[4 * i + 1];
             const double e2 = r[3 * i + 2] - al[2] * q[4 * i + 2];
@@ -306,12 +340,11 @@ static int pcg_run(pcg_ws_t *w, const double *b, double *x, double tol, int max_
             live[c] = live[c] && sqrt(rn[c]) > lim[c];
             rr[c] = rn[c];
         }
-        for (long i = 0; i < n; i++) {
-            d[3 * i] = r[3 * i] + be[0] * d[3 * i];
-            d[3 * i + 1] = r[3 * i + 1] + be[1] * d[3 * i + 1];
-            d[3 * i + 2] = r[3 * i + 2] + be[2] * d[3 * i + 2];
-        }
     }
+    /* The last step, which no further backward sweep folds in. */
+    for (long i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++)
+            x[3 * i + c] += ab[c] * t[4 * i + c];
     return it;
 }
 
@@ -394,8 +427,10 @@ int nf_pcg_apply(const nf_stripe_t *A, const double *d, double *t, double *q, do
     if (generic)
         w.hi = -1;
     for (long i = 0; i < 3 * A->n; i++)
-        w.d[i] = d[i];
-    apply(&w, dq);
+        w.r[i] = d[i]; /* folded into d = r + 0 d */
+    const double ab[6] = {0, 0, 0, 0, 0, 0};
+    w.x = w.d; /* x += 0 t: a harmless target */
+    apply(&w, ab, dq);
     for (long i = 0; i < A->n; i++)
         for (int c = 0; c < 3; c++) {
             t[3 * i + c] = w.t[4 * i + c];
