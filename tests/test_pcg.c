@@ -1,7 +1,8 @@
 /* test_pcg.c: the split PCG operator of nf_pcg.c (bicubic 4-wide kernels and
- * generic sweeps) against a dense forward/backward substitution, and the
- * whole PCG solve against a dense Gaussian elimination, on nets with and
- * without rows the bicubic kernels take (Nu, Nv < 7, other degrees). */
+ * generic sweeps) against a dense forward/backward substitution, the stripe
+ * product against the dense one, and the whole PCG solve against a dense
+ * Gaussian elimination, on nets with and without rows the bicubic kernels
+ * take (Nu, Nv < 7, other degrees). */
 #include "cf_test.h"
 #include "nf_arena.h"
 #include "nf_err.h"
@@ -141,6 +142,48 @@ static void test_apply_small_and_other_degrees(void **state)
     check_apply(5, 4, 9, 8);
 }
 
+/* nf_stripe_matvec (bicubic 4-wide rows and generic rows) against the
+ * dense product. */
+static void check_matvec(int p, int q, int nu, int nv)
+{
+    nf_stripe_t A;
+    double *S = random_store(&A, p, q, nu, nv);
+    const long n = A.n;
+    double *x = malloc(sizeof(double) * 3 * n), *y = malloc(sizeof(double) * 3 * n);
+    for (long i = 0; i < 3 * n; i++)
+        x[i] = ref_rand(-1.0, 1.0);
+    nf_stripe_matvec(&A, x, y);
+    double ys = 0.0;
+    for (long i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            double s = 0.0, m = 0.0;
+            for (long j = 0; j < n; j++) {
+                s += nf_stripe_get(&A, i, j) * x[3 * j + c];
+                m += fabs(nf_stripe_get(&A, i, j));
+            }
+            assert_near(y[3 * i + c], s, 1e-14 * m);
+            ys = fmax(ys, fabs(s));
+        }
+    assert_true(ys > 0.0);
+    free(x);
+    free(y);
+    free(S);
+}
+
+static void test_matvec(void **state)
+{
+    (void)state;
+    ref_seed(64);
+    check_matvec(3, 3, 12, 9); /* 4-wide rows in the middle */
+    check_matvec(3, 3, 31, 23);
+    check_matvec(3, 3, 5, 20); /* Nu < 7 */
+    check_matvec(3, 3, 4, 30); /* Nu = p + 1 */
+    check_matvec(3, 3, 16, 4); /* no row far enough from both ends */
+    check_matvec(2, 3, 10, 9);
+    check_matvec(3, 2, 10, 9);
+    check_matvec(5, 4, 9, 8);
+}
+
 /* The whole solve on a random store against Gaussian elimination. */
 static void check_solve(int p, int q, int nu, int nv)
 {
@@ -189,6 +232,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_apply_bicubic),
         cmocka_unit_test(test_apply_small_and_other_degrees),
+        cmocka_unit_test(test_matvec),
         cmocka_unit_test(test_solve_against_dense),
     };
     return cmocka_run_group_tests_name("pcg", tests, NULL, NULL);
