@@ -95,22 +95,20 @@ NF_INLINE void fold_row(const pcg_ws_t *w, long i, const double ab[6])
 }
 
 /* Backward sweep, rows from..to descending: t_i = D^-1 s_i with
- * s_i = D^1/2 d_i - sum_{j > i} A_ij t_j, and q_i = D^1/2 d_i - s_i, the
- * forward sweep's input D^1/2 d - D t. The zero test skips the slots that
- * fall outside the grid (and so outside the vectors near the end). */
+ * s_i = D^1/2 d_i - sum_{j > i} A_ij t_j. The zero test skips the slots
+ * that fall outside the grid (and so outside the vectors near the end). */
 static void bwd_rows(const pcg_ws_t *w, const double ab[6], long from, long to)
 {
     const nf_stripe_t *A = w->A;
     const int K = A->K;
     const long *dl = A->delta;
-    const double *d = w->d;
-    double *t = w->t, *q = w->q;
+    const double *d = w->d, *q = w->q;
+    double *t = w->t;
     for (long i = from; i >= to; i--) {
         const double *row = A->S + i * K;
         const double dh = q[4 * i + 3], invd = t[4 * i + 3];
         fold_row(w, i, ab);
         double s0 = dh * d[3 * i], s1 = dh * d[3 * i + 1], s2 = dh * d[3 * i + 2];
-        const double w0 = s0, w1 = s1, w2 = s2;
         for (int s = 1; s < K; s++) {
             const double a = row[s];
             if (a != 0.0) {
@@ -123,14 +121,14 @@ static void bwd_rows(const pcg_ws_t *w, const double ab[6], long from, long to)
         t[4 * i] = s0 * invd;
         t[4 * i + 1] = s1 * invd;
         t[4 * i + 2] = s2 * invd;
-        q[4 * i] = w0 - s0;
-        q[4 * i + 1] = w1 - s1;
-        q[4 * i + 2] = w2 - s2;
     }
 }
 
-/* Forward sweep, rows from..n-1: y_i = D^-1 q_i, scattered into the later
- * rows, then q_i = D^1/2 (t_i + y_i) and dq += d_i q_i. */
+/* Forward sweep, rows from..n-1, on q_i zeroed before the first row that
+ * reaches it: y_i = D^-1 (D^1/2 d_i - D t_i + q_i), D^1/2 d - D t being the
+ * sweep's input and q_i the sum scattered so far from the earlier rows;
+ * y_i scattered into the later rows, then q_i = D^1/2 (t_i + y_i) and
+ * dq += d_i q_i. Forming the input here spares the backward sweep a store. */
 static void fwd_rows(const nf_stripe_t *A, const double *d, const double *t, double *q, long from,
                      double dq[3])
 {
@@ -140,7 +138,9 @@ static void fwd_rows(const nf_stripe_t *A, const double *d, const double *t, dou
     for (long i = from; i < A->n; i++) {
         const double *row = A->S + i * K;
         const double dh = q[4 * i + 3], invd = t[4 * i + 3];
-        const double y0 = q[4 * i] * invd, y1 = q[4 * i + 1] * invd, y2 = q[4 * i + 2] * invd;
+        const double y0 = (dh * d[3 * i] - row[0] * t[4 * i] + q[4 * i]) * invd;
+        const double y1 = (dh * d[3 * i + 1] - row[0] * t[4 * i + 1] + q[4 * i + 1]) * invd;
+        const double y2 = (dh * d[3 * i + 2] - row[0] * t[4 * i + 2] + q[4 * i + 2]) * invd;
         for (int s = 1; s < K; s++) {
             const double a = row[s];
             if (a != 0.0) {
@@ -177,8 +177,8 @@ static void bwd_33(const pcg_ws_t *w, const double ab[6], long hi)
 {
     const nf_stripe_t *A = w->A;
     const long nu = A->nu;
-    const double *d = w->d;
-    double *t = w->t, *q = w->q;
+    const double *d = w->d, *q = w->q;
+    double *t = w->t;
     nf_v4 t1 = V4(t + 4 * (hi + 1)), t2 = V4(t + 4 * (hi + 2)), t3 = V4(t + 4 * (hi + 3));
     for (long i = hi; i >= 0; i--) {
         const double *a = A->S + 25 * i;
@@ -196,11 +196,9 @@ static void bwd_33(const pcg_ws_t *w, const double ab[6], long hi)
         }
         const nf_v4 wi = {dh * d[3 * i], dh * d[3 * i + 1], dh * d[3 * i + 2], 0.0};
         const nf_v4 s = (wi - a[3] * t3 - a[2] * t2 - (s1 + s2 + s3)) - a[1] * t1;
-        nf_v4 ti = s * invd, qi = wi - s;
+        nf_v4 ti = s * invd;
         ti[3] = invd;
-        qi[3] = dh;
         V4(t + 4 * i) = ti;
-        V4(q + 4 * i) = qi;
         t3 = t2;
         t2 = t1;
         t1 = ti;
@@ -209,7 +207,8 @@ static void bwd_33(const pcg_ws_t *w, const double ab[6], long hi)
 
 /* Forward sweep, bicubic rows 0..hi. q_{i+1..i+3}, which row i and the two
  * before it update, ride in registers; with Nu >= 7 no group slot of those
- * rows reaches them, so memory holds every other update. */
+ * rows reaches them, so memory holds every other update. Row i is the
+ * first to reach q_{i+3Nu+3}: it stores its term there instead of adding. */
 static void fwd_33(const nf_stripe_t *A, const double *d, const double *t, double *q, long hi,
                    double dq[3])
 {
@@ -220,22 +219,26 @@ static void fwd_33(const nf_stripe_t *A, const double *d, const double *t, doubl
         const double dh = q[4 * i + 3], invd = t[4 * i + 3];
         for (int l = 0; l < 4; l++)
             __builtin_prefetch(a + NF_PCG_AHEAD * 25 + 8 * l);
-        nf_v4 y = q0 * invd;
+        const nf_v4 di = {d[3 * i], d[3 * i + 1], d[3 * i + 2], 0.0}, ti = V4(t + 4 * i);
+        nf_v4 y = (dh * di - a[0] * ti + q0) * invd;
         y[3] = 0.0; /* keeps the fourth lanes of the targets */
         q0 = q1 - a[1] * y;
         q1 = q2 - a[2] * y;
         q2 = V4(q + 4 * (i + 3)) - a[3] * y;
         double *g1 = q + 4 * (i + nu - 3), *g2 = g1 + 4 * nu, *g3 = g2 + 4 * nu;
+        nf_v4 last = -a[G33(3) + 6] * y;
+        last[3] = g3[4 * 6 + 3];
+        V4(g3 + 4 * 6) = last;
         NF_UNROLL7
         for (int k = 0; k < 7; k++) {
             V4(g1 + 4 * k) -= a[G33(1) + k] * y;
             V4(g2 + 4 * k) -= a[G33(2) + k] * y;
-            V4(g3 + 4 * k) -= a[G33(3) + k] * y;
+            if (k < 6)
+                V4(g3 + 4 * k) -= a[G33(3) + k] * y;
         }
-        nf_v4 qi = dh * (V4(t + 4 * i) + y);
+        nf_v4 qi = dh * (ti + y);
         qi[3] = dh;
         V4(q + 4 * i) = qi;
-        const nf_v4 di = {d[3 * i], d[3 * i + 1], d[3 * i + 2], 0.0};
         acc += di * qi;
     }
     V4(q + 4 * (hi + 1)) = q0;
@@ -268,6 +271,12 @@ static void apply(pcg_ws_t *w, const double ab[6], double dq[3])
     const long hi = w->hi;
     bwd_rows(w, ab, A->n - 1, hi + 1);
     dq[0] = dq[1] = dq[2] = 0.0;
+    /* The forward sweep's sums start at zero: all of them for the generic
+     * loops, those no bicubic row is the first to reach otherwise. */
+    const long nz = hi >= 0 ? 3L * A->nu + 3 : A->n;
+    for (long i = 0; i < nz; i++)
+        for (int c = 0; c < 3; c++)
+            w->q[4 * i + c] = 0.0;
 #if NF_PCG_VECTOR
     if (hi >= 0) {
         bwd_33(w, ab, hi);
@@ -428,6 +437,11 @@ int nf_pcg_apply(const nf_stripe_t *A, const double *d, double *t, double *q, do
         w.hi = -1;
     for (long i = 0; i < 3 * A->n; i++)
         w.r[i] = d[i]; /* folded into d = r + 0 d */
+    /* q holds the last iteration's values on entry: a sum the forward sweep
+     * failed to start from zero shows as NaN. */
+    for (long i = 0; i < A->n; i++)
+        for (int c = 0; c < 3; c++)
+            w.q[4 * i + c] = NAN;
     const double ab[6] = {0, 0, 0, 0, 0, 0};
     w.x = w.d; /* x += 0 t: a harmless target */
     apply(&w, ab, dq);
