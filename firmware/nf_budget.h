@@ -9,8 +9,8 @@
  *   base   = 8 N (K + 6)                  stripes S, right-hand side R^T Q + beta P0 (3N),
  *                                          solution P (3N)
  *   gs     = base + 8 (6N)                residual and rank-probe vectors
- *   pcg    = base + 8 (17N)               r, d, q, t (3N each), D^1/2 and D^-1 (N each),
- *                                          determinacy probe (3N)
+ *   pcg    = base + 8 (17N)               r, d (3N each), q, t (4N each: x y z and
+ *                                          D^1/2 or D^-1), determinacy probe (3N)
  *   chol   = base + 8 (N (q Nu + p + 1) + 3N)   upper band of half bandwidth q Nu + p
  *   bytes  = solver term + NF_ARENA_SLACK  alignment of at most 16 blocks
  *   shard  = 8 N (K + 3) + 4 NF_ARENA_ALIGN  each further accumulator (a second

@@ -22,6 +22,13 @@ int nf_chol_solve(const nf_stripe_t *A, const double *b, double *x, nf_arena_t *
 int nf_pcg_solve(const nf_stripe_t *A, const double *b, double *x, const nf_solve_opts_t *o,
                  nf_arena_t *ar, nf_solve_stats_t *st, long *bad);
 
+/* One step of nf_pcg_solve's operator, for tests: from d, t = C^-T d and
+ * q = C^-1 A C^-T d (C C^T the symmetric Gauss-Seidel preconditioner,
+ * C = (D + L) D^-1/2), dq = d . q per coordinate; all 3 per point. generic
+ * takes the generic sweeps for every row. Scratch: 14N doubles of ar. */
+int nf_pcg_apply(const nf_stripe_t *A, const double *d, double *t, double *q, double dq[3],
+                 int generic, nf_arena_t *ar);
+
 /* r = b - A x; returns max over the three coordinates of ||r|| / ||b||
  * (||r|| alone where b = 0). */
 double nf_residual(const nf_stripe_t *A, const double *b, const double *x, double *r);

@@ -239,6 +239,8 @@ static void test_solvers_rational_mixed(void **state)
     ref_seed(22);
     check_solvers(2, 3, 9, 6, 0.5, 0.0, 800, 0.4);
     check_solvers(4, 2, 7, 5, 0.0, 0.0, 900, 0.6);
+    /* Bicubic, rational, with rows PCG's 4-wide kernels take (Nu >= 7). */
+    check_solvers(3, 3, 13, 9, 0.1, 0.001, 2500, 0.5);
 }
 
 /* Noise-free points from a surface in the same space: alpha = beta = 0
