@@ -95,7 +95,7 @@ static void gen(const nf_surf_t *s, long k0, long n, long total, int random, dou
 int bench_project(int argc, char **argv)
 {
     long points = 1000000, cp = 10000, degree = 3, maxq = 200000;
-    double rel = NF_QUAD_REL_TOL, off = 1.0;
+    double rel = NF_QUAD_SEED_TOL, off = 1.0; /* as cf_seedgrid's projections */
     int json = 0, random = 1;
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";

@@ -24,9 +24,12 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
      * cell need not be the nearest in space, so the 3-D grid is kept. */
     const size_t qb = NF_QUAD_BYTES(CF_SEEDGRID_MAXQ, s->nu, s->nv);
     g->qmem = malloc(qb);
-    const nf_quad_params_t prm = {NF_QUAD_REL_TOL, 0.0, 0};
-    if (g->qmem && nf_quad_init(&g->quad, s, &prm, CF_SEEDGRID_MAXQ, g->qmem, qb) == NF_OK &&
-        !g->quad.folded) {
+    /* the finer blanket for closer starts, the paper's when it does not fit */
+    const nf_quad_params_t fine = {NF_QUAD_SEED_TOL, 0.0, 0}, paper = {NF_QUAD_REL_TOL, 0.0, 0};
+    int rc = g->qmem ? nf_quad_init(&g->quad, s, &fine, CF_SEEDGRID_MAXQ, g->qmem, qb) : NF_EARG;
+    if (rc == NF_EBUDGET)
+        rc = nf_quad_init(&g->quad, s, &paper, CF_SEEDGRID_MAXQ, g->qmem, qb);
+    if (g->qmem && rc == NF_OK && !g->quad.folded) {
         g->use_quad = 1;
         return CF_OK;
     }
