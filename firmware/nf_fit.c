@@ -32,20 +32,21 @@ static void take_lent(nf_fit_t *f, nf_arena_t *a)
     long cap = (f->need_bytes - NF_BYTES_BASE(f->n, s->p, s->q) - NF_ARENA_SLACK) / 2 -
                8L * NF_ARENA_ALIGN;
     f->row_mark = nf_arena_mark(a);
+    if (f->acc.fast && !f->acc.rational && cap >= 80L * s->nu) {
+        double *G = nf_arena_doubles(a, (size_t)7 * s->nu),
+               *Gq = nf_arena_doubles(a, (size_t)3 * s->nu);
+        if (G && Gq) {
+            nf_accum_rowbuf(&f->acc, G, Gq);
+            cap -= 80L * s->nu + 2L * NF_ARENA_ALIGN;
+        }
+    }
+    /* the reciprocals of every span (bicubic): no division per span change */
     if (f->acc.fast && cap >= 48L * (s->nu + s->nv)) {
         double *tu = nf_arena_doubles(a, (size_t)6 * s->nu),
                *tv = nf_arena_doubles(a, (size_t)6 * s->nv);
         if (tu && tv) {
             nf_accum_rtab(&f->acc, tu, tv);
             cap -= 48L * (s->nu + s->nv) + 2L * NF_ARENA_ALIGN;
-        }
-    }
-    if (f->acc.fast && !f->acc.rational && cap >= 80L * s->nu) {
-        double *G = nf_arena_doubles(a, (size_t)7 * s->nu),
-               *Gq = nf_arena_doubles(a, (size_t)3 * s->nu);
-        if (G && Gq) {
-            nf_accum_rowbuf(&f->acc, G, Gq);
-            cap -= 80L * s->nu;
         }
     }
     f->bin_tx = (s->nu - s->p + NF_TILE - 1) / NF_TILE;
