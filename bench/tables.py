@@ -275,7 +275,8 @@ def e2e(out):
     if good:
         d = min(good, key=lambda x: x["wall_seconds"])
         other = d["seconds"] - d["accumulate_seconds"] - d["solve_seconds"]
-        table(["wall s", "fit seconds", "parse + other s", "accumulate s", "solve s", "solver",
+        table(["wall s", "fit seconds", "other s (IGES in and out, residual pass)",
+               "read + accumulate s", "solve s (with the probe)", "solver",
                "iterations", "rel. residual", "rms mm", "peak RSS MiB", "runs"],
               [[sec(d["wall_seconds"]), sec(d["seconds"]), sec(other),
                 sec(d["accumulate_seconds"]), sec(d["solve_seconds"]), d["solver"],
