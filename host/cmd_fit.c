@@ -22,7 +22,10 @@
 #include <string.h>
 #include <sys/resource.h>
 
-#define BATCH 4096
+/* Points read (and projected) at a time: a batch is the fitter's binning
+ * window for random order (up to N points, nf_fit_add_rows). Fixed, and
+ * touched whole when allocated, so that memory never follows the points. */
+#define BATCH 65536
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
 
 /* Start points for projection: surface samples (8 per knot span and
@@ -344,7 +347,7 @@ typedef struct weigh {
  * (proj_onto when projecting); points of weight 0 are left out. */
 static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t *proj_onto,
                     const weigh_t *wt, cf_points_t *pr, void *mem, long need, double *buf,
-                    double *rows, nf_surf_t *out, pass_out_t *po)
+                    double *rows, long *src, nf_surf_t *out, pass_out_t *po)
 {
     char msg[512];
     nf_arena_t ar;
@@ -365,7 +368,7 @@ static int fit_pass(const fit_opts_t *o, const nf_surf_t *base, const nf_surf_t 
         cf_seedgrid_free(&pj);
         return cli_error("fit", CLI_USAGE, "%s: cannot read the points again", o->points);
     }
-    long got, src[BATCH];
+    long got;
     proj_count_t pc = {o->far, o->drop_far, 0, 0, 0, src};
     while ((got = cf_points_read(pr, buf, BATCH, msg, sizeof msg)) > 0) {
         long bad = -1, n = got;
@@ -478,6 +481,7 @@ int cmd_fit(int argc, char **argv)
     }
     void *mem = NULL;
     double *buf = malloc(sizeof(double) * 5 * BATCH), *rows = malloc(sizeof(double) * 5 * BATCH);
+    long *src = malloc(sizeof(long) * BATCH); /* projected rows' input index */
     double *srmem = NULL;
     int ec = CLI_OK, met = 0, nr = 0;
     cf_round_t rounds[MAX_ROUNDS];
@@ -486,10 +490,13 @@ int cmd_fit(int argc, char **argv)
     resid_t res, best_res;
     nf_solve_stats_t best_st = po.st;
     long rejected = 0, best_need = need;
-    if (!buf || !rows || cf_surf_copy(&cur, &base)) {
+    if (!buf || !rows || !src || cf_surf_copy(&cur, &base)) {
         ec = cli_error("fit", CLI_FAIL, "out of memory");
         goto done;
     }
+    memset(buf, 0, sizeof(double) * 5 * BATCH); /* resident now, whatever the points */
+    memset(rows, 0, sizeof(double) * 5 * BATCH);
+    memset(src, 0, sizeof(long) * BATCH);
     /* Round r fits in the space of cur with P0 = cur's net: the base first,
      * then the previous fit refined (Section 2.2). */
     for (int round = 0;; round++) {
@@ -505,7 +512,8 @@ int cmd_fit(int argc, char **argv)
          * cur; each --reparam pass projects onto the previous fit and
          * refits in the same space with the same nominal P0. */
         for (long pass = 0; pass <= o.reparam; pass++) {
-            ec = fit_pass(&o, &cur, o.uv ? NULL : &prev, NULL, pr, mem, need, buf, rows, &fit, &po);
+            ec = fit_pass(&o, &cur, o.uv ? NULL : &prev, NULL, pr, mem, need, buf, rows, src, &fit,
+                          &po);
             if (ec)
                 goto done;
             t_acc += po.t_acc;
@@ -532,7 +540,8 @@ int cmd_fit(int argc, char **argv)
             if (!(c > 0))
                 break; /* the fit is exact: nothing to reweight */
             weigh_t wt = {c, &prev};
-            ec = fit_pass(&o, &cur, o.uv ? NULL : &prev, &wt, pr, mem, need, buf, rows, &fit, &po);
+            ec = fit_pass(&o, &cur, o.uv ? NULL : &prev, &wt, pr, mem, need, buf, rows, src, &fit,
+                          &po);
             if (ec)
                 goto done;
             rejected = po.rejected;
@@ -708,6 +717,7 @@ done:
     cf_points_close(pr);
     free(buf);
     free(rows);
+    free(src);
     free(mem);
     free(srmem);
     cf_surf_free(&prev);
