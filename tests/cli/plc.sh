@@ -48,9 +48,13 @@ start() {
 }
 mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
 
-# The part: 200000 x y z points (projected by the fit: a job of seconds).
+# The part: 200000 x y z points (projected by the fit: a job of a few
+# tenths of a second). The watchdog's cell gets 10^6 (a job of seconds,
+# which must outlast WATCHDOG_MS = 300 ms on a fast machine too).
 "$CF" gen --dir "$T" --nu 16 --nv 12 --points 200000 --noise 0.002 >/dev/null
 grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
+"$CF" gen --dir "$T/big" --nu 16 --nv 12 --points 1000000 --noise 0.002 >/dev/null
+grep -v '^#' "$T/big/points.uvxyz" | cut -d' ' -f3- >"$T/big/points.xyz"
 mkdir -p "$T/results"
 
 # Usage errors: exit 2, one line naming what.
@@ -117,10 +121,19 @@ else
     no "cellfit report on the exported fitted.igs"
 fi
 py abort "$port"
+# The watchdog trips mid-job on a cell of its own (the long job above).
+a_port=$port
+a_pid=$pid
+start w --nominal "$T/big/nominal.igs" --points "$T/big/points.xyz"
 py watchdog "$port"
+kill -TERM "$pid"
+wait "$pid"
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+port=$a_port
+pid=$a_pid
 py net "$port"
 py errors "$port" folder 305
-grep -q "info command FIT seq" "$T/a.log" && grep -q "error watchdog: PLC heartbeat" "$T/a.log" &&
+grep -q "info command FIT seq" "$T/a.log" && grep -q "error watchdog: PLC heartbeat" "$T/w.log" &&
     ok "log: levelled lines for commands and the watchdog" || no "log lines missing"
 # A job keeps running while clients come and go: mbpoll connects and
 # leaves during the jobs above; the server saw them.
@@ -162,8 +175,8 @@ pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 [ ! -e "$T/$name.port" ] && ok "SIGTERM: port file removed" || no "port file left"
 grep -q "info stopping" "$T/$name.log" && ok "SIGTERM: logged" || no "SIGTERM not logged"
 
-if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" "$T/c.log" >/dev/null; then
-    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[abc].log | head -5
+if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" "$T/c.log" "$T/w.log" >/dev/null; then
+    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[abcw].log | head -5
 else
     ok "no sanitizer report in the server logs"
 fi
