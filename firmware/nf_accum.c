@@ -467,36 +467,20 @@ NF_INLINE void point_pq(nf_accum_t *ac, double u, double v, int l, int k, const 
 }
 
 #if NF_ACCUM_VECTOR
-/* Reciprocals of the 6 knot differences of a cubic span (nf_basis_recip,
- * p = 3) for u and v together: 3 vector divisions instead of 12 scalar. */
-static void recip33(const double *U, int l, double *ru, const double *V, int k, double *rv, int du,
-                    int dv)
+/* The 6 reciprocals of a cubic span's knot differences in basis3's order
+ * (nf_basis_recip, p = 3): two vector divisions. */
+static inline void recip3(const double *U, int l, double *rc)
 {
-    double d[12];
-    d[0] = U[l + 1] - U[l];
-    d[1] = U[l + 1] - U[l - 1];
-    d[2] = U[l + 2] - U[l];
-    d[3] = U[l + 1] - U[l - 2];
-    d[4] = U[l + 2] - U[l - 1];
-    d[5] = U[l + 3] - U[l];
-    d[6] = V[k + 1] - V[k];
-    d[7] = V[k + 1] - V[k - 1];
-    d[8] = V[k + 2] - V[k];
-    d[9] = V[k + 1] - V[k - 2];
-    d[10] = V[k + 2] - V[k - 1];
-    d[11] = V[k + 3] - V[k];
-    double r[12];
     const nf_v4 one = {1.0, 1.0, 1.0, 1.0};
-    NF_UNROLL
-    for (int t = 0; t < 12; t += 4)
-        V4(r + t) = one / V4C(d + t);
-    NF_UNROLL
-    for (int t = 0; t < 6; t++) {
-        if (du)
-            ru[t] = r[t];
-        if (dv)
-            rv[t] = r[6 + t];
-    }
+    const nf_v4 d0 = {U[l + 1] - U[l], U[l + 1] - U[l - 1], U[l + 2] - U[l], U[l + 1] - U[l - 2]};
+    const nf_v4 d1 = {U[l + 2] - U[l - 1], U[l + 3] - U[l], 1.0, 1.0};
+    const nf_v4 r0 = one / d0, r1 = one / d1;
+    rc[0] = r0[0];
+    rc[1] = r0[1];
+    rc[2] = r0[2];
+    rc[3] = r0[3];
+    rc[4] = r1[0];
+    rc[5] = r1[1];
 }
 
 /* nf_basis_funs_r for p = 3, written out (A2.2 with the reciprocals). */
@@ -534,9 +518,12 @@ static void point33(nf_accum_t *ac, double u, double v, int l, int k, const doub
 {
     const nf_surf_t *s = ac->s;
     if (l != ac->lu || k != ac->lv) {
-        recip33(s->U, l, ac->ru, s->V, k, ac->rv, l != ac->lu, k != ac->lv);
-        if (k != ac->lv)
+        if (l != ac->lu)
+            recip3(s->U, l, ac->ru);
+        if (k != ac->lv) {
+            recip3(s->V, k, ac->rv);
             ac->vk = -1;
+        }
         ac->lu = l;
         ac->lv = k;
     }
@@ -656,21 +643,6 @@ static void point33(nf_accum_t *ac, double u, double v, int l, int k, const doub
 #endif
 
 #if NF_ACCUM_VECTOR
-/* The 6 reciprocals of a cubic span's knot differences in basis3's order
- * (nf_basis_recip, p = 3): two vector divisions. */
-static inline void recip3(const double *U, int l, double *rc)
-{
-    const nf_v4 one = {1.0, 1.0, 1.0, 1.0};
-    const nf_v4 d0 = {U[l + 1] - U[l], U[l + 1] - U[l - 1], U[l + 2] - U[l], U[l + 1] - U[l - 2]};
-    const nf_v4 d1 = {U[l + 2] - U[l - 1], U[l + 3] - U[l], 1.0, 1.0};
-    const nf_v4 r0 = one / d0, r1 = one / d1;
-    rc[0] = r0[0];
-    rc[1] = r0[1];
-    rc[2] = r0[2];
-    rc[3] = r0[3];
-    rc[4] = r1[0];
-    rc[5] = r1[1];
-}
 
 /* A span's sums of the row kernel into G and Gq: Su row a (N_a N_c, c = 0..3)
  * at band offsets c - a of column l - 3 + a; Sq per coordinate (a-major)
@@ -706,7 +678,10 @@ void nf_accum_lone33(nf_accum_t *ac, double u, double v, int l, int k, const dou
         rcu = ac->rtu + 6 * l;
         rcv = ac->rtv + 6 * k;
     } else if (l != ac->lu || k != ac->lv) {
-        recip33(s->U, l, ac->ru, s->V, k, ac->rv, l != ac->lu, k != ac->lv);
+        if (l != ac->lu)
+            recip3(s->U, l, ac->ru);
+        if (k != ac->lv)
+            recip3(s->V, k, ac->rv);
         ac->vk = -1;
         ac->lu = l;
         ac->lv = k;
@@ -803,7 +778,11 @@ long nf_accum_rows33(nf_accum_t *ac, const double *rows, long n, const double li
             nf_accum_flush(ac);
             const int k = nf_find_span_from(ac->lv, nv1, 3, v, V, ac->hv);
             if (k != ac->lv) {
-                recip3(V, k, ac->rv);
+                if (ac->rtv)
+                    for (int c = 0; c < 6; c++)
+                        ac->rv[c] = ac->rtv[6 * k + c];
+                else
+                    recip3(V, k, ac->rv);
                 ac->lv = k;
             }
             basis3(k, v, V, ac->rv, ac->rowNv);

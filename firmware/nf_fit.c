@@ -10,6 +10,13 @@ static int finite3(const double *x)
     return x[0] - x[0] == 0.0 && x[1] - x[1] == 0.0 && x[2] - x[2] == 0.0;
 }
 
+/* (u, v) in the domain within its rounding allowance; NaN fails. */
+static inline int in_box(const nf_fit_t *f, double u, double v)
+{
+    return u >= f->dom[0] - f->dtol[0] && u <= f->dom[1] + f->dtol[0] &&
+           v >= f->dom[2] - f->dtol[1] && v <= f->dom[3] + f->dtol[1];
+}
+
 /* Random order: a window of points is sorted by tiles of NF_TILE x NF_TILE
  * knot spans before it is accumulated, so that a tile's stripe rows
  * ((NF_TILE + q) (NF_TILE + p) rows, 72 KB bicubic) come from memory once
@@ -180,8 +187,7 @@ int nf_fit_add(nf_fit_t *f, double u, double v, const double xyz[3], double wgt)
         return NF_ESTATE;
     if (!finite3(xyz) || u - u != 0.0 || v - v != 0.0 || !(wgt > 0.0) || wgt - wgt != 0.0)
         return NF_ENONFINITE;
-    if (u < f->dom[0] - f->dtol[0] || u > f->dom[1] + f->dtol[0] || v < f->dom[2] - f->dtol[1] ||
-        v > f->dom[3] + f->dtol[1])
+    if (!in_box(f, u, v))
         return NF_EDOMAIN;
     u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
     v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
@@ -233,8 +239,7 @@ static void batch_prepare(nf_fit_t *f, const double *rows, int n, fit_batch_t *b
         const double *r = rows + 5 * t;
         double u = r[0], v = r[1];
         bt->l[t] = bt->k[t] = -1;
-        if (!finite3(r + 2) || u - u != 0.0 || v - v != 0.0 || u < f->dom[0] - f->dtol[0] ||
-            u > f->dom[1] + f->dtol[0] || v < f->dom[2] - f->dtol[1] || v > f->dom[3] + f->dtol[1])
+        if (!finite3(r + 2) || !in_box(f, u, v))
             continue; /* nf_fit_add reports it, in order */
         u = u < f->dom[0] ? f->dom[0] : (u > f->dom[1] ? f->dom[1] : u);
         v = v < f->dom[2] ? f->dom[2] : (v > f->dom[3] ? f->dom[3] : v);
@@ -288,8 +293,7 @@ static int add_batched(nf_fit_t *f, const double *rows, long n, long *bad)
 static inline int row_spans(nf_fit_t *f, const double *r, double *u, double *v, int *l, int *k)
 {
     double a = r[0], b = r[1];
-    if (!finite3(r + 2) || a - a != 0.0 || b - b != 0.0 || a < f->dom[0] - f->dtol[0] ||
-        a > f->dom[1] + f->dtol[0] || b < f->dom[2] - f->dtol[1] || b > f->dom[3] + f->dtol[1])
+    if (!finite3(r + 2) || !in_box(f, a, b))
         return 0;
     *u = a < f->dom[0] ? f->dom[0] : (a > f->dom[1] ? f->dom[1] : a);
     *v = b < f->dom[2] ? f->dom[2] : (b > f->dom[3] ? f->dom[3] : b);

@@ -42,24 +42,14 @@ static double bp_rand(void)
  * smooth field with a bump (radius of curvature >= ~30 mm). */
 static int make_part(long cp, int p, nf_surf_t *s)
 {
-    int side = (int)lround(sqrt((double)cp));
-    if (side < p + 1)
-        side = p + 1;
-    if (cf_surf_alloc(s, p, p, side, side))
+    if (cf_surf_square(s, p, (int)lround(sqrt((double)cp))))
         return -1;
-    for (int i = 0; i <= p; i++) {
-        s->U[i] = s->V[i] = 0.0;
-        s->U[side + i] = s->V[side + i] = 1.0;
-    }
-    for (int i = p + 1; i < side; i++)
-        s->U[i] = s->V[i] = (double)(i - p) / (side - p);
+    const int side = s->nu;
     for (int j = 0; j < side; j++)
         for (int i = 0; i < side; i++) {
-            double *P = s->cp + 3 * (i + (long)j * side);
             const double u = (double)i / (side - 1), v = (double)j / (side - 1);
-            P[0] = 100.0 * u;
-            P[1] = 100.0 * v;
-            P[2] = 10.0 * u * (1.0 - u) + 5.0 * v * v + 0.5 * sin(6.0 * u) * cos(4.5 * v);
+            s->cp[3 * (i + (long)j * side) + 2] =
+                10.0 * u * (1.0 - u) + 5.0 * v * v + 0.5 * sin(6.0 * u) * cos(4.5 * v);
         }
     return 0;
 }

@@ -37,3 +37,26 @@ int cf_surf_copy(nf_surf_t *dst, const nf_surf_t *src)
         memcpy(dst->w, src->w, sizeof(double) * (size_t)n);
     return CF_OK;
 }
+
+int cf_surf_square(nf_surf_t *s, int p, int side)
+{
+    if (side < p + 1)
+        side = p + 1;
+    int rc = cf_surf_alloc(s, p, p, side, side);
+    if (rc)
+        return rc;
+    for (int i = 0; i <= p; i++) {
+        s->U[i] = s->V[i] = 0.0;
+        s->U[side + i] = s->V[side + i] = 1.0;
+    }
+    for (int i = p + 1; i < side; i++)
+        s->U[i] = s->V[i] = (double)(i - p) / (side - p);
+    for (int j = 0; j < side; j++)
+        for (int i = 0; i < side; i++) {
+            double *P = s->cp + 3 * (i + (long)j * side);
+            P[0] = 100.0 * i / (side - 1);
+            P[1] = 100.0 * j / (side - 1);
+            P[2] = 0.0;
+        }
+    return CF_OK;
+}

@@ -65,25 +65,7 @@ static void gen_chunk(const bench_opts_t *o, long k0, long n, double *rows)
 
 static int make_net(const bench_opts_t *o, nf_surf_t *s)
 {
-    int side = (int)lround(sqrt((double)o->cp)), p = (int)o->degree;
-    if (side < p + 1)
-        side = p + 1;
-    if (cf_surf_alloc(s, p, p, side, side))
-        return -1;
-    for (int i = 0; i <= p; i++) {
-        s->U[i] = s->V[i] = 0.0;
-        s->U[side + i] = s->V[side + i] = 1.0;
-    }
-    for (int i = p + 1; i < side; i++)
-        s->U[i] = s->V[i] = (double)(i - p) / (side - p);
-    for (int j = 0; j < side; j++)
-        for (int i = 0; i < side; i++) {
-            double *P = s->cp + 3 * (i + (long)j * side);
-            P[0] = 100.0 * i / (side - 1);
-            P[1] = 100.0 * j / (side - 1);
-            P[2] = 0.0;
-        }
-    return 0;
+    return cf_surf_square(s, (int)o->degree, (int)lround(sqrt((double)o->cp))) ? -1 : 0;
 }
 
 /* The assembled Eq. 7 as a file other solvers read (bench/): "CFNE0001",

@@ -32,3 +32,32 @@ stop_all() { # reverse order: TERM, wait a little, KILL
     done
     PIDS=""
 }
+# The PLC scripts (plc.sh, plc_rig.sh) keep their servers' PIDs in $pids and
+# stop them with a longer wait of their own (serve stops its cellsim child).
+# serve_start NAME ARGS...: `$CF serve` on 127.0.0.1, port 0, in the
+# background, stderr in $T/NAME.log; sets $port and $pid, adds $pid to $pids.
+serve_start() {
+    name=$1; shift
+    rm -f "$T/$name.port"
+    "$CF" serve --plc tcp:127.0.0.1:0 --port-file "$T/$name.port" "$@" 2>"$T/$name.log" &
+    pid=$!
+    pids="$pid ${pids:-}"
+    i=0
+    while [ ! -s "$T/$name.port" ] && kill -0 "$pid" 2>/dev/null && [ $i -lt 100 ]; do
+        sleep 0.1; i=$((i + 1))
+    done
+    port=$(cat "$T/$name.port" 2>/dev/null)
+    [ -n "$port" ] && ok "serve $name listening on 127.0.0.1:$port" ||
+        { no "serve $name did not start"; sed 's/^/     /' "$T/$name.log" | head -5; }
+}
+# py_step SCRIPT SECONDS STEP ARGS...: a Python client step ($HERE/SCRIPT,
+# under $PY) with a time limit; its ok/FAIL lines printed and counted.
+py_step() {
+    script=$1; secs=$2; shift 2
+    timeout "$secs" "$PY" "${HERE:-$(dirname "$0")}/$script" "$@" >"$T/py.out" 2>&1
+    rc=$?
+    cat "$T/py.out"
+    pass=$((pass + $(grep -c '^ok ' "$T/py.out")))
+    fail=$((fail + $(grep -c '^FAIL' "$T/py.out")))
+    [ $rc -eq 0 ] || [ "$(grep -c '^FAIL' "$T/py.out")" -gt 0 ] || no "$script $1 exited $rc"
+}

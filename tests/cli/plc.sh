@@ -22,30 +22,8 @@ stop_all() { # reverse order: TERM, wait, then KILL
     pids=""
 }
 trap 'stop_all; rm -rf "$T"' EXIT
-# py STEP ARGS...: run a client step, count its ok/FAIL lines.
-py() {
-    timeout 300 "$PY" "$HERE/plc_cycle.py" "$@" >"$T/py.out" 2>&1
-    rc=$?
-    cat "$T/py.out"
-    pass=$((pass + $(grep -c '^ok ' "$T/py.out")))
-    fail=$((fail + $(grep -c '^FAIL' "$T/py.out")))
-    [ $rc -eq 0 ] || [ "$(grep -c '^FAIL' "$T/py.out")" -gt 0 ] || no "plc_cycle.py $1 exited $rc"
-}
-# start NAME ARGS...: cellfit serve in the background; sets $port and $pid.
-start() {
-    name=$1; shift
-    rm -f "$T/$name.port"
-    "$CF" serve --plc tcp:127.0.0.1:0 --port-file "$T/$name.port" "$@" 2>"$T/$name.log" &
-    pid=$!
-    pids="$pid $pids"
-    i=0
-    while [ ! -s "$T/$name.port" ] && kill -0 "$pid" 2>/dev/null && [ $i -lt 100 ]; do
-        sleep 0.1; i=$((i + 1))
-    done
-    port=$(cat "$T/$name.port" 2>/dev/null)
-    [ -n "$port" ] && ok "serve $name listening on 127.0.0.1:$port" ||
-        { no "serve $name did not start"; sed 's/^/     /' "$T/$name.log" | head -5; }
-}
+py() { py_step plc_cycle.py 300 "$@"; } # py STEP ARGS...
+start() { serve_start "$@"; }          # start NAME ARGS...
 mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
 
 # The part: 200000 x y z points (projected by the fit: a job of a few

@@ -32,36 +32,14 @@ stop_all() { # TERM, wait, then KILL
 }
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
-json() {
-    sed -n "s/.*\"$2\": \"\{0,1\}\([^,\"}]*\)\"\{0,1\}[,}].*/\1/p" "$1"
-}
-# py STEP ARGS...: one client step, its ok/FAIL lines counted.
-py() {
-    timeout 120 "$PY" "$HERE/$PYS" "$@" >"$T/py.out" 2>&1
-    rc=$?
-    cat "$T/py.out"
-    pass=$((pass + $(grep -c '^ok ' "$T/py.out")))
-    fail=$((fail + $(grep -c '^FAIL' "$T/py.out")))
-    [ $rc -eq 0 ] || [ "$(grep -c '^FAIL' "$T/py.out")" -gt 0 ] || no "$PYS $1 exited $rc"
-}
 PYS=plc_rig.py
-# start NAME ARGS...: cellfit serve in the background; sets $port, $pid,
-# and with --sim $simport and $simpid (from its log).
+py() { py_step "$PYS" 120 "$@"; } # py STEP ARGS...: one client step
+# start NAME ARGS...: serve_start, and with --sim $simport and $simpid (from
+# its log).
 start() {
-    name=$1; shift
-    rm -f "$T/$name.port"
-    "$CF" serve --plc tcp:127.0.0.1:0 --port-file "$T/$name.port" "$@" 2>"$T/$name.log" &
-    pid=$!
-    pids="$pid $pids"
-    i=0
-    while [ ! -s "$T/$name.port" ] && kill -0 "$pid" 2>/dev/null && [ $i -lt 100 ]; do
-        sleep 0.1; i=$((i + 1))
-    done
-    port=$(cat "$T/$name.port" 2>/dev/null)
-    simport=$(sed -n 's/.*rig: cellsim pid [0-9]* on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/$name.log")
-    simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/$name.log")
-    [ -n "$port" ] && ok "serve $name listening on 127.0.0.1:$port" ||
-        { no "serve $name did not start"; sed 's/^/     /' "$T/$name.log" | head -5; }
+    serve_start "$@"
+    simport=$(sed -n 's/.*rig: cellsim pid [0-9]* on 127.0.0.1:\([0-9]*\)$/\1/p' "$T/$1.log")
+    simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/$1.log")
 }
 
 "$CF" gen --dir "$T/part" --nu 40 --nv 30 --points 1000 >/dev/null
