@@ -133,10 +133,20 @@ grep -q "bad.uv:3:" "$T/err" && ok "eval error names file:line 3" || no "eval er
 # Memory flat in the number of points: same net, 10^4 and 10^6 points.
 "$CF" gen --dir "$T/m4" --nu 60 --nv 45 --points 10000 >/dev/null &&
     "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --points 1000000 >/dev/null
-"$CF" fit --base "$T/m4/nominal.igs" --points "$T/m4/points.uvxyz" --uv --out "$T/m4.igs" --json >"$T/m4.json"
-"$CF" fit --base "$T/m6/nominal.igs" --points "$T/m6/points.uvxyz" --uv --out "$T/m6.igs" --json >"$T/m6.json"
-r4=$(json "$T/m4.json" peak_rss_bytes)
-r6=$(json "$T/m6.json" peak_rss_bytes)
+# A run's peak RSS moves by a few hundred kB between identical runs (where
+# the allocator and the kernel place pages): the smallest of 3 runs each.
+min_rss() { # min_rss DIR: smallest peak_rss_bytes of 3 fits of DIR's points
+    best=
+    for k in 1 2 3; do
+        "$CF" fit --base "$1/nominal.igs" --points "$1/points.uvxyz" --uv --out "$1.igs" \
+            --json >"$1.json" || return
+        r=$(json "$1.json" peak_rss_bytes)
+        if [ -z "$best" ] || [ "$r" -lt "$best" ]; then best=$r; fi
+    done
+    echo "$best"
+}
+r4=$(min_rss "$T/m4")
+r6=$(min_rss "$T/m6")
 diff=$(awk -v a="$r4" -v b="$r6" 'BEGIN { d = b - a; if (d < 0) d = -d; print d }')
 if [ -n "$r4" ] && [ -n "$r6" ] && le "$diff" 262144; then
     ok "peak RSS flat in points: 10^4 -> $r4 B, 10^6 -> $r6 B"
