@@ -24,30 +24,61 @@ ifeq ($(SAN),1)
 CFLAGS_BASE += -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 LDSAN := -fsanitize=address,undefined
 endif
-INC := -Iboards/$(BOARD) -Ifirmware -Ihost -Ihal
+# Each layer compiles with its own include paths only, so an include that
+# breaks the arrows (host/cmd -> host/cell -> host/jobs -> host/report -> lib
+# -> firmware; hal -> firmware; sim -> lib, hal, firmware) cannot build.
+FW_INC := -Iboards/$(BOARD) -Ifirmware
+HAL_INC := $(FW_INC) -Ihal
+LIB_INC := $(FW_INC) -Ilib -I$(BUILD)/gen
+REPORT_INC := $(LIB_INC) -Ihost/report
+JOBS_INC := $(REPORT_INC) -Ihost/jobs
+CELL_INC := $(JOBS_INC) -Ihost/cell -Ihal
+CMD_INC := $(CELL_INC) -Ihost/cmd
+SIM_INC := $(LIB_INC) -Ihal -Isim
+# Tests and tools see every layer.
+INC := $(CMD_INC) -Isim -Itests/unit
 CFLAGS_ALL = $(CFLAGS_BASE) $(INC) $(CFLAGS)
+CF = $(CFLAGS_BASE) -MMD -MP $(CFLAGS)
 
 FW_SRC := $(sort $(wildcard firmware/*.c))
-FW_OBJ := $(patsubst firmware/%.c,$(BUILD)/firmware/%.o,$(FW_SRC))
-HOST_SRC := $(sort $(filter-out host/main.c,$(wildcard host/*.c)))
-HOST_OBJ := $(patsubst host/%.c,$(BUILD)/host/%.o,$(HOST_SRC))
-TEST_SRC := $(sort $(wildcard tests/test_*.c))
-TEST_BIN := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
-TESTLIB_SRC := $(sort $(wildcard tests/ref_*.c))
-TESTLIB_OBJ := $(patsubst tests/%.c,$(BUILD)/tests/%.o,$(TESTLIB_SRC))
+FW_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(FW_SRC))
+LIB_SRC := $(sort $(wildcard lib/*.c))
+LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(LIB_SRC))
+# host/: the layers above lib/ (report, jobs, cell) as one archive; host/cmd
+# holds the subcommands and main.
+HOSTLIB_SRC := $(sort $(wildcard host/report/*.c host/jobs/*.c host/cell/*.c))
+HOSTLIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(HOSTLIB_SRC))
+CMD_SRC := $(sort $(wildcard host/cmd/*.c))
+CMD_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CMD_SRC))
+TEST_SRC := $(sort $(wildcard tests/unit/test_*.c))
+TEST_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/%,$(TEST_SRC))
+TESTLIB_SRC := $(sort $(wildcard tests/unit/ref_*.c))
+TESTLIB_OBJ := $(patsubst tests/unit/%.c,$(BUILD)/tests/%.o,$(TESTLIB_SRC))
 # hal/: transports to real devices (libmodbus, libserialport, libusb), host
 # builds only; firmware/ never sees them.
 HAL_SRC := $(sort $(wildcard hal/*.c))
-HAL_OBJ := $(patsubst hal/%.c,$(BUILD)/hal/%.o,$(HAL_SRC))
+HAL_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(HAL_SRC))
 HAL_PKGS := libmodbus libserialport libusb-1.0
 HAL_CFLAGS = $(shell pkg-config --cflags $(HAL_PKGS) 2>/dev/null)
 HAL_LIBS = $(if $(HAL_SRC),$(shell pkg-config --libs $(HAL_PKGS) 2>/dev/null))
 # sim/: cellsim, the simulated rig (its own main), on the same wire protocols.
 SIM_SRC := $(sort $(wildcard sim/*.c))
-SIM_OBJ := $(patsubst sim/%.c,$(BUILD)/sim/%.o,$(SIM_SRC))
+SIM_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(SIM_SRC))
 LIBS = -lm $(HAL_LIBS) -lpthread
+# The archives, linked in the arrows' order; a program pulls only what it uses.
+A_FW := $(BUILD)/libcf_firmware.a
+A_HAL := $(BUILD)/libcf_hal.a
+A_LIB := $(BUILD)/libcf_lib.a
+A_HOST := $(BUILD)/libcf_host.a
+# Every object a host program may need, for fragments that link their own
+# tools (fuzz targets, benchmarks).
+HOST_OBJ := $(HOSTLIB_OBJ) $(LIB_OBJ)
 # Extra test targets that mk/*.mk files add (TEST_EXTRA += ...); make test runs them.
 TEST_EXTRA :=
+# Version: the release, and the git revision the build came from (cellfit
+# --version, IGES headers, report.json, the journal header).
+CF_VERSION := 0.13.0
+CF_REV := $(shell git describe --always --dirty --abbrev=12 2>/dev/null || echo unknown)
 
 .PHONY: all firmware cellfit cellsim test check unit unit-run demo bench clean lint format deps \
 	test-cli fwcheck test-extra
@@ -56,34 +87,67 @@ all: $(if $(filter 1,$(BOARD_CROSS)),,cellfit $(if $(SIM_SRC),cellsim)) firmware
 cellfit: $(BUILD)/cellfit
 firmware: $(FW_OBJ)
 
-$(BUILD)/firmware/%.o: firmware/%.c $(wildcard firmware/*.h) boards/$(BOARD)/board_config.h
+$(BUILD)/firmware/%.o: firmware/%.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) -c $< -o $@
+	$(CC) $(CF) $(FW_INC) -c $< -o $@
 
-$(BUILD)/host/%.o: host/%.c $(wildcard host/*.h hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+$(BUILD)/hal/%.o: hal/%.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) -c $< -o $@
+	$(CC) $(CF) $(HAL_INC) $(HAL_CFLAGS) -c $< -o $@
 
-$(BUILD)/hal/%.o: hal/%.c $(wildcard hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+$(BUILD)/lib/%.o: lib/%.c | $(BUILD)/gen/cf_rev.h
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -c $< -o $@
+	$(CC) $(CF) $(LIB_INC) -c $< -o $@
 
-$(BUILD)/sim/%.o: sim/%.c $(wildcard sim/*.h hal/*.h host/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+$(BUILD)/host/report/%.o: host/report/%.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Isim -c $< -o $@
+	$(CC) $(CF) $(REPORT_INC) -c $< -o $@
 
-$(BUILD)/cellfit: $(BUILD)/host/main.o $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+$(BUILD)/host/jobs/%.o: host/jobs/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CF) $(JOBS_INC) -c $< -o $@
+
+$(BUILD)/host/cell/%.o: host/cell/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CF) $(CELL_INC) $(HAL_CFLAGS) -c $< -o $@
+
+$(BUILD)/host/cmd/%.o: host/cmd/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CF) $(CMD_INC) $(HAL_CFLAGS) -c $< -o $@
+
+$(BUILD)/sim/%.o: sim/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CF) $(SIM_INC) $(HAL_CFLAGS) -c $< -o $@
+
+# The revision header changes only when the revision does (no needless rebuilds).
+.PHONY: FORCE
+$(BUILD)/gen/cf_rev.h: FORCE
+	@mkdir -p $(@D)
+	@printf '#define CF_VERSION "%s"\n#define CF_REV "%s"\n' '$(CF_VERSION)' '$(CF_REV)' >$@.tmp
+	@if cmp -s $@.tmp $@; then rm -f $@.tmp; else mv $@.tmp $@; fi
+$(BUILD)/lib/cf_version.o: $(BUILD)/gen/cf_rev.h
+
+$(A_FW): $(FW_OBJ)
+$(A_HAL): $(HAL_OBJ)
+$(A_LIB): $(LIB_OBJ)
+$(A_HOST): $(HOSTLIB_OBJ)
+$(A_FW) $(A_HAL) $(A_LIB) $(A_HOST):
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+$(BUILD)/cellfit: $(CMD_OBJ) $(A_HOST) $(A_LIB) $(A_HAL) $(A_FW)
 	$(CC) $(LDSAN) -o $@ $^ $(LIBS)
 
 cellsim: $(BUILD)/cellsim
-$(BUILD)/cellsim: $(SIM_OBJ) $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+$(BUILD)/cellsim: $(SIM_OBJ) $(A_LIB) $(A_HAL) $(A_FW)
 	$(CC) $(LDSAN) -o $@ $^ $(LIBS)
 
-$(BUILD)/tests/%.o: tests/%.c $(wildcard tests/*.h host/*.h hal/*.h firmware/*.h)
+$(BUILD)/tests/%.o: tests/unit/%.c | $(BUILD)/gen/cf_rev.h
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Itests -c $< -o $@
+	$(CC) $(CF) $(INC) $(HAL_CFLAGS) -c $< -o $@
 
-$(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+# A unit test links the archives; it pulls only the objects it calls.
+$(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(A_HOST) $(A_LIB) $(A_HAL) $(A_FW)
 	$(CC) $(LDSAN) -o $@ $^ -lcmocka $(LIBS)
 
 # Unit tests of one build tree, each binary in turn; cmocka prints its summary.
@@ -95,12 +159,15 @@ deps:
 
 # firmware/ must not reference the heap (nm on its objects proves it) and
 # includes nothing from hal/, host/ or sim/.
-fwcheck: $(FW_OBJ)
+fwcheck: $(FW_OBJ) $(BUILD)/cellsim
 	@bad=$$(nm -u $(FW_OBJ) | grep -E ' (malloc|calloc|realloc|free|aligned_alloc|posix_memalign)$$' || true); \
 	if [ -n "$$bad" ]; then echo "firmware uses the heap:"; echo "$$bad"; exit 1; fi; \
 	echo "fwcheck: firmware/ objects reference no allocator"
 	@if grep -nE '#include +"(hal|host|sim|cf_)' firmware/*.c firmware/*.h; then \
 	  echo "firmware includes outside code"; exit 1; fi
+	@bad=$$(nm $(BUILD)/cellsim | grep -E ' T (cmd_|cf_plc|cf_job|cf_scanjob|cf_sfit)' || true); \
+	if [ -n "$$bad" ]; then echo "cellsim links host code:"; echo "$$bad"; exit 1; fi; \
+	echo "fwcheck: cellsim holds no cellfit command, job or PLC server"
 
 test: deps
 	$(MAKE) all
@@ -126,7 +193,7 @@ lint:
 	@sh scripts/lint.sh
 
 format:
-	clang-format -i $(wildcard firmware/*.[ch] host/*.[ch] hal/*.[ch] sim/*.[ch] tests/*.[ch] boards/*/*.[ch])
+	clang-format -i $(wildcard firmware/*.[ch] lib/*.[ch] host/*/*.[ch] hal/*.[ch] sim/*.[ch] tests/unit/*.[ch] boards/*/*.[ch])
 
 demo:
 	@sh scripts/deps.sh demo
@@ -140,6 +207,9 @@ bench:
 
 clean:
 	rm -rf build
+
+# Header dependencies (-MMD).
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)
 
 # Cross builds for microcontroller boards (make BOARD=<b> firmware, make boards)
 # and the parts' own fragments (mk/<part>.mk, each adding to TEST_EXTRA).

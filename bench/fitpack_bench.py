@@ -3,7 +3,7 @@ height field of `cellfit bench fit`, same points, same knots; one JSON line.
 
 Usage: python3 bench/fitpack_bench.py --points M --cp N [--order random|raster]
 
-The points are those host/cmd_bench.c generates (its xorshift64 generator and
+The points are those host/cmd/cmd_bench.c generates (its xorshift64 generator and
 seed, or its raster), x = 100u, y = 100v, z = height(u, v); the spline is
 bicubic on side = round(sqrt(N)) coefficients a direction with uniform
 interior knots 100 i/(side-3), i = 1..side-4. FITPACK fits the scalar z only.

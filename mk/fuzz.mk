@@ -18,21 +18,21 @@ FUZZ_WRAP := -Wl,--wrap=hal_now_ms -Wl,--wrap=hal_sleep_ms
 FUZZ_LIBFUZZER ?=
 # The parsers under test are compiled again for the targets, with
 # float-to-int overflow checks (gcc's -fsanitize=undefined leaves them out).
-FUZZ_UNITS := host/cf_iges.c host/cf_points.c host/cf_conf.c host/cmd_serve.c hal/hal_uri.c \
+FUZZ_UNITS := lib/cf_iges.c lib/cf_points.c lib/cf_conf.c host/cmd/cmd_serve.c hal/hal_uri.c \
 	hal/hal_stage.c hal/hal_probe.c hal/hal_probe_mb.c hal/hal_trig.c firmware/jnl.c \
 	firmware/plc_map.c firmware/plc_fsm.c
 FUZZ_UNIT_OBJ := $(patsubst %.c,$(BUILD)/fuzz/unit/%.o,$(FUZZ_UNITS))
 FUZZ_COMMON := $(BUILD)/fuzz/fuzz_util.o $(BUILD)/fuzz/fuzz_hal.o $(BUILD)/tests/ref_memstore.o \
 	$(FUZZ_UNIT_OBJ) \
-	$(filter-out $(patsubst %.c,$(BUILD)/%.o,$(FUZZ_UNITS)),$(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ))
+	$(filter-out $(patsubst %.c,$(BUILD)/%.o,$(FUZZ_UNITS)),$(HOST_OBJ) $(filter-out $(BUILD)/host/cmd/main.o,$(CMD_OBJ)) $(HAL_OBJ) $(FW_OBJ))
 
 .PHONY: fuzz fuzz-bins fuzz-run test-fuzz fuzz-regress-run valgrind valgrind-run lint-fuzz
 
-$(BUILD)/fuzz/%.o: tests/fuzz/%.c $(wildcard tests/fuzz/*.h tests/*.h host/*.h hal/*.h firmware/*.h)
+$(BUILD)/fuzz/%.o: tests/fuzz/%.c $(wildcard tests/fuzz/*.h tests/unit/*.h lib/*.h host/*/*.h hal/*.h firmware/*.h)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Itests -Itests/fuzz -c $< -o $@
+	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) -Itests/fuzz -c $< -o $@
 
-$(BUILD)/fuzz/unit/%.o: %.c $(wildcard host/*.h hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
+$(BUILD)/fuzz/unit/%.o: %.c $(wildcard lib/*.h host/*/*.h hal/*.h firmware/*.h) boards/$(BOARD)/board_config.h
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) $(if $(SAN),-fsanitize=float-cast-overflow) -c $< -o $@
 

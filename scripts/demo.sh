@@ -2,7 +2,7 @@
 # scripts/demo.sh CELLFIT: the cell's main job end to end on the simulated
 # rig. cellsim (beside CELLFIT) plays the stage on Modbus RTU and the laser
 # probe on its ASCII protocol, each over a socat pty pair (the wires a real
-# cell has); the part on the table is the synthetic panel of host/cf_part.h
+# cell has); the part on the table is the synthetic panel of lib/cf_part.h
 # (nominal + a dent + a warp). `cellfit scan` rasters part of the panel,
 # journals every point and streams it into the fit of the nominal's net,
 # where beta (Eq. 7 of Brujic et al. 2010) keeps the unmeasured strip at
@@ -106,7 +106,7 @@ $REGION
 EOF
 
 # 1. The CAD side: the nominal the cell fits against, and cellfit gen's
-# check grid of the true part (the same host/cf_part.c formula cellsim's
+# check grid of the true part (the same lib/cf_part.c formula cellsim's
 # built-in part uses; tests/cli/demo.sh checks that they agree).
 "$CF" gen --dir "$D/part" --points 1 --noise 0 >/dev/null || die "cellfit gen failed"
 NOM=$D/part/nominal.igs

@@ -2,7 +2,7 @@
 # scripts/lint.sh: clang-format (the project's .clang-format) and cppcheck on
 # every C file we own. Fails on any difference or finding.
 set -eu
-files=$(ls firmware/*.[ch] host/*.[ch] hal/*.[ch] sim/*.[ch] tests/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
+files=$(ls firmware/*.[ch] lib/*.[ch] host/*/*.[ch] hal/*.[ch] sim/*.[ch] tests/unit/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
 bad=0
 for f in $files; do
     if ! clang-format --dry-run -Werror "$f" >/dev/null 2>&1; then
@@ -12,8 +12,9 @@ for f in $files; do
 done
 # cppcheck: the firmware with each board's configuration, the rest as host code.
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability \
-    --inline-suppr --suppress=missingIncludeSystem -Iboards/linux-cell -Ifirmware -Ihost \
-    --std=c11 -D__GNUC__ firmware host tests $( [ -d hal ] && echo hal ) $( [ -d sim ] && echo sim ) || bad=1
+    --inline-suppr --suppress=missingIncludeSystem -Iboards/linux-cell -Ifirmware -Ilib \
+    -Ihost/report -Ihost/jobs -Ihost/cell -Ihost/cmd -Ihal -Isim -Itests/unit \
+    --std=c11 -D__GNUC__ firmware lib host tests hal sim || bad=1
 # Benchmarks (CHOLMOD's headers when installed: make bench installs them).
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --inline-suppr \
     --suppress=missingIncludeSystem -I/usr/include/suitesparse --std=c11 bench || bad=1

@@ -49,7 +49,7 @@ none_alive() {
 
 NOISE=0.002
 MARGIN=15
-# The dent (host/cf_part.c: 130, 60) in a 70 x 70 mm window; everything
+# The dent (lib/cf_part.c: 130, 60) in a 70 x 70 mm window; everything
 # else unmeasured.
 REGION=100:170:25:95
 X0=100 X1=170 Y0=25 Y1=95

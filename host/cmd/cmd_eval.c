@@ -1,5 +1,6 @@
 /* cmd_eval.c: `cellfit eval SURF.igs UVFILE`: x y z (%.17g) for each u v line. */
 #include "cf_cli.h"
+#include "cmd.h"
 #include "cf_iges.h"
 #include "cf_points.h"
 #include "cf_surf.h"

@@ -11,6 +11,8 @@
  * `cellfit base --extract SURF.igs --out CURVES.igs` writes a surface's
  * four boundary curves as entities 126. */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_points.h"
@@ -205,12 +207,12 @@ static int extract(const base_opts_t *o)
         printf("cellfit base: boundary curves of %s (C0 v=v0, C1 v=v1, D0 u=u0, D1 u=u1) in %s\n",
                o->extract, o->out);
     if (!ec && o->json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "extract", o->extract);
-        cli_json_int(&j, "curves", 4);
-        cli_json_str(&j, "out", o->out);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "extract", o->extract);
+        cf_json_int(&j, "curves", 4);
+        cf_json_str(&j, "out", o->out);
+        cf_json_end(&j);
     }
     for (int k = 0; k < 4; k++)
         cf_curve_free(&c[k]);
@@ -780,30 +782,30 @@ int cmd_base(int argc, char **argv)
     }
     double t1 = cli_now();
     if (o.json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "method", method_name[o.method]);
-        cli_json_int(&j, "points", res.points);
-        cli_json_int(&j, "used", res.used);
-        cli_json_int(&j, "nu", out.nu);
-        cli_json_int(&j, "nv", out.nv);
-        cli_json_int(&j, "p", out.p);
-        cli_json_int(&j, "q", out.q);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "method", method_name[o.method]);
+        cf_json_int(&j, "points", res.points);
+        cf_json_int(&j, "used", res.used);
+        cf_json_int(&j, "nu", out.nu);
+        cf_json_int(&j, "nv", out.nv);
+        cf_json_int(&j, "p", out.p);
+        cf_json_int(&j, "q", out.q);
         if (o.method == M_PLANE) {
-            cli_json_num(&j, "nx", res.normal[0]);
-            cli_json_num(&j, "ny", res.normal[1]);
-            cli_json_num(&j, "nz", res.normal[2]);
-            cli_json_num(&j, "spread_normal", sqrt(res.lam[2] > 0 ? res.lam[2] : 0));
-            cli_json_int(&j, "iterations", res.iters);
+            cf_json_num(&j, "nx", res.normal[0]);
+            cf_json_num(&j, "ny", res.normal[1]);
+            cf_json_num(&j, "nz", res.normal[2]);
+            cf_json_num(&j, "spread_normal", sqrt(res.lam[2] > 0 ? res.lam[2] : 0));
+            cf_json_int(&j, "iterations", res.iters);
         } else {
-            cli_json_num(&j, "corner_gap", res.gap);
-            cli_json_str(&j, "curves", o.curves ? o.curves : "fitted");
+            cf_json_num(&j, "corner_gap", res.gap);
+            cf_json_str(&j, "curves", o.curves ? o.curves : "fitted");
         }
         if (res.has_rms)
-            cli_json_num(&j, "rms_to_bilinear", res.rms);
-        cli_json_num(&j, "seconds", t1 - t0);
-        cli_json_str(&j, "out", o.out);
-        cli_json_end(&j);
+            cf_json_num(&j, "rms_to_bilinear", res.rms);
+        cf_json_num(&j, "seconds", t1 - t0);
+        cf_json_str(&j, "out", o.out);
+        cf_json_end(&j);
     } else {
         printf("cellfit base: %s base surface, %d x %d control points, degree %d x %d\n",
                method_name[o.method], out.nu, out.nv, out.p, out.q);

@@ -6,6 +6,8 @@
  * Memory is the job's byte formula plus buffers of the net's size (seed
  * grid, span counts, copies of the surface), whatever the number of points. */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_loop.h"
@@ -632,53 +634,52 @@ int cmd_fit(int argc, char **argv)
     double rms = sqrt(res.ss / (double)res.n);
     long ncp = (long)best.nu * best.nv;
     if (o.json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "points", po.points);
-        cli_json_int(&j, "control_points", ncp);
-        cli_json_int(&j, "nu", best.nu);
-        cli_json_int(&j, "nv", best.nv);
-        cli_json_int(&j, "p", best.p);
-        cli_json_int(&j, "q", best.q);
-        cli_json_num(&j, "alpha", o.alpha);
-        cli_json_num(&j, "beta", o.beta);
-        cli_json_str(&j, "parameters", o.uv ? "given" : "projected");
-        cli_json_int(&j, "reparam", o.reparam);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_int(&j, "points", po.points);
+        cf_json_int(&j, "control_points", ncp);
+        cf_json_int(&j, "nu", best.nu);
+        cf_json_int(&j, "nv", best.nv);
+        cf_json_int(&j, "p", best.p);
+        cf_json_int(&j, "q", best.q);
+        cf_json_num(&j, "alpha", o.alpha);
+        cf_json_num(&j, "beta", o.beta);
+        cf_json_str(&j, "parameters", o.uv ? "given" : "projected");
+        cf_json_int(&j, "reparam", o.reparam);
         if (!o.uv) {
-            cli_json_int(&j, "clamped", po.clamped);
-            cli_json_num(&j, "far_limit", o.far);
-            cli_json_int(&j, "far", po.far);
-            cli_json_int(&j, "dropped", po.dropped);
+            cf_json_int(&j, "clamped", po.clamped);
+            cf_json_num(&j, "far_limit", o.far);
+            cf_json_int(&j, "far", po.far);
+            cf_json_int(&j, "dropped", po.dropped);
         }
-        cli_json_str(&j, "solver", nf_solver_name(best_st.solver));
-        cli_json_int(&j, "iterations", best_st.iterations);
-        cli_json_num(&j, "rel_residual", best_st.rel_residual);
-        cli_json_num(&j, "rms", rms);
-        cli_json_num(&j, "max_abs", res.mx);
+        cf_json_str(&j, "solver", nf_solver_name(best_st.solver));
+        cf_json_int(&j, "iterations", best_st.iterations);
+        cf_json_num(&j, "rel_residual", best_st.rel_residual);
+        cf_json_num(&j, "rms", rms);
+        cf_json_num(&j, "max_abs", res.mx);
         if (o.dtol > 0) {
-            cli_json_num(&j, "tol", o.dtol);
-            cli_json_num(&j, "within", o.within);
-            cli_json_num(&j, "within_tol_pct", best_within);
-            /* cli_json has no booleans: the key written as cli_json does. */
-            fprintf(j.f, "%s\"tol_met\": %s", j.n++ ? ", " : "", met ? "true" : "false");
-            cli_json_str(&j, "refine", o.refine == CF_REFINE_UNIFORM ? "uniform" : "residual");
+            cf_json_num(&j, "tol", o.dtol);
+            cf_json_num(&j, "within", o.within);
+            cf_json_num(&j, "within_tol_pct", best_within);
+            cf_json_bool(&j, "tol_met", met);
+            cf_json_str(&j, "refine", o.refine == CF_REFINE_UNIFORM ? "uniform" : "residual");
             if (!met)
-                cli_json_str(&j, "stopped", why);
+                cf_json_str(&j, "stopped", why);
             cf_rounds_json(&j, rounds, nr, o.robust);
         }
         if (o.robust) {
-            cli_json_int(&j, "robust_iters", o.robust_iters);
-            cli_json_num(&j, "robust_sigma", rounds[nr - 1].sigma);
-            cli_json_int(&j, "outliers", rounds[nr - 1].rejected);
+            cf_json_int(&j, "robust_iters", o.robust_iters);
+            cf_json_num(&j, "robust_sigma", rounds[nr - 1].sigma);
+            cf_json_int(&j, "outliers", rounds[nr - 1].rejected);
         }
-        cli_json_num(&j, "seconds", t3 - t0);
-        cli_json_num(&j, "accumulate_seconds", t_acc);
-        cli_json_num(&j, "solve_seconds", t_solve);
-        cli_json_int(&j, "bytes", best_need);
-        cli_json_int(&j, "peak_rss_bytes", peak_rss());
-        cli_json_str(&j, "board", BOARD_NAME);
-        cli_json_str(&j, "out", o.out);
-        cli_json_end(&j);
+        cf_json_num(&j, "seconds", t3 - t0);
+        cf_json_num(&j, "accumulate_seconds", t_acc);
+        cf_json_num(&j, "solve_seconds", t_solve);
+        cf_json_int(&j, "bytes", best_need);
+        cf_json_int(&j, "peak_rss_bytes", peak_rss());
+        cf_json_str(&j, "board", BOARD_NAME);
+        cf_json_str(&j, "out", o.out);
+        cf_json_end(&j);
     } else {
         printf("cellfit fit: %ld points, %ld control points (%d x %d, degree %d x %d)\n", po.points,
                ncp, best.nu, best.nv, best.p, best.q);

@@ -7,6 +7,8 @@
  * (memory: the decomposition, never the points); the kept ones are written
  * to FILE as x y z, in input order, each once. */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_iges.h"
 #include "cf_points.h"
 #include "cf_surf.h"
@@ -196,16 +198,16 @@ int cmd_thin(int argc, char **argv)
         goto done;
     }
     if (o.json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "points", n);
-        cli_json_int(&j, "kept", kept);
-        cli_json_int(&j, "quads", nf_quad_count(&q));
-        cli_json_int(&j, "vertices", nvx);
-        cli_json_num(&j, "rel_tol", o.tol);
-        cli_json_num(&j, "radius", radius);
-        cli_json_num(&j, "seconds", cli_now() - t0);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_int(&j, "points", n);
+        cf_json_int(&j, "kept", kept);
+        cf_json_int(&j, "quads", nf_quad_count(&q));
+        cf_json_int(&j, "vertices", nvx);
+        cf_json_num(&j, "rel_tol", o.tol);
+        cf_json_num(&j, "radius", radius);
+        cf_json_num(&j, "seconds", cli_now() - t0);
+        cf_json_end(&j);
     } else {
         printf("thin: %ld points, %ld kept (%ld quadrilaterals, %ld vertices, radius %.6g)\n", n,
                kept, nf_quad_count(&q), nvx, radius);

@@ -7,7 +7,9 @@
  * per second (generation excluded) and the largest parameter error
  * against the truth, relative to the domain. Measures, asserts nothing. */
 #include "bench_project.h"
+#include "cf_json.h"
 #include "cf_cli.h"
+#include "cmd.h"
 #include "cf_surf.h"
 #include "nf_err.h"
 #include "nf_quad.h"
@@ -163,30 +165,30 @@ int bench_project(int argc, char **argv)
     }
     const long store = (long)bytes;
     if (json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "bench", "project");
-        cli_json_int(&j, "points", points);
-        cli_json_int(&j, "control_points", (long)s.nu * s.nv);
-        cli_json_int(&j, "degree", degree);
-        cli_json_str(&j, "order", random ? "random" : "raster");
-        cli_json_num(&j, "rel_tol", rel);
-        cli_json_int(&j, "quads", nf_quad_count(&q));
-        cli_json_int(&j, "grid_cells", (long)q.gx * q.gy);
-        cli_json_int(&j, "folded", q.folded);
-        cli_json_num(&j, "init_seconds", t_init);
-        cli_json_num(&j, "seconds", c_proj);
-        cli_json_num(&j, "wall_seconds", t_proj);
-        cli_json_num(&j, "points_per_s", (double)points / c_proj);
-        cli_json_num(&j, "max_param_error", err);
-        cli_json_num(&j, "max_distance", dmax);
-        cli_json_num(&j, "mean_newton_iters", (double)iters / (double)points);
-        cli_json_int(&j, "slow_points", q.n_slow);
-        cli_json_int(&j, "clamped", q.n_clamped);
-        cli_json_int(&j, "far", q.n_far);
-        cli_json_int(&j, "not_converged", lost);
-        cli_json_int(&j, "quad_bytes", store);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "bench", "project");
+        cf_json_int(&j, "points", points);
+        cf_json_int(&j, "control_points", (long)s.nu * s.nv);
+        cf_json_int(&j, "degree", degree);
+        cf_json_str(&j, "order", random ? "random" : "raster");
+        cf_json_num(&j, "rel_tol", rel);
+        cf_json_int(&j, "quads", nf_quad_count(&q));
+        cf_json_int(&j, "grid_cells", (long)q.gx * q.gy);
+        cf_json_int(&j, "folded", q.folded);
+        cf_json_num(&j, "init_seconds", t_init);
+        cf_json_num(&j, "seconds", c_proj);
+        cf_json_num(&j, "wall_seconds", t_proj);
+        cf_json_num(&j, "points_per_s", (double)points / c_proj);
+        cf_json_num(&j, "max_param_error", err);
+        cf_json_num(&j, "max_distance", dmax);
+        cf_json_num(&j, "mean_newton_iters", (double)iters / (double)points);
+        cf_json_int(&j, "slow_points", q.n_slow);
+        cf_json_int(&j, "clamped", q.n_clamped);
+        cf_json_int(&j, "far", q.n_far);
+        cf_json_int(&j, "not_converged", lost);
+        cf_json_int(&j, "quad_bytes", store);
+        cf_json_end(&j);
     } else {
         printf("bench project: %ld points, %ld control points, degree %ld, %s order\n", points,
                (long)s.nu * s.nv, degree, random ? "random" : "raster");

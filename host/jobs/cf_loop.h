@@ -6,7 +6,7 @@
 #ifndef CF_LOOP_H
 #define CF_LOOP_H
 
-#include "cf_cli.h"
+#include "cf_json.h"
 #include "nf_budget.h"
 #include "nf_knots.h"
 #include "nf_surf.h"
@@ -38,7 +38,7 @@ typedef struct cf_round {
 
 /* "rounds": [{round, nu, nv, control_points, within_tol_pct, rms, max_abs,
  * [sigma, rejected,] seconds}, ...] as a field of an open JSON object. */
-void cf_rounds_json(cli_json_t *j, const cf_round_t *r, int n, int robust);
+void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust);
 
 /* One line for people: net, share within tol (if tol > 0), rms, max. */
 void cf_round_print(FILE *f, int i, const cf_round_t *r, double tol, int robust);

@@ -3,6 +3,8 @@
  * on a serial port (M0 readings, libserialport) and the USB trigger box
  * (identity, encoder packets, libusb). */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "hal.h"
 #include "hal_serial.h"
 #include "hal_trig.h"
@@ -187,18 +189,18 @@ static int read_probe(const char *port, long baud, long count, const hal_opts_t 
         }
     }
     if (json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "port", port);
-        cli_json_int(&j, "readings", ok);
-        cli_json_int(&j, "out_of_range", nosurf);
-        cli_json_int(&j, "failed", failed);
-        cli_json_num(&j, "first_mm", first);
-        cli_json_num(&j, "mean_mm", ok ? sum / ok : 0);
-        cli_json_int(&j, "retries", (long)h->retries);
-        cli_json_int(&j, "reconnects", (long)h->reconnects);
-        cli_json_int(&j, "last_error", last_err);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "port", port);
+        cf_json_int(&j, "readings", ok);
+        cf_json_int(&j, "out_of_range", nosurf);
+        cf_json_int(&j, "failed", failed);
+        cf_json_num(&j, "first_mm", first);
+        cf_json_num(&j, "mean_mm", ok ? sum / ok : 0);
+        cf_json_int(&j, "retries", (long)h->retries);
+        cf_json_int(&j, "reconnects", (long)h->reconnects);
+        cf_json_int(&j, "last_error", last_err);
+        cf_json_end(&j);
     }
     h->ops->close(h);
     if (failed)
@@ -287,19 +289,19 @@ static int read_trig(const char *id, long count, long period, const hal_opts_t *
     else
         hal_trig_arm(h, 0);
     if (json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "device", id);
-        cli_json_int(&j, "serial", have_ident ? (long)ident.serial : 0);
-        cli_json_int(&j, "packets", got);
-        cli_json_int(&j, "lost", (long)seq.lost);
-        cli_json_int(&j, "crc_errors", crc);
-        cli_json_int(&j, "first_seq", first);
-        cli_json_int(&j, "last_seq", last);
-        cli_json_int(&j, "reconnects", (long)h->reconnects);
-        cli_json_int(&j, "rearmed", rearmed);
-        cli_json_int(&j, "error", rc);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "device", id);
+        cf_json_int(&j, "serial", have_ident ? (long)ident.serial : 0);
+        cf_json_int(&j, "packets", got);
+        cf_json_int(&j, "lost", (long)seq.lost);
+        cf_json_int(&j, "crc_errors", crc);
+        cf_json_int(&j, "first_seq", first);
+        cf_json_int(&j, "last_seq", last);
+        cf_json_int(&j, "reconnects", (long)h->reconnects);
+        cf_json_int(&j, "rearmed", rearmed);
+        cf_json_int(&j, "error", rc);
+        cf_json_end(&j);
     }
     h->ops->close(h);
     if (rc)

@@ -5,6 +5,8 @@
  * journal of known records through the real file store, for the power-cut
  * tests (tests/cli/journal.sh). */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_points.h"
@@ -145,32 +147,32 @@ static int do_info(int argc, char **argv)
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)j.h.nominal_hash);
     double span = in->records ? in->t_last - in->t_first : 0.0;
     if (json) {
-        cli_json_t o;
-        cli_json_begin(&o, stdout);
-        cli_json_str(&o, "journal", path);
-        cli_json_int(&o, "version", (long)j.h.version);
-        cli_json_int(&o, "job_id", (long)j.h.job_id);
-        cli_json_str(&o, "nominal", j.h.nominal_name);
-        cli_json_str(&o, "nominal_hash", hash);
-        cli_json_int(&o, "sync_every", (long)j.h.sync_every);
-        cli_json_int(&o, "planned", (long)j.h.planned);
-        cli_json_int(&o, "records", (long)in->records);
-        cli_json_int(&o, "points", (long)in->points);
-        cli_json_int(&o, "flagged", (long)in->flagged);
-        cli_json_int(&o, "torn_tail", in->tail_bytes > 0);
-        cli_json_int(&o, "torn_tail_bytes", (long)in->tail_bytes);
-        cli_json_int(&o, "ended", in->ended);
-        cli_json_int(&o, "end_code", in->end_code);
-        cli_json_str(&o, "end_error", in->ended ? rig_strerror(in->end_code) : "");
-        cli_json_num(&o, "t_start", j.h.t_start);
-        cli_json_num(&o, "t_first", in->t_first);
-        cli_json_num(&o, "t_last", in->t_last);
-        cli_json_num(&o, "span_seconds", span);
-        cli_json_num(&o, "z0", j.h.z0);
-        cli_json_num(&o, "cx", j.h.cal[0]);
-        cli_json_num(&o, "cy", j.h.cal[1]);
-        cli_json_num(&o, "cz", j.h.cal[2]);
-        cli_json_end(&o);
+        cf_json_t o;
+        cf_json_begin(&o, stdout);
+        cf_json_str(&o, "journal", path);
+        cf_json_int(&o, "version", (long)j.h.version);
+        cf_json_int(&o, "job_id", (long)j.h.job_id);
+        cf_json_str(&o, "nominal", j.h.nominal_name);
+        cf_json_str(&o, "nominal_hash", hash);
+        cf_json_int(&o, "sync_every", (long)j.h.sync_every);
+        cf_json_int(&o, "planned", (long)j.h.planned);
+        cf_json_int(&o, "records", (long)in->records);
+        cf_json_int(&o, "points", (long)in->points);
+        cf_json_int(&o, "flagged", (long)in->flagged);
+        cf_json_int(&o, "torn_tail", in->tail_bytes > 0);
+        cf_json_int(&o, "torn_tail_bytes", (long)in->tail_bytes);
+        cf_json_int(&o, "ended", in->ended);
+        cf_json_int(&o, "end_code", in->end_code);
+        cf_json_str(&o, "end_error", in->ended ? rig_strerror(in->end_code) : "");
+        cf_json_num(&o, "t_start", j.h.t_start);
+        cf_json_num(&o, "t_first", in->t_first);
+        cf_json_num(&o, "t_last", in->t_last);
+        cf_json_num(&o, "span_seconds", span);
+        cf_json_num(&o, "z0", j.h.z0);
+        cf_json_num(&o, "cx", j.h.cal[0]);
+        cf_json_num(&o, "cy", j.h.cal[1]);
+        cf_json_num(&o, "cz", j.h.cal[2]);
+        cf_json_end(&o);
         return CLI_OK;
     }
     printf("%s: journal v%u, job %llu, nominal '%s' (FNV-1a %s), synced every %u records\n", path,
@@ -335,26 +337,26 @@ static int do_fit(int argc, char **argv)
         goto out_fit;
     }
     if (json) {
-        cli_json_t o;
-        cli_json_begin(&o, stdout);
-        cli_json_str(&o, "journal", path);
-        cli_json_int(&o, "points", sf.points);
-        cli_json_int(&o, "flagged", (long)j.in.flagged);
-        cli_json_int(&o, "control_points", (long)nom.nu * nom.nv);
-        cli_json_num(&o, "alpha", alpha);
-        cli_json_num(&o, "beta", beta);
-        cli_json_str(&o, "solver", nf_solver_name(sst.solver));
-        cli_json_int(&o, "iterations", sst.iterations);
-        cli_json_num(&o, "rel_residual", sst.rel_residual);
-        cli_json_num(&o, "rms", res.rms);
-        cli_json_num(&o, "max_abs", res.max);
-        cli_json_num(&o, "nominal_rms", dev_rms);
-        cli_json_num(&o, "nominal_max_abs", dev_max);
-        cli_json_int(&o, "reparam", reparam);
-        cli_json_num(&o, "seconds", cli_now() - t0);
-        cli_json_int(&o, "bytes", sf.need);
-        cli_json_str(&o, "out", out);
-        cli_json_end(&o);
+        cf_json_t o;
+        cf_json_begin(&o, stdout);
+        cf_json_str(&o, "journal", path);
+        cf_json_int(&o, "points", sf.points);
+        cf_json_int(&o, "flagged", (long)j.in.flagged);
+        cf_json_int(&o, "control_points", (long)nom.nu * nom.nv);
+        cf_json_num(&o, "alpha", alpha);
+        cf_json_num(&o, "beta", beta);
+        cf_json_str(&o, "solver", nf_solver_name(sst.solver));
+        cf_json_int(&o, "iterations", sst.iterations);
+        cf_json_num(&o, "rel_residual", sst.rel_residual);
+        cf_json_num(&o, "rms", res.rms);
+        cf_json_num(&o, "max_abs", res.max);
+        cf_json_num(&o, "nominal_rms", dev_rms);
+        cf_json_num(&o, "nominal_max_abs", dev_max);
+        cf_json_int(&o, "reparam", reparam);
+        cf_json_num(&o, "seconds", cli_now() - t0);
+        cf_json_int(&o, "bytes", sf.need);
+        cf_json_str(&o, "out", out);
+        cf_json_end(&o);
     } else {
         printf("cellfit journal fit: %ld points of %s (%llu without a surface), %d x %d control "
                "points\n",

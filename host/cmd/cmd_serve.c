@@ -6,6 +6,7 @@
  * SIGTERM or SIGINT stops it cleanly (a running job is aborted, the
  * simulator stopped). */
 #include "cf_cli.h"
+#include "cmd.h"
 #include "cf_conf.h"
 #include "cf_err.h"
 #include "cf_log.h"

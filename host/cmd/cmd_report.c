@@ -5,6 +5,8 @@
  * points are streamed (three passes with --png: plane, extent, deviations);
  * memory is fixed by the surface, the map raster and the histogram. */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_devmap.h"
 #include "cf_iges.h"
 #include "cf_points.h"
@@ -156,16 +158,16 @@ int cmd_report(int argc, char **argv)
         goto done;
     }
     if (o.json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "surface", o.surf);
-        cli_json_str(&j, "points_file", o.points);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "surface", o.surf);
+        cf_json_str(&j, "points_file", o.points);
         cf_stats_json_fields(st, &j);
-        cli_json_int(&j, "boundary_feet", clamped);
+        cf_json_int(&j, "boundary_feet", clamped);
         if (o.png)
-            cli_json_str(&j, "png", o.png);
-        cli_json_num(&j, "seconds", cli_now() - t0);
-        cli_json_end(&j);
+            cf_json_str(&j, "png", o.png);
+        cf_json_num(&j, "seconds", cli_now() - t0);
+        cf_json_end(&j);
     } else {
         printf("cellfit report: %s against %s (signed normal distance, + along Su x Sv)\n",
                o.points, o.surf);

@@ -2,8 +2,10 @@
  * on generated, seeded data streamed without files (issue 6). Prints
  * figures; asserts nothing. Nets are square, bicubic, uniform knots. */
 #include "bench_project.h"
+#include "cf_json.h"
 #include "cf_accum.h"
 #include "cf_cli.h"
+#include "cmd.h"
 #include "cf_surf.h"
 #include "nf_err.h"
 #include "nf_fit.h"
@@ -257,32 +259,32 @@ int cmd_bench(int argc, char **argv)
         return cli_error("bench", CLI_FAIL, "%s", nf_strerror(rc));
     }
     long store = (long)f.n * f.A.K * (long)sizeof(double);
-    cli_json_t j;
+    cf_json_t j;
     if (o.json) {
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "bench", what);
-        cli_json_int(&j, "points", o.points);
-        cli_json_int(&j, "control_points", f.n);
-        cli_json_int(&j, "degree", o.degree);
-        cli_json_str(&j, "order", o.random ? "random" : "raster");
-        cli_json_int(&j, "threads", o.threads);
+        cf_json_begin(&j, stdout);
+        cf_json_str(&j, "bench", what);
+        cf_json_int(&j, "points", o.points);
+        cf_json_int(&j, "control_points", f.n);
+        cf_json_int(&j, "degree", o.degree);
+        cf_json_str(&j, "order", o.random ? "random" : "raster");
+        cf_json_int(&j, "threads", o.threads);
         if (acc || fit) {
-            cli_json_num(&j, "accumulate_seconds", t_acc);
-            cli_json_num(&j, "merge_seconds", t_merge);
-            cli_json_num(&j, "points_per_s", (double)o.points / t_acc);
+            cf_json_num(&j, "accumulate_seconds", t_acc);
+            cf_json_num(&j, "merge_seconds", t_merge);
+            cf_json_num(&j, "points_per_s", (double)o.points / t_acc);
         }
         if (sol || fit) {
-            cli_json_str(&j, "solver", nf_solver_name(st.solver));
-            cli_json_num(&j, "solve_seconds", t_solve);
-            cli_json_int(&j, "iterations", st.iterations);
-            cli_json_num(&j, "rel_residual", st.rel_residual);
+            cf_json_str(&j, "solver", nf_solver_name(st.solver));
+            cf_json_num(&j, "solve_seconds", t_solve);
+            cf_json_int(&j, "iterations", st.iterations);
+            cf_json_num(&j, "rel_residual", st.rel_residual);
         }
-        cli_json_num(&j, "seconds", acc ? t_acc : sol ? t_solve : t_acc + t_solve);
-        cli_json_num(&j, "generate_seconds", t_gen);
-        cli_json_int(&j, "store_bytes", store);
-        cli_json_int(&j, "arena_bytes", need);
-        cli_json_int(&j, "peak_rss_bytes", peak_rss());
-        cli_json_end(&j);
+        cf_json_num(&j, "seconds", acc ? t_acc : sol ? t_solve : t_acc + t_solve);
+        cf_json_num(&j, "generate_seconds", t_gen);
+        cf_json_int(&j, "store_bytes", store);
+        cf_json_int(&j, "arena_bytes", need);
+        cf_json_int(&j, "peak_rss_bytes", peak_rss());
+        cf_json_end(&j);
     } else {
         printf("bench %s: %ld points, %ld control points, degree %ld, %s order, %ld thread%s\n",
                what, o.points, f.n, o.degree, o.random ? "random" : "raster", o.threads,

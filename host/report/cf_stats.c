@@ -4,6 +4,7 @@
  * known while streaming, and a relative error is what a reader of
  * "p95 0.0312 mm" cares about at any scale. */
 #include "cf_stats.h"
+#include "cf_json.h"
 #include "cf_err.h"
 #include <math.h>
 #include <string.h>
@@ -197,58 +198,51 @@ int cf_stats_decimals(double tol)
     return d < 3 ? 3 : d > 12 ? 12 : d;
 }
 
-void cf_stats_json_fields(const cf_stats_t *st, cli_json_t *j)
+void cf_stats_json_fields(const cf_stats_t *st, cf_json_t *j)
 {
     double none = NAN;
     int any = st->n > 0;
-    cli_json_int(j, "points", (long)st->n);
-    cli_json_num(j, "tol", st->tol);
-    cli_json_num(j, "rms", cf_stats_rms(st));
-    cli_json_num(j, "mean", cf_stats_mean(st));
-    cli_json_num(j, "std", cf_stats_std(st));
-    cli_json_num(j, "min", any ? st->min : none);
-    cli_json_num(j, "max", any ? st->max : none);
-    cli_json_num(j, "max_abs", any ? st->max_abs : none);
-    cli_json_num(j, "min_index", any ? (double)st->imin : none);
-    cli_json_num(j, "max_index", any ? (double)st->imax : none);
-    cli_json_num(j, "max_abs_index", any ? (double)st->imaxabs : none);
-    cli_json_int(j, "within_tol", (long)st->within);
-    cli_json_num(j, "within_tol_pct", cf_stats_within_pct(st));
+    cf_json_int(j, "points", (long)st->n);
+    cf_json_num(j, "tol", st->tol);
+    cf_json_num(j, "rms", cf_stats_rms(st));
+    cf_json_num(j, "mean", cf_stats_mean(st));
+    cf_json_num(j, "std", cf_stats_std(st));
+    cf_json_num(j, "min", any ? st->min : none);
+    cf_json_num(j, "max", any ? st->max : none);
+    cf_json_num(j, "max_abs", any ? st->max_abs : none);
+    cf_json_num(j, "min_index", any ? (double)st->imin : none);
+    cf_json_num(j, "max_index", any ? (double)st->imax : none);
+    cf_json_num(j, "max_abs_index", any ? (double)st->imaxabs : none);
+    cf_json_int(j, "within_tol", (long)st->within);
+    cf_json_num(j, "within_tol_pct", cf_stats_within_pct(st));
     static const double pcts[] = {5, 50, 95, 99};
     static const char *const names[] = {"p5", "p50", "p95", "p99"};
     static const char *const anames[] = {"p5_abs", "p50_abs", "p95_abs", "p99_abs"};
     for (int i = 0; i < 4; i++)
-        cli_json_num(j, names[i], cf_stats_percentile(st, pcts[i]));
+        cf_json_num(j, names[i], cf_stats_percentile(st, pcts[i]));
     for (int i = 0; i < 4; i++)
-        cli_json_num(j, anames[i], cf_stats_percentile_abs(st, pcts[i]));
-    cli_json_num(j, "pct_rel_err", CF_STATS_PCT_RELERR);
-    /* cli_json has no arrays: the same ", " separator rule, written here. */
-    fprintf(j->f, "%s\"histogram\": [", j->n++ ? ", " : "");
+        cf_json_num(j, anames[i], cf_stats_percentile_abs(st, pcts[i]));
+    cf_json_num(j, "pct_rel_err", CF_STATS_PCT_RELERR);
+    cf_json_arr(j, "histogram");
     for (int i = 0; i <= CF_STATS_HIST_BINS + 1; i++) {
         double lo, hi;
         long long c;
         cf_stats_hist_bin(st, i, &lo, &hi, &c);
-        fprintf(j->f, "%s{\"lo\": ", i ? ", " : "");
-        if (isfinite(lo))
-            fprintf(j->f, "%.17g", lo);
-        else
-            fputs("null", j->f);
-        fputs(", \"hi\": ", j->f);
-        if (isfinite(hi))
-            fprintf(j->f, "%.17g", hi);
-        else
-            fputs("null", j->f);
-        fprintf(j->f, ", \"count\": %lld}", c);
+        cf_json_obj(j, NULL);
+        cf_json_num(j, "lo", lo); /* null when open-ended */
+        cf_json_num(j, "hi", hi);
+        cf_json_int(j, "count", (long)c);
+        cf_json_close(j);
     }
-    fputc(']', j->f);
+    cf_json_close(j);
 }
 
 void cf_stats_json(const cf_stats_t *st, FILE *f)
 {
-    cli_json_t j;
-    cli_json_begin(&j, f);
+    cf_json_t j;
+    cf_json_begin(&j, f);
     cf_stats_json_fields(st, &j);
-    cli_json_end(&j);
+    cf_json_end(&j);
 }
 
 /* A bar of up to width characters for count out of top. */

@@ -2,6 +2,8 @@
  * tests: status, home, move X Y, probe readings, fault reset, stop, on the
  * devices the --stage and --probe URIs name (hal.h). */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "hal_rig.h"
 #include <stdio.h>
 #include <string.h>
@@ -38,15 +40,15 @@ static int do_probe(hal_rig_t *r, long count, int json)
             printf("%.4f\n", d);
     }
     if (json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "readings", ok);
-        cli_json_int(&j, "nosurf", nosurf);
-        cli_json_num(&j, "last_mm", last);
-        cli_json_num(&j, "mean_mm", ok ? sum / ok : 0);
-        cli_json_int(&j, "retries", (long)r->pr.h->retries);
-        cli_json_int(&j, "reconnects", (long)r->pr.h->reconnects);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_int(&j, "readings", ok);
+        cf_json_int(&j, "nosurf", nosurf);
+        cf_json_num(&j, "last_mm", last);
+        cf_json_num(&j, "mean_mm", ok ? sum / ok : 0);
+        cf_json_int(&j, "retries", (long)r->pr.h->retries);
+        cf_json_int(&j, "reconnects", (long)r->pr.h->reconnects);
+        cf_json_end(&j);
     }
     /* Out of range is a reading, not a failure of the line, but a run
      * that saw nothing else did not measure. */
@@ -67,28 +69,28 @@ static int do_status(hal_rig_t *r, int json)
     if (r->probe.ops)
         r->probe.ops->range(r->probe.ctx, &plo, &phi);
     if (json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
         if (r->stage.ops) {
-            cli_json_int(&j, "status", (long)bits);
-            cli_json_int(&j, "homed", !!(bits & RIG_ST_HOMED));
-            cli_json_int(&j, "busy", !!(bits & RIG_ST_BUSY));
-            cli_json_int(&j, "inpos", !!(bits & RIG_ST_INPOS));
-            cli_json_int(&j, "fault", !!(bits & RIG_ST_FAULT));
-            cli_json_int(&j, "estop", !!(bits & RIG_ST_ESTOP));
-            cli_json_int(&j, "limit", !!(bits & RIG_ST_LIMIT));
-            cli_json_num(&j, "x", x);
-            cli_json_num(&j, "y", y);
-            cli_json_num(&j, "x_lo", lo[0]);
-            cli_json_num(&j, "x_hi", hi[0]);
-            cli_json_num(&j, "y_lo", lo[1]);
-            cli_json_num(&j, "y_hi", hi[1]);
+            cf_json_int(&j, "status", (long)bits);
+            cf_json_int(&j, "homed", !!(bits & RIG_ST_HOMED));
+            cf_json_int(&j, "busy", !!(bits & RIG_ST_BUSY));
+            cf_json_int(&j, "inpos", !!(bits & RIG_ST_INPOS));
+            cf_json_int(&j, "fault", !!(bits & RIG_ST_FAULT));
+            cf_json_int(&j, "estop", !!(bits & RIG_ST_ESTOP));
+            cf_json_int(&j, "limit", !!(bits & RIG_ST_LIMIT));
+            cf_json_num(&j, "x", x);
+            cf_json_num(&j, "y", y);
+            cf_json_num(&j, "x_lo", lo[0]);
+            cf_json_num(&j, "x_hi", hi[0]);
+            cf_json_num(&j, "y_lo", lo[1]);
+            cf_json_num(&j, "y_hi", hi[1]);
         }
         if (r->probe.ops) {
-            cli_json_num(&j, "range_lo", plo);
-            cli_json_num(&j, "range_hi", phi);
+            cf_json_num(&j, "range_lo", plo);
+            cf_json_num(&j, "range_hi", phi);
         }
-        cli_json_end(&j);
+        cf_json_end(&j);
         return CLI_OK;
     }
     if (r->stage.ops)
@@ -188,14 +190,14 @@ int cmd_rig(int argc, char **argv)
             double x = 0, y = 0;
             r->stage.ops->position(c, &x, &y);
             if (json) {
-                cli_json_t j;
-                cli_json_begin(&j, stdout);
-                cli_json_str(&j, "done", op);
-                cli_json_num(&j, "x", x);
-                cli_json_num(&j, "y", y);
-                cli_json_int(&j, "retries", (long)r->st.h->retries);
-                cli_json_int(&j, "reconnects", (long)r->st.h->reconnects);
-                cli_json_end(&j);
+                cf_json_t j;
+                cf_json_begin(&j, stdout);
+                cf_json_str(&j, "done", op);
+                cf_json_num(&j, "x", x);
+                cf_json_num(&j, "y", y);
+                cf_json_int(&j, "retries", (long)r->st.h->retries);
+                cf_json_int(&j, "reconnects", (long)r->st.h->reconnects);
+                cf_json_end(&j);
             } else
                 printf("stage: %s done, at (%.3f, %.3f) mm\n", op, x, y);
         }

@@ -19,7 +19,7 @@
 #ifndef CF_STATS_H
 #define CF_STATS_H
 
-#include "cf_cli.h"
+#include "cf_json.h"
 #include <stdio.h>
 
 #define CF_STATS_HIST_HALF 7 /* B: the histogram has 2B + 1 bins around 0 */
@@ -80,13 +80,13 @@ void cf_stats_hist_bin(const cf_stats_t *st, int i, double *lo, double *hi, long
  * significant digits of tol (0.05 -> 4: "0.0500"); at least 3. */
 int cf_stats_decimals(double tol);
 
-/* The statistics as fields of an open JSON object (after cli_json_begin):
+/* The statistics as fields of an open JSON object (after cf_json_begin):
  * points, tol, rms, mean, std, min, max, max_abs, min_index, max_index,
  * max_abs_index, within_tol, within_tol_pct, p5, p50, p95, p99, p5_abs,
  * p50_abs, p95_abs, p99_abs, pct_rel_err, and histogram: an array of
  * {"lo", "hi", "count"} with lo null on the underflow bin, hi null on the
  * overflow bin. Undefined values (empty input) are null. */
-void cf_stats_json_fields(const cf_stats_t *st, cli_json_t *j);
+void cf_stats_json_fields(const cf_stats_t *st, cf_json_t *j);
 
 /* One JSON object holding just those fields, and a newline. */
 void cf_stats_json(const cf_stats_t *st, FILE *f);

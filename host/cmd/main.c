@@ -1,5 +1,6 @@
 /* main.c: the cellfit command-line tool: dispatch to subcommands. */
 #include "cf_cli.h"
+#include "cmd.h"
 #include "nf_config.h"
 #include <string.h>
 

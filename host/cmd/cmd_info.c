@@ -1,6 +1,8 @@
 /* cmd_info.c: `cellfit info SURF.igs`: what a surface is and what a fit of
  * its space costs on this board. */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_iges.h"
 #include "cf_surf.h"
 #include "nf_budget.h"
@@ -91,40 +93,40 @@ int cmd_info(int argc, char **argv)
     long b_chol = nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_CHOL);
     nf_solver_t pick = nf_solver_pick(s.nu, s.nv, s.p, s.q);
     if (json) {
-        cli_json_t j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "p", s.p);
-        cli_json_int(&j, "q", s.q);
-        cli_json_int(&j, "nu", s.nu);
-        cli_json_int(&j, "nv", s.nv);
-        cli_json_int(&j, "control_points", (long)s.nu * s.nv);
-        cli_json_num(&j, "u0", s.U[s.p]);
-        cli_json_num(&j, "u1", s.U[s.nu]);
-        cli_json_num(&j, "v0", s.V[s.q]);
-        cli_json_num(&j, "v1", s.V[s.nv]);
-        cli_json_num(&j, "weight_min", wlo);
-        cli_json_num(&j, "weight_max", whi);
-        cli_json_int(&j, "rational", wlo != whi);
-        cli_json_num(&j, "xmin", slo[0]);
-        cli_json_num(&j, "ymin", slo[1]);
-        cli_json_num(&j, "zmin", slo[2]);
-        cli_json_num(&j, "xmax", shi[0]);
-        cli_json_num(&j, "ymax", shi[1]);
-        cli_json_num(&j, "zmax", shi[2]);
-        cli_json_num(&j, "net_xmin", lo[0]);
-        cli_json_num(&j, "net_ymin", lo[1]);
-        cli_json_num(&j, "net_zmin", lo[2]);
-        cli_json_num(&j, "net_xmax", hi[0]);
-        cli_json_num(&j, "net_ymax", hi[1]);
-        cli_json_num(&j, "net_zmax", hi[2]);
-        cli_json_int(&j, "bytes_gs", b_gs);
-        cli_json_int(&j, "bytes_pcg", b_pcg);
-        cli_json_int(&j, "bytes_chol", b_chol);
-        cli_json_str(&j, "auto_solver", nf_solver_name(pick));
-        cli_json_int(&j, "bytes", nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_AUTO));
-        cli_json_str(&j, "board", BOARD_NAME);
-        cli_json_int(&j, "board_bytes", (long)NF_ARENA_BYTES);
-        cli_json_end(&j);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_int(&j, "p", s.p);
+        cf_json_int(&j, "q", s.q);
+        cf_json_int(&j, "nu", s.nu);
+        cf_json_int(&j, "nv", s.nv);
+        cf_json_int(&j, "control_points", (long)s.nu * s.nv);
+        cf_json_num(&j, "u0", s.U[s.p]);
+        cf_json_num(&j, "u1", s.U[s.nu]);
+        cf_json_num(&j, "v0", s.V[s.q]);
+        cf_json_num(&j, "v1", s.V[s.nv]);
+        cf_json_num(&j, "weight_min", wlo);
+        cf_json_num(&j, "weight_max", whi);
+        cf_json_int(&j, "rational", wlo != whi);
+        cf_json_num(&j, "xmin", slo[0]);
+        cf_json_num(&j, "ymin", slo[1]);
+        cf_json_num(&j, "zmin", slo[2]);
+        cf_json_num(&j, "xmax", shi[0]);
+        cf_json_num(&j, "ymax", shi[1]);
+        cf_json_num(&j, "zmax", shi[2]);
+        cf_json_num(&j, "net_xmin", lo[0]);
+        cf_json_num(&j, "net_ymin", lo[1]);
+        cf_json_num(&j, "net_zmin", lo[2]);
+        cf_json_num(&j, "net_xmax", hi[0]);
+        cf_json_num(&j, "net_ymax", hi[1]);
+        cf_json_num(&j, "net_zmax", hi[2]);
+        cf_json_int(&j, "bytes_gs", b_gs);
+        cf_json_int(&j, "bytes_pcg", b_pcg);
+        cf_json_int(&j, "bytes_chol", b_chol);
+        cf_json_str(&j, "auto_solver", nf_solver_name(pick));
+        cf_json_int(&j, "bytes", nf_fit_bytes(s.nu, s.nv, s.p, s.q, NF_SOLVER_AUTO));
+        cf_json_str(&j, "board", BOARD_NAME);
+        cf_json_int(&j, "board_bytes", (long)NF_ARENA_BYTES);
+        cf_json_end(&j);
     } else {
         printf("%s: NURBS surface, degree %d x %d, net %d x %d (%ld control points)\n", path, s.p,
                s.q, s.nu, s.nv, (long)s.nu * s.nv);

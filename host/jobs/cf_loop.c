@@ -1,6 +1,7 @@
 /* cf_loop.c: next net of the fitting loop (uniform or residual-driven knot
  * insertion, within the limits) and the round records. */
 #include "cf_loop.h"
+#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_surf.h"
 #include "nf_err.h"
@@ -71,20 +72,26 @@ int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, 
     return rc;
 }
 
-void cf_rounds_json(cli_json_t *j, const cf_round_t *r, int n, int robust)
+void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust)
 {
-    fprintf(j->f, "%s\"rounds\": [", j->n++ ? ", " : "");
+    cf_json_arr(j, "rounds");
     for (int i = 0; i < n; i++) {
-        fprintf(j->f,
-                "%s{\"round\": %d, \"nu\": %d, \"nv\": %d, \"control_points\": %ld, "
-                "\"within_tol_pct\": %.17g, \"rms\": %.17g, \"max_abs\": %.17g",
-                i ? ", " : "", i, r[i].nu, r[i].nv, (long)r[i].nu * r[i].nv, r[i].within_pct,
-                r[i].rms, r[i].mx);
-        if (robust)
-            fprintf(j->f, ", \"sigma\": %.17g, \"rejected\": %ld", r[i].sigma, r[i].rejected);
-        fprintf(j->f, ", \"seconds\": %.6g}", r[i].seconds);
+        cf_json_obj(j, NULL);
+        cf_json_int(j, "round", i);
+        cf_json_int(j, "nu", r[i].nu);
+        cf_json_int(j, "nv", r[i].nv);
+        cf_json_int(j, "control_points", (long)r[i].nu * r[i].nv);
+        cf_json_num(j, "within_tol_pct", r[i].within_pct);
+        cf_json_num(j, "rms", r[i].rms);
+        cf_json_num(j, "max_abs", r[i].mx);
+        if (robust) {
+            cf_json_num(j, "sigma", r[i].sigma);
+            cf_json_int(j, "rejected", r[i].rejected);
+        }
+        cf_json_num(j, "seconds", r[i].seconds);
+        cf_json_close(j);
     }
-    fputc(']', j->f);
+    cf_json_close(j);
 }
 
 void cf_round_print(FILE *f, int i, const cf_round_t *r, double tol, int robust)

@@ -1,7 +1,9 @@
 /* cf_job.c: the cell's fit job on files and the export of its result
  * (cf_job.h). The fit is cmd_fit's single pass (Eq. 7) with progress and a
  * stop check between batches; the deviations are cmd_report's. */
+#include "cf_cli.h"
 #include "cf_job.h"
+#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_points.h"
@@ -304,25 +306,25 @@ int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const cha
     if (!f)
         return cf_fail(msg, ml, CF_EIO, "%s: cannot write: %s", tmp, strerror(errno));
     const cf_stats_t *st = r->st;
-    cli_json_t j;
-    cli_json_begin(&j, f);
-    cli_json_int(&j, "part", (long)meta->part);
-    cli_json_int(&j, "program", (long)meta->program);
-    cli_json_int(&j, "seq", (long)meta->seq);
-    cli_json_int(&j, "utc", (long)meta->utc);
-    cli_json_str(&j, "board", meta->board);
-    cli_json_str(&j, "nominal", meta->nominal);
-    cli_json_str(&j, "points_file", meta->points ? meta->points : "");
+    cf_json_t j;
+    cf_json_begin(&j, f);
+    cf_json_int(&j, "part", (long)meta->part);
+    cf_json_int(&j, "program", (long)meta->program);
+    cf_json_int(&j, "seq", (long)meta->seq);
+    cf_json_int(&j, "utc", (long)meta->utc);
+    cf_json_str(&j, "board", meta->board);
+    cf_json_str(&j, "nominal", meta->nominal);
+    cf_json_str(&j, "points_file", meta->points ? meta->points : "");
     if (meta->journal)
-        cli_json_str(&j, "journal", meta->journal);
-    cli_json_str(&j, "verdict", st->max_abs <= st->tol ? "pass" : "fail");
-    cli_json_int(&j, "control_points", (long)r->fitted.nu * r->fitted.nv);
-    cli_json_int(&j, "nu", r->fitted.nu);
-    cli_json_int(&j, "nv", r->fitted.nv);
-    cli_json_str(&j, "solver", nf_solver_name(r->solve.solver));
-    cli_json_num(&j, "seconds", r->seconds);
+        cf_json_str(&j, "journal", meta->journal);
+    cf_json_str(&j, "verdict", st->max_abs <= st->tol ? "pass" : "fail");
+    cf_json_int(&j, "control_points", (long)r->fitted.nu * r->fitted.nv);
+    cf_json_int(&j, "nu", r->fitted.nu);
+    cf_json_int(&j, "nv", r->fitted.nv);
+    cf_json_str(&j, "solver", nf_solver_name(r->solve.solver));
+    cf_json_num(&j, "seconds", r->seconds);
     cf_stats_json_fields(st, &j);
-    cli_json_end(&j);
+    cf_json_end(&j);
     if (fclose(f) || rename(tmp, path)) {
         remove(tmp);
         return cf_fail(msg, ml, CF_EIO, "%s: cannot write: %s", path, strerror(errno));

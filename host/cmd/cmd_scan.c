@@ -6,6 +6,8 @@
  * progress bar on a terminal, progress lines otherwise; SIGINT/SIGTERM stop
  * the job cleanly (stage stopped, journal synced). */
 #include "cf_cli.h"
+#include "cmd.h"
+#include "cf_json.h"
 #include "cf_iges.h"
 #include "cf_sfit.h"
 #include "cf_store_file.h"
@@ -250,35 +252,35 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
                     const jnl_t *j, const cf_sfit_t *sf, const cf_sfit_resid_t *rs,
                     const nf_solve_stats_t *sst, double secs)
 {
-    cli_json_t js;
-    cli_json_begin(&js, f);
-    cli_json_str(&js, "journal", o->journal);
-    cli_json_int(&js, "job_id", o->job_id);
-    cli_json_str(&js, "nominal", o->nominal);
-    cli_json_num(&js, "x0", pl->x0);
-    cli_json_num(&js, "y0", pl->y0);
-    cli_json_num(&js, "step", o->step);
-    cli_json_int(&js, "nx", pl->nx);
-    cli_json_int(&js, "ny", pl->ny);
-    cli_json_int(&js, "planned", scan_plan_count(pl));
-    cli_json_int(&js, "done", res->done);
-    cli_json_int(&js, "points", res->points);
-    cli_json_int(&js, "flagged", res->flagged);
-    cli_json_int(&js, "acknowledged_records", (long)jnl_acked(j));
-    cli_json_int(&js, "code", res->code);
-    cli_json_str(&js, "error", res->code ? rig_strerror(res->code) : "");
-    cli_json_int(&js, "fail_index", res->fail_index);
+    cf_json_t js;
+    cf_json_begin(&js, f);
+    cf_json_str(&js, "journal", o->journal);
+    cf_json_int(&js, "job_id", o->job_id);
+    cf_json_str(&js, "nominal", o->nominal);
+    cf_json_num(&js, "x0", pl->x0);
+    cf_json_num(&js, "y0", pl->y0);
+    cf_json_num(&js, "step", o->step);
+    cf_json_int(&js, "nx", pl->nx);
+    cf_json_int(&js, "ny", pl->ny);
+    cf_json_int(&js, "planned", scan_plan_count(pl));
+    cf_json_int(&js, "done", res->done);
+    cf_json_int(&js, "points", res->points);
+    cf_json_int(&js, "flagged", res->flagged);
+    cf_json_int(&js, "acknowledged_records", (long)jnl_acked(j));
+    cf_json_int(&js, "code", res->code);
+    cf_json_str(&js, "error", res->code ? rig_strerror(res->code) : "");
+    cf_json_int(&js, "fail_index", res->fail_index);
     if (sf && rs) {
-        cli_json_str(&js, "fit", o->fit);
-        cli_json_str(&js, "solver", nf_solver_name(sst->solver));
-        cli_json_int(&js, "iterations", sst->iterations);
-        cli_json_num(&js, "rms", rs->rms);
-        cli_json_num(&js, "max_abs", rs->max);
-        cli_json_num(&js, "nominal_rms", sqrt(sf->dev_ss / (double)sf->points));
-        cli_json_num(&js, "nominal_max_abs", sf->dev_max);
+        cf_json_str(&js, "fit", o->fit);
+        cf_json_str(&js, "solver", nf_solver_name(sst->solver));
+        cf_json_int(&js, "iterations", sst->iterations);
+        cf_json_num(&js, "rms", rs->rms);
+        cf_json_num(&js, "max_abs", rs->max);
+        cf_json_num(&js, "nominal_rms", sqrt(sf->dev_ss / (double)sf->points));
+        cf_json_num(&js, "nominal_max_abs", sf->dev_max);
     }
-    cli_json_num(&js, "seconds", secs);
-    cli_json_end(&js);
+    cf_json_num(&js, "seconds", secs);
+    cf_json_end(&js);
 }
 
 int cmd_scan(int argc, char **argv)
