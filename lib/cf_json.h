@@ -11,9 +11,9 @@
 
 typedef struct cf_json {
     FILE *f;
-    int depth;                         /* open containers, the top object included */
-    unsigned char n[CF_JSON_DEPTH];    /* items written in each open container */
-    unsigned char arr[CF_JSON_DEPTH];  /* 1 where the container is an array */
+    int depth;                        /* open containers, the top object included */
+    unsigned char n[CF_JSON_DEPTH];   /* items written in each open container */
+    unsigned char arr[CF_JSON_DEPTH]; /* 1 where the container is an array */
 } cf_json_t;
 
 /* Opens the top-level object ("{"). */

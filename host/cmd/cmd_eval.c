@@ -1,31 +1,35 @@
-/* cmd_eval.c: `cellfit eval SURF.igs UVFILE`: x y z (%.17g) for each u v line. */
+/* cmd_eval.c: `cellfit eval SURF UVFILE`: x y z (%.17g) for each u v line. */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_iges.h"
+#include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_surf.h"
-#include <string.h>
+#include "cmd.h"
 
 int cmd_eval(int argc, char **argv)
 {
-    const char *surf = NULL, *uvf = NULL;
+    const char *pos[2];
     long entity = 0;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--entity")) {
-            if (i + 1 >= argc || cli_int(argv[i + 1], 1, 9999999, &entity))
-                return cli_error("eval", CLI_USAGE, "--entity needs a DE number");
-            i++;
-        } else if (argv[i][0] == '-' && argv[i][1])
-            return cli_error("eval", CLI_USAGE, "unknown option '%s'", argv[i]);
-        else if (!surf)
-            surf = argv[i];
-        else if (!uvf)
-            uvf = argv[i];
-        else
-            return cli_error("eval", CLI_USAGE, "unexpected argument '%s'", argv[i]);
-    }
-    if (!surf || !uvf)
-        return cli_error("eval", CLI_USAGE, "usage: cellfit eval SURF.igs UVFILE");
+    const cf_opt_t opts[] = {
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in SURF (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "eval",
+                          .args = "SURF UVFILE",
+                          .summary = "x y z (%.17g) of SURF at each \"u v\" line of UVFILE",
+                          .opts = opts,
+                          .min_pos = 2,
+                          .max_pos = 2};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
+    const char *surf = pos[0], *uvf = pos[1];
     char msg[512];
     nf_surf_t s;
     if (cf_iges_read(surf, (int)entity, &s, msg, sizeof msg))

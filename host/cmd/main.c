@@ -1,54 +1,44 @@
-/* main.c: the cellfit command-line tool: dispatch to subcommands. */
+/* main.c: the cellfit command-line tool: one table of subcommands, each
+ * with its own option table (cf_opt.h) behind `cellfit CMD --help`. */
 #include "cf_cli.h"
+#include "cf_version.h"
 #include "cmd.h"
 #include "nf_config.h"
 #include <string.h>
 
+typedef struct cmd_entry {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} cmd_entry_t;
+
+static const cmd_entry_t cmds[] = {
+    {"fit", cmd_fit, "fit a surface's control net to measured points (Eq. 7), to a tolerance"},
+    {"base", cmd_base, "a base surface for scattered points (plane, Coons, tensor fit)"},
+    {"report", cmd_report, "deviations of points from a surface: statistics, histogram, map"},
+    {"project", cmd_project, "u v and distance of each point projected onto a surface"},
+    {"thin", cmd_thin, "keep the nearest point per vertex of a quadrilateral blanket"},
+    {"eval", cmd_eval, "x y z of a surface at given u v"},
+    {"info", cmd_info, "degrees, net, knots, weights and the bytes a fit needs"},
+    {"gen", cmd_gen, "write a synthetic part: nominal, points, check grid"},
+    {"scan", cmd_scan, "measure a part on the rig into a journal, and fit it"},
+    {"journal", cmd_journal, "the journal of measured points: export, info, recover, fit"},
+    {"rig", cmd_rig, "the stage and probe by hand: status, home, move, probe, reset, stop"},
+    {"ports", cmd_ports, "serial ports, the laser probe, the USB trigger box"},
+    {"serve", cmd_serve, "the cell headless, driven by a PLC over Modbus TCP"},
+    {"bench", cmd_bench, "benchmarks on generated data"},
+};
+#define NCMDS (sizeof cmds / sizeof cmds[0])
+
 static int usage(FILE *f, int code)
 {
+    fprintf(f, "usage: cellfit COMMAND [options] [arguments]\n"
+               "       cellfit COMMAND --help    the command's options and their defaults\n"
+               "       cellfit --version\n\ncommands:\n");
+    for (size_t i = 0; i < NCMDS; i++)
+        fprintf(f, "  %-8s %s\n", cmds[i].name, cmds[i].summary);
     fprintf(f,
-            "usage: cellfit <command> [options]\n"
-            "commands:\n"
-            "  fit   --base BASE.igs --points FILE [--uv | --reparam K] [--alpha A]\n"
-            "        [--beta B] [--solver auto|gs|chol|pcg] [--entity N] --out OUT.igs [--json]\n"
-            "        (x y z points are projected onto BASE; --uv takes u v x y z)\n"
-            "        [--tol T [--within PCT] [--refine residual|uniform] [--max-cp N]\n"
-            "        [--max-rounds R]]  insert knots until PCT %% of the points are within T\n"
-            "        [--robust [--robust-iters K]]  Tukey reweighting against outliers\n"
-            "        [--far MM [--drop-far]]  flag (drop) projected points farther than MM\n"
-            "  eval  SURF.igs UVFILE [--entity N]   print x y z for each u v line\n"
-            "  project SURF.igs XYZFILE [--entity N]  print u v distance for each point\n"
-            "  report SURF.igs POINTS --tol T [--png MAP.png] [--json]\n"
-            "        signed normal deviations, statistics, histogram, colour deviation map\n"
-            "  thin  SURF.igs POINTS --tol T [--radius R] --out FILE [--json]\n"
-            "        keep the nearest point per vertex of a T-relative quadrilateral blanket\n"
-            "  info  SURF.igs [--entity N] [--json] degrees, net, knots, weights, bytes\n"
-            "  base  --points FILE [--curves CURVES.igs [--de a,b,c,d]]\n"
-            "        [--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S]\n"
-            "        [--nu N --nv N --degree P] --out BASE.igs [--json]   base surface for fit\n"
-            "        (--extract SURF.igs --out CURVES.igs: its four boundary curves, IGES 126)\n"
-            "  gen   --dir DIR [--nu N --nv N --degree P --points M --noise SIGMA --seed S]\n"
-            "        [--bump H,X,Y,R] [--ridge H,X,W] [--outliers FRAC [--spike MM]]\n"
-            "        write a synthetic part: nominal.igs, points.uvxyz, check grid\n"
-            "  serve --plc tcp:ADDR:PORT [--config FILE] [--word-order lo-hi|hi-lo]\n"
-            "        [--watchdog-ms T] [--port-file F] [--syslog]   the cell headless, driven\n"
-            "        by a PLC over Modbus TCP (docs/plc-register-map.md)\n"
-            "  scan  --stage URI --probe URI --nominal N.igs --journal FILE [--fit OUT.igs]\n"
-            "        [--step MM] [--region x0:x1:y0:y1] [--z0 Z --cal cx:cy:cz] [--alpha A]\n"
-            "        [--beta B] [--report REPORT.json] [--json]   measure on the rig\n"
-            "  journal export JOURNAL [--out FILE] | info JOURNAL [--json] | recover JOURNAL\n"
-            "        | fit JOURNAL --nominal N.igs --out OUT.igs [--reparam K]   the journal of "
-            "points\n"
-            "  rig   status|home|move X Y|probe|reset|stop --stage URI --probe URI [--count N]\n"
-            "        [--timeout MS] [--retries N] [--json]   the stage and probe by hand (hal.h)\n"
-            "  ports [--json]   serial ports with their USB VID:PID\n"
-            "  ports --probe PORT [--n N] [--baud B] [--retries R] [--timeout MS] [--json]\n"
-            "        read the laser probe (M0) on a serial port\n"
-            "  ports --trig VID:PID[:SERIAL] [--n N] [--period US] [--json]\n"
-            "        identity and encoder packets of the USB trigger box (1209:cf01)\n"
-            "  bench accumulate|solve|fit|export|project [--points M] [--cp N]\n"
-            "        [--order raster|random] [--solver S] [--json]   benchmarks on generated data\n"
-            "board %s: at most %ld control points, degree %d, arena %ld bytes\n"
+            "\nboard %s: at most %ld control points, degree %d, arena %ld bytes\n"
             "exit status: 0 success, 1 the work failed, 2 bad usage or input\n",
             BOARD_NAME, (long)NF_MAX_CP, NF_MAX_DEGREE, (long)NF_ARENA_BYTES);
     return code;
@@ -59,36 +49,32 @@ int main(int argc, char **argv)
     if (argc < 2)
         return usage(stderr, CLI_USAGE);
     const char *c = argv[1];
-    if (!strcmp(c, "fit"))
-        return cmd_fit(argc - 1, argv + 1);
-    if (!strcmp(c, "eval"))
-        return cmd_eval(argc - 1, argv + 1);
-    if (!strcmp(c, "info"))
-        return cmd_info(argc - 1, argv + 1);
-    if (!strcmp(c, "gen"))
-        return cmd_gen(argc - 1, argv + 1);
-    if (!strcmp(c, "bench"))
-        return cmd_bench(argc - 1, argv + 1);
-    if (!strcmp(c, "report"))
-        return cmd_report(argc - 1, argv + 1);
-    if (!strcmp(c, "project"))
-        return cmd_project(argc - 1, argv + 1);
-    if (!strcmp(c, "base"))
-        return cmd_base(argc - 1, argv + 1);
-    if (!strcmp(c, "journal"))
-        return cmd_journal(argc - 1, argv + 1);
-    if (!strcmp(c, "scan"))
-        return cmd_scan(argc - 1, argv + 1);
-    if (!strcmp(c, "rig"))
-        return cmd_rig(argc - 1, argv + 1);
-    if (!strcmp(c, "ports"))
-        return cmd_ports(argc - 1, argv + 1);
-    if (!strcmp(c, "thin"))
-        return cmd_thin(argc - 1, argv + 1);
-    if (!strcmp(c, "serve"))
-        return cmd_serve(argc - 1, argv + 1);
-    if (!strcmp(c, "-h") || !strcmp(c, "--help") || !strcmp(c, "help"))
+    for (size_t i = 0; i < NCMDS; i++)
+        if (!strcmp(c, cmds[i].name))
+            return cmds[i].run(argc - 1, argv + 1);
+    if (!strcmp(c, "-h") || !strcmp(c, "--help"))
         return usage(stdout, CLI_OK);
-    fprintf(stderr, "cellfit: unknown command '%s'\n", c);
-    return usage(stderr, CLI_USAGE);
+    if (!strcmp(c, "help")) {
+        if (argc < 3)
+            return usage(stdout, CLI_OK);
+        for (size_t i = 0; i < NCMDS; i++)
+            if (!strcmp(argv[2], cmds[i].name)) {
+                char *av[] = {argv[2], "--help", NULL};
+                return cmds[i].run(2, av);
+            }
+        fprintf(stderr, "cellfit help: unknown command '%s' (cellfit --help lists them)\n",
+                argv[2]);
+        return CLI_USAGE;
+    }
+    if (!strcmp(c, "--version") || !strcmp(c, "-V")) {
+        printf("%s\nboard %s\n", cf_version_string(), BOARD_NAME);
+        return CLI_OK;
+    }
+    if (!strcmp(c, "--commands")) { /* for completion and the man page */
+        for (size_t i = 0; i < NCMDS; i++)
+            printf("%s\n", cmds[i].name);
+        return CLI_OK;
+    }
+    fprintf(stderr, "cellfit: unknown command '%s' (cellfit --help lists them)\n", c);
+    return CLI_USAGE;
 }

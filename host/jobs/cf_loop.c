@@ -1,8 +1,8 @@
 /* cf_loop.c: next net of the fitting loop (uniform or residual-driven knot
  * insertion, within the limits) and the round records. */
 #include "cf_loop.h"
-#include "cf_json.h"
 #include "cf_err.h"
+#include "cf_json.h"
 #include "cf_surf.h"
 #include "nf_err.h"
 #include "nf_refine.h"

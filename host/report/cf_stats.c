@@ -4,8 +4,8 @@
  * known while streaming, and a relative error is what a reader of
  * "p95 0.0312 mm" cares about at any scale. */
 #include "cf_stats.h"
-#include "cf_json.h"
 #include "cf_err.h"
+#include "cf_json.h"
 #include <math.h>
 #include <string.h>
 
