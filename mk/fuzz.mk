@@ -18,7 +18,7 @@ FUZZ_WRAP := -Wl,--wrap=hal_now_ms -Wl,--wrap=hal_sleep_ms
 FUZZ_LIBFUZZER ?=
 # The parsers under test are compiled again for the targets, with
 # float-to-int overflow checks (gcc's -fsanitize=undefined leaves them out).
-FUZZ_UNITS := lib/cf_iges.c lib/cf_points.c lib/cf_conf.c host/cmd/cmd_serve.c hal/hal_uri.c \
+FUZZ_UNITS := lib/cf_iges_read.c lib/cf_points.c lib/cf_conf.c host/cmd/cmd_serve.c hal/hal_uri.c \
 	hal/hal_stage.c hal/hal_probe.c hal/hal_probe_mb.c hal/hal_trig.c firmware/jnl.c \
 	firmware/plc_map.c firmware/plc_fsm.c
 FUZZ_UNIT_OBJ := $(patsubst %.c,$(BUILD)/fuzz/unit/%.o,$(FUZZ_UNITS))

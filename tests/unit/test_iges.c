@@ -501,9 +501,12 @@ static void test_written_structure(void **state)
         seq[7] = '\0';
         assert_int_equal(atol(seq), cnt[k]);
         assert_true(seq[6] != ' '); /* right-justified */
-        if (k == 1) {
-            memcpy(g + gl, l, 72);
-            gl += 72;
+        if (k == 1) {               /* parameters never straddle lines: drop the padding */
+            size_t w = 72;
+            while (w > 0 && l[w - 1] == ' ')
+                w--;
+            memcpy(g + gl, l, w);
+            gl += w;
         }
         if (k == 3) {
             assert_memory_equal(l + 64, "       1", 8); /* back pointer to DE 1 */

@@ -1,0 +1,358 @@
+/* cf_iges_write.c: IGES 5.3 entities 128 (rational B-spline surface) and
+ * 126 (rational B-spline curve), written as complete files (cf_iges.h; the
+ * reader is cf_iges_read.c): fixed 80-column records, %.17g numbers, the
+ * file replaced atomically (cf_atomic.h). */
+#include "cf_atomic.h"
+#include "cf_err.h"
+#include "cf_fmt.h"
+#include "cf_iges.h"
+#include "cf_surf.h"
+#include "cf_version.h"
+#include "nf_err.h"
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define IG_PCOLS 64 /* data columns of a P line */
+#define IG_GCOLS 72 /* data columns of an S or G line */
+#define IG_MAX_SEQ 9999999L
+
+/* --------------------------------------------------------------- output */
+
+typedef struct ig_w {
+    FILE *f; /* NULL: only count the lines */
+    char sect;
+    size_t width; /* data columns of a free-format line: 72 (S, G) or 64 (P) */
+    char cur[81];
+    size_t curlen;
+    long seq; /* lines of this section so far */
+    long de;  /* P lines: DE number of the entity they belong to (0: 1) */
+} ig_w_t;
+
+static void ig_wline(ig_w_t *w, const char *data, size_t n)
+{
+    char line[96];
+    w->seq++;
+    if (!w->f)
+        return;
+    memset(line, ' ', 80);
+    memcpy(line, data, n < 72 ? n : 72);
+    if (w->sect == 'P')
+        snprintf(line + 64, 9, "%8ld", w->de ? w->de : 1L); /* back pointer to its DE */
+    snprintf(line + 72, sizeof line - 72, "%c%7ld\n", w->sect, w->seq);
+    fwrite(line, 1, 81, w->f);
+}
+
+static void ig_flush(ig_w_t *w)
+{
+    if (w->curlen)
+        ig_wline(w, w->cur, w->curlen);
+    w->curlen = 0;
+}
+
+/* A parameter and its delimiter; parameters never straddle lines. */
+static void ig_tok(ig_w_t *w, const char *tok, char delim)
+{
+    size_t n = strlen(tok);
+    if (w->curlen + n + 1 > w->width)
+        ig_flush(w);
+    memcpy(w->cur + w->curlen, tok, n);
+    w->curlen += n;
+    w->cur[w->curlen++] = delim;
+}
+
+/* %.17g (round-trip exact) with the decimal point and capital E IGES wants. */
+static void ig_fmt(double x, char *b, size_t bl)
+{
+    cf_fmt17(x, b, bl); /* "%.17g", fast */
+    char *e = strchr(b, 'e');
+    if (e)
+        *e = 'E';
+    if (!strchr(b, '.')) {
+        size_t n = strlen(b), at = e ? (size_t)(e - b) : n;
+        memmove(b + at + 2, b + at, n - at + 1);
+        b[at] = '.';
+        b[at + 1] = '0';
+    }
+}
+
+static void ig_real_tok(ig_w_t *w, double x, char delim)
+{
+    char b[48];
+    ig_fmt(x, b, sizeof b);
+    ig_tok(w, b, delim);
+}
+
+static void ig_int_tok(ig_w_t *w, long x)
+{
+    char b[24];
+    snprintf(b, sizeof b, "%ld", x);
+    ig_tok(w, b, ',');
+}
+
+/* Hollerith string nH... */
+static void ig_str_tok(ig_w_t *w, const char *str, char delim)
+{
+    char b[80];
+    snprintf(b, sizeof b, "%zuH%s", strlen(str), str);
+    ig_tok(w, b, delim);
+}
+
+/* The parameter data of the 128: counts, flags, knots, weights, points, range. */
+static void ig_pdata(ig_w_t *w, const nf_surf_t *s, int poly)
+{
+    const long n = (long)s->nu * s->nv;
+    double u0, u1, v0, v1;
+    ig_int_tok(w, 128);
+    ig_int_tok(w, s->nu - 1);
+    ig_int_tok(w, s->nv - 1);
+    ig_int_tok(w, s->p);
+    ig_int_tok(w, s->q);
+    ig_int_tok(w, 0); /* PROP1, PROP2: not closed */
+    ig_int_tok(w, 0);
+    ig_int_tok(w, poly);
+    ig_int_tok(w, 0); /* PROP4, PROP5: not periodic */
+    ig_int_tok(w, 0);
+    for (long i = 0; i < s->nu + s->p + 1; i++)
+        ig_real_tok(w, s->U[i], ',');
+    for (long i = 0; i < s->nv + s->q + 1; i++)
+        ig_real_tok(w, s->V[i], ',');
+    for (long i = 0; i < n; i++)
+        ig_real_tok(w, s->w ? s->w[i] : 1.0, ',');
+    for (long i = 0; i < 3 * n; i++)
+        ig_real_tok(w, s->cp[i], ',');
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    ig_real_tok(w, u0, ',');
+    ig_real_tok(w, u1, ',');
+    ig_real_tok(w, v0, ',');
+    ig_real_tok(w, v1, ';');
+    ig_flush(w);
+}
+
+/* Printable ASCII only, at most max characters; empty becomes dflt. */
+static void ig_clean(char *dst, const char *src, size_t max, const char *dflt)
+{
+    size_t n = 0;
+    for (; src && src[n] && n < max; n++)
+        dst[n] = (src[n] >= 0x20 && src[n] < 0x7F) ? src[n] : '_';
+    dst[n] = '\0';
+    if (!n)
+        snprintf(dst, max + 1, "%s", dflt);
+}
+
+static double ig_maxabs(const double *x, long n)
+{
+    double mx = 0.0;
+    for (long i = 0; i < n; i++)
+        mx = fabs(x[i]) > mx ? fabs(x[i]) : mx;
+    return mx;
+}
+
+static void ig_global_out(ig_w_t *w, double mx, const char *name, const char *fname,
+                          const char *date)
+{
+    ig_str_tok(w, ",", ',');                 /* 1 parameter delimiter */
+    ig_str_tok(w, ";", ',');                 /* 2 record delimiter */
+    ig_str_tok(w, name, ',');                /* 3 product id (sender) */
+    ig_str_tok(w, fname, ',');               /* 4 file name */
+    ig_str_tok(w, "cellfit", ',');           /* 5 native system */
+    ig_str_tok(w, cf_version_string(), ','); /* 6 preprocessor version */
+    ig_int_tok(w, 32);                       /* 7 integer bits */
+    ig_int_tok(w, 38);                       /* 8, 9 single precision */
+    ig_int_tok(w, 6);
+    ig_int_tok(w, 308); /* 10, 11 double precision */
+    ig_int_tok(w, 15);
+    ig_str_tok(w, name, ',');  /* 12 product id (receiver) */
+    ig_real_tok(w, 1.0, ',');  /* 13 model space scale */
+    ig_int_tok(w, 2);          /* 14 units: millimetres */
+    ig_str_tok(w, "MM", ',');  /* 15 */
+    ig_int_tok(w, 1);          /* 16 line weight gradations */
+    ig_real_tok(w, 1.0, ',');  /* 17 maximum line width */
+    ig_str_tok(w, date, ',');  /* 18 file generated */
+    ig_real_tok(w, 1e-9, ','); /* 19 resolution */
+    ig_real_tok(w, mx, ',');   /* 20 maximum coordinate */
+    ig_str_tok(w, "cellfit", ',');
+    ig_str_tok(w, "cellfit", ',');
+    ig_int_tok(w, 11);        /* 23 IGES 5.3 */
+    ig_int_tok(w, 0);         /* 24 no drafting standard */
+    ig_str_tok(w, date, ';'); /* 25 model modified */
+    ig_flush(w);
+}
+
+int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, long long utc,
+                     char *msg, size_t msglen)
+{
+    if (!path || !*path || !s)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_write: bad arguments");
+    int rc = nf_surf_check(s);
+    if (rc)
+        return cf_fail(msg, msglen, rc, "%s: not written: invalid surface: %s", path,
+                       nf_strerror(rc));
+    char nm[65], fname[65], date[72], text[160];
+    const char *base = strrchr(path, '/');
+    ig_clean(nm, name, 64, "surface");
+    ig_clean(fname, base ? base + 1 : path, 64, "surface.igs");
+    time_t t = (time_t)utc;
+    struct tm tm;
+    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
+        t = 0;
+        gmtime_r(&t, &tm);
+    }
+    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
+             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    int poly = 1;
+    for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
+        poly &= s->w[i] == s->w[0];
+
+    ig_w_t w = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    ig_pdata(&w, s, poly); /* dry run: the D entry needs the line count */
+    long np = w.seq;
+    if (np > IG_MAX_SEQ)
+        return cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                       "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence "
+                       "numbers",
+                       path, np);
+
+    cf_atomic_t aw;
+    int orc = cf_atomic_open(&aw, path, msg, msglen);
+    if (orc)
+        return orc;
+    FILE *f = aw.f;
+
+    long cnt[4];
+    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    int tl = snprintf(text, sizeof text,
+                      "cellfit: rational B-spline surface %s (IGES 5.3, one entity 128)", nm);
+    for (int at = 0; at < tl; at += IG_GCOLS)
+        ig_wline(&ws, text + at, (size_t)(tl - at));
+    cnt[0] = ws.seq;
+
+    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), nm, fname, date);
+    cnt[1] = wg.seq;
+
+    char d[2][96];
+    snprintf(d[0], sizeof d[0], "%8d%8d%8d%8d%8d%8d%8d%8d%8s%c%7d\n", 128, 1, 0, 0, 0, 0, 0, 0,
+             "00000000", 'D', 1);
+    snprintf(d[1], sizeof d[1], "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", 128, 0, 0, np, 0, "", "",
+             "BSURF", 0, 'D', 2);
+    fputs(d[0], f);
+    fputs(d[1], f);
+    cnt[2] = 2;
+
+    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    ig_pdata(&wp, s, poly);
+    cnt[3] = wp.seq;
+
+    fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
+
+    return cf_atomic_commit(&aw, 0, msg, msglen);
+}
+
+int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *msg, size_t msglen)
+{
+    /* SOURCE_DATE_EPOCH: the reproducible-builds convention for fixed timestamps. */
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long t = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || t < 0)
+        t = (long long)time(NULL);
+    return cf_iges_write_at(path, s, name, t, msg, msglen);
+}
+
+/* ------------------------------------------------- entity 126 output */
+
+static void ig_cdata(ig_w_t *w, const nf_curve_t *c)
+{
+    int poly = 1;
+    for (int i = 1; c->w && i < c->n; i++)
+        poly &= c->w[i] == c->w[0];
+    ig_int_tok(w, 126);
+    ig_int_tok(w, c->n - 1);
+    ig_int_tok(w, c->p);
+    ig_int_tok(w, 0); /* PROP1: not known to be planar */
+    ig_int_tok(w, 0); /* PROP2: open */
+    ig_int_tok(w, poly);
+    ig_int_tok(w, 0); /* PROP4: not periodic */
+    for (int i = 0; i < c->n + c->p + 1; i++)
+        ig_real_tok(w, c->U[i], ',');
+    for (int i = 0; i < c->n; i++)
+        ig_real_tok(w, c->w ? c->w[i] : 1.0, ',');
+    for (long i = 0; i < 3L * c->n; i++)
+        ig_real_tok(w, c->cp[i], ',');
+    ig_real_tok(w, c->U[c->p], ',');
+    ig_real_tok(w, c->U[c->n], ',');
+    ig_real_tok(w, 0.0, ','); /* normal: unused for a non-planar curve */
+    ig_real_tok(w, 0.0, ',');
+    ig_real_tok(w, 0.0, ';');
+    ig_flush(w);
+}
+
+int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const char *name, char *msg,
+                         size_t msglen)
+{
+    if (!path || !*path || !c || nc < 1 || nc > 9999)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_write_curves: bad arguments");
+    double mx = 0.0;
+    for (int k = 0; k < nc; k++) {
+        int rc = nf_curve_check(&c[k]);
+        if (rc)
+            return cf_fail(msg, msglen, rc, "%s: not written: curve %d invalid: %s", path, k + 1,
+                           nf_strerror(rc));
+        mx = fmax(mx, ig_maxabs(c[k].cp, 3L * c[k].n));
+    }
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long utc = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || utc < 0)
+        utc = (long long)time(NULL);
+    char nm[65], fname[65], date[72], text[160];
+    const char *base = strrchr(path, '/');
+    ig_clean(nm, name, 64, "curves");
+    ig_clean(fname, base ? base + 1 : path, 64, "curves.igs");
+    time_t t = (time_t)utc;
+    struct tm tm;
+    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
+        t = 0;
+        gmtime_r(&t, &tm);
+    }
+    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
+             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    cf_atomic_t aw;
+    int orc = cf_atomic_open(&aw, path, msg, msglen);
+    if (orc)
+        return orc;
+    FILE *f = aw.f;
+    long cnt[4];
+    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    int tl = snprintf(text, sizeof text,
+                      "cellfit: %d rational B-spline curves %s (IGES 5.3, entity 126)", nc, nm);
+    for (int at = 0; at < tl; at += IG_GCOLS)
+        ig_wline(&ws, text + at, (size_t)(tl - at));
+    cnt[0] = ws.seq;
+    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_global_out(&wg, mx, nm, fname, date);
+    cnt[1] = wg.seq;
+    long pstart = 1;
+    for (int k = 0; k < nc; k++) { /* D entries: each curve's P line count from a dry run */
+        ig_w_t dry = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
+        ig_cdata(&dry, &c[k]);
+        fprintf(f, "%8d%8ld%8d%8d%8d%8d%8d%8d%8s%c%7d\n", 126, pstart, 0, 0, 0, 0, 0, 0, "00000000",
+                'D', 2 * k + 1);
+        fprintf(f, "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", 126, 0, 0, dry.seq, 0, "", "", "BCURVE",
+                k + 1, 'D', 2 * k + 2);
+        pstart += dry.seq;
+    }
+    cnt[2] = 2L * nc;
+    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    for (int k = 0; k < nc; k++) {
+        wp.de = 2L * k + 1;
+        ig_cdata(&wp, &c[k]);
+    }
+    cnt[3] = wp.seq;
+    fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
+    return cf_atomic_commit(&aw, 0, msg, msglen);
+}
