@@ -68,6 +68,10 @@ struct cf_points {
     cp_elem_t elem[CP_MAX_ELEMS];
     int nelem, velem, ply_ready;
     long long vdone;
+    /* CSV with a header line: the file's columns, and which of them go to
+     * each output column. */
+    int hdr, hcols;
+    int map[CF_POINTS_MAX_COLS];
 };
 
 static int cp_err(cf_points_t *r, int code, long line, const char *fmt, ...)
@@ -389,6 +393,21 @@ static int cp_ascii_point(cf_points_t *r, double *row)
         }
         if (rc <= 0)
             return rc;
+        if (r->hdr) {
+            double all[CP_MAX_PROPS];
+            int n = cp_parse(r, s, e, all, r->hcols);
+            if (n < 0)
+                return n;
+            if (n == 0)
+                continue;
+            if (n != r->hcols)
+                return cp_err(r, CF_EPARSE, r->line, "%d value%s, the header names %d", n,
+                              n == 1 ? "" : "s", r->hcols);
+            for (int k = 0; k < r->cols; k++)
+                row[k] = all[r->map[k]];
+            r->last = r->line;
+            return 1;
+        }
         int n = cp_parse(r, s, e, row, r->cols);
         if (n < 0)
             return n;
@@ -408,7 +427,14 @@ static int cp_first_cols(cf_points_t *r)
     double row[CF_POINTS_MAX_COLS];
     for (;;) {
         char *s, *e;
-        int rc = cp_line(r, &s, &e);
+        int rc = 1;
+        if (r->pending) { /* the line cp_csv_header looked at */
+            r->pending = 0;
+            s = r->ps;
+            e = r->pe;
+        } else {
+            rc = cp_line(r, &s, &e);
+        }
         if (rc <= 0)
             return rc; /* empty file: cols stays 0, reads return 0 */
         int n = cp_parse(r, s, e, row, CF_POINTS_MAX_COLS);
@@ -425,6 +451,96 @@ static int cp_first_cols(cf_points_t *r)
         r->pe = e;
         return CF_OK;
     }
+}
+
+/* CSV with a header line ("x,y,z", "u,v,x,y,z", in any order, other
+ * columns ignored): when the first line that is not blank or a comment
+ * starts with a letter or a quote, its names choose the columns. Without a
+ * header nothing is consumed (the line stays pending for the reads). */
+static int cp_csv_header(cf_points_t *r)
+{
+    char *s, *e;
+    for (;;) {
+        int rc = cp_line(r, &s, &e);
+        if (rc <= 0)
+            return rc;
+        const char *p = s;
+        while (cp_space(*p))
+            p++;
+        if (*p == '\0' || *p == '#')
+            continue;
+        int words = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || *p == '"';
+        /* A header holds names only: "information 2 3" is a bad data line. */
+        for (const char *t = p; words && t < e;) {
+            double d;
+            const char *q;
+            if (cp_num(t, &q, &d) == CP_NUM_OK && (cp_sep(*q) || *q == ';'))
+                words = 0;
+            while (t < e && !cp_space(*t) && *t != ',' && *t != ';')
+                t++;
+            while (t < e && (cp_space(*t) || *t == ',' || *t == ';'))
+                t++;
+        }
+        if (!words) {
+            r->pending = 1; /* a data line, read first */
+            r->ps = s;
+            r->pe = e;
+            return 1;
+        }
+        break;
+    }
+    /* The names, split at commas, semicolons or blanks, quotes dropped. */
+    int idx[5] = {-1, -1, -1, -1, -1}; /* u v x y z */
+    int n = 0;
+    char *p = s;
+    while (p < e) {
+        while (p < e && (cp_space(*p) || *p == ',' || *p == ';'))
+            p++;
+        if (p >= e)
+            break;
+        char name[32];
+        size_t k = 0;
+        while (p < e && !cp_space(*p) && *p != ',' && *p != ';') {
+            if (*p != '"' && k + 1 < sizeof name)
+                name[k++] = (char)cp_lower(*p);
+            p++;
+        }
+        name[k] = '\0';
+        if (n >= CP_MAX_PROPS)
+            return cp_err(r, CF_EUNSUPPORTED, r->line, "header with more than %d columns",
+                          CP_MAX_PROPS);
+        static const char *const want[5] = {"u", "v", "x", "y", "z"};
+        for (int w = 0; w < 5; w++)
+            if (!strcmp(name, want[w])) {
+                if (idx[w] >= 0)
+                    return cp_err(r, CF_EPARSE, r->line, "header names column '%s' twice", want[w]);
+                idx[w] = n;
+            }
+        n++;
+    }
+    int has_uv = idx[0] >= 0 && idx[1] >= 0, has_xyz = idx[2] >= 0 && idx[3] >= 0 && idx[4] >= 0;
+    int cols = r->want ? r->want : has_uv && has_xyz ? 5 : 3;
+    const int *from = cols == 2 ? idx : cols == 3 ? idx + 2 : idx;
+    if (cols != 2 && cols != 3 && cols != 5)
+        return cp_err(r, CF_EUNSUPPORTED, r->line, "a header for %d columns", cols);
+    for (int k = 0; k < cols; k++) {
+        if (from[k] < 0) {
+            static const char *const what[5] = {"u", "v", "x", "y", "z"};
+            int w = (int)(from - idx) + k;
+            return cp_err(r, CF_EPARSE, r->line,
+                          "the header names no '%s' column (need %s; names are u v x y z)", what[w],
+                          cols == 2   ? "u,v"
+                          : cols == 3 ? "x,y,z"
+                                      : "u,v,x,y,z");
+        }
+        r->map[k] = from[k];
+    }
+    r->hdr = 1;
+    r->hcols = n;
+    r->cols = cols;
+    r->data_off = r->boff + (long long)r->pos;
+    r->data_line = r->line;
+    return 1;
 }
 
 /* ----------------------------------------------------------------- PLY */
@@ -784,8 +900,11 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
         rc = cp_ply_header(r);
     } else {
         r->fmt = CP_ASCII;
-        if (!want_cols)
-            rc = cp_first_cols(r);
+        rc = cp_csv_header(r);
+        if (rc > 0 && !r->hdr && !want_cols)
+            rc = cp_first_cols(r); /* no header: the first data line decides */
+        else if (rc > 0)
+            rc = CF_OK;
     }
     if (rc) {
         cf_fail(msg, msglen, rc, "%s", r->errmsg);

@@ -2,7 +2,7 @@
 # scripts/lint.sh: clang-format (the project's .clang-format) and cppcheck on
 # every C file we own. Fails on any difference or finding.
 set -eu
-files=$(ls firmware/*.[ch] lib/*.[ch] host/*/*.[ch] hal/*.[ch] sim/*.[ch] tests/unit/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
+files=$(ls firmware/*.[ch] lib/*.[ch] include/*.h examples/*.c host/*/*.[ch] hal/*.[ch] sim/*.[ch] tests/unit/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
 bad=0
 for f in $files; do
     if ! clang-format --dry-run -Werror "$f" >/dev/null 2>&1; then
@@ -13,8 +13,8 @@ done
 # cppcheck: the firmware with each board's configuration, the rest as host code.
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability \
     --inline-suppr --suppress=missingIncludeSystem -Iboards/linux-cell -Ifirmware -Ilib \
-    -Ihost/report -Ihost/jobs -Ihost/cell -Ihost/cmd -Ihal -Isim -Itests/unit \
-    --std=c11 -D__GNUC__ firmware lib host tests hal sim || bad=1
+    -Ihost/report -Ihost/jobs -Ihost/cell -Ihost/cmd -Ihal -Isim -Itests/unit -Iinclude \
+    --std=c11 -D__GNUC__ firmware lib include host tests hal sim examples || bad=1
 # Benchmarks (CHOLMOD's headers when installed: make bench installs them).
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --inline-suppr \
     --suppress=missingIncludeSystem -I/usr/include/suitesparse --std=c11 bench || bad=1

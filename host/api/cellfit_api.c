@@ -204,8 +204,8 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
     cellfit_fit_t *f = mem;
     char *p = (char *)mem + up(sizeof *f);
     long sb = surf_bytes(nominal);
-    copy_surf(&f->nominal, nominal, (double *)p);
-    copy_surf(&f->fitted, nominal, (double *)(p + sb));
+    copy_surf(&f->nominal, nominal, (double *)(void *)p);
+    copy_surf(&f->fitted, nominal, (double *)(void *)(p + sb));
     f->own = own;
     f->bytes = need;
     cellfit_params_t d;

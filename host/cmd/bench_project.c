@@ -7,10 +7,10 @@
  * per second (generation excluded) and the largest parameter error
  * against the truth, relative to the domain. Measures, asserts nothing. */
 #include "bench_project.h"
-#include "cf_json.h"
 #include "cf_cli.h"
-#include "cmd.h"
+#include "cf_json.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_quad.h"
 #include <math.h>

@@ -2,11 +2,11 @@
  * on generated, seeded data streamed without files (issue 6). Prints
  * figures; asserts nothing. Nets are square, bicubic, uniform knots. */
 #include "bench_project.h"
-#include "cf_json.h"
 #include "cf_accum.h"
 #include "cf_cli.h"
-#include "cmd.h"
+#include "cf_json.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_fit.h"
 #include <math.h>

@@ -6,14 +6,14 @@
  * Memory is the job's byte formula plus buffers of the net's size (seed
  * grid, span counts, copies of the surface), whatever the number of points. */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_loop.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_fit.h"
 #include "nf_knots.h"

@@ -5,14 +5,14 @@
  * journal of known records through the real file store, for the power-cut
  * tests (tests/cli/journal.sh). */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_points.h"
 #include "cf_sfit.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "jnl.h"
 #include "nf_err.h"
 #include "rig_err.h"

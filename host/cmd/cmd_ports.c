@@ -3,8 +3,8 @@
  * on a serial port (M0 readings, libserialport) and the USB trigger box
  * (identity, encoder packets, libusb). */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_json.h"
+#include "cmd.h"
 #include "hal.h"
 #include "hal_serial.h"
 #include "hal_trig.h"

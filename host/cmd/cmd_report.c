@@ -5,14 +5,14 @@
  * points are streamed (three passes with --png: plane, extent, deviations);
  * memory is fixed by the surface, the map raster and the histogram. */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_devmap.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_stats.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include <stdlib.h>
 #include <string.h>
 

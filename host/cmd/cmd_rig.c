@@ -2,8 +2,8 @@
  * tests: status, home, move X Y, probe readings, fault reset, stop, on the
  * devices the --stage and --probe URIs name (hal.h). */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_json.h"
+#include "cmd.h"
 #include "hal_rig.h"
 #include <stdio.h>
 #include <string.h>

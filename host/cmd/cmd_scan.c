@@ -6,12 +6,12 @@
  * progress bar on a terminal, progress lines otherwise; SIGINT/SIGTERM stop
  * the job cleanly (stage stopped, journal synced). */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_sfit.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "hal_rig.h"
 #include "nf_err.h"
 #include "rig_err.h"

@@ -6,7 +6,6 @@
  * SIGTERM or SIGINT stops it cleanly (a running job is aborted, the
  * simulator stopped). */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_conf.h"
 #include "cf_err.h"
 #include "cf_log.h"
@@ -14,6 +13,7 @@
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
 #include "cf_simchild.h"
+#include "cmd.h"
 #include "hal_rig.h"
 #include <arpa/inet.h>
 #include <signal.h>

@@ -7,11 +7,11 @@
  * (memory: the decomposition, never the points); the kept ones are written
  * to FILE as x y z, in input order, each once. */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_points.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_quad.h"
 #include <math.h>

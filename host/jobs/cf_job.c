@@ -1,11 +1,11 @@
 /* cf_job.c: the cell's fit job on files and the export of its result
  * (cf_job.h). The fit is cmd_fit's single pass (Eq. 7) with progress and a
  * stop check between batches; the deviations are cmd_report's. */
-#include "cf_cli.h"
 #include "cf_job.h"
-#include "cf_json.h"
+#include "cf_cli.h"
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"

@@ -163,6 +163,60 @@ static void test_first_line_decides(void **state)
     remove(path);
 }
 
+/* CSV with a header line: columns chosen by name, in any order, others
+ * ignored; the header is skipped on rewind; missing names refused. */
+static void test_csv_header(void **state)
+{
+    (void)state;
+    char path[600];
+    cf_points_t *r;
+    double v[16];
+    tmp_path(path, sizeof path, "h.csv");
+    write_text(path, "# exported\n\"id\", Z ,x;y,intensity\r\n7,3.5,1,2,90\n8,4.5,1.5,2.5,91\n");
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_cols(r), 3);
+    assert_int_equal(cf_points_read(r, v, 8, msg, sizeof msg), 2);
+    assert_int_equal(cf_points_line(r), 4);
+    static const double want[6] = {1, 2, 3.5, 1.5, 2.5, 4.5};
+    for (int i = 0; i < 6; i++)
+        assert_same(v[i], want[i], i);
+    assert_int_equal(cf_points_rewind(r), CF_OK);
+    assert_int_equal(cf_points_read(r, v, 8, msg, sizeof msg), 2);
+    assert_same(v[0], 1, 0);
+    assert_int_equal(cf_points_line(r), 4);
+    cf_points_close(r);
+    /* u v x y z in another order: 5 columns, reordered. */
+    write_text(path, "z,y,x,v,u\n30,20,10,0.5,0.25\n");
+    assert_int_equal(read_all(path, 0, v, 4), 1);
+    static const double want5[5] = {0.25, 0.5, 10, 20, 30};
+    for (int i = 0; i < 5; i++)
+        assert_same(v[i], want5[i], i);
+    /* Asked for u v only (eval), from the same file. */
+    assert_int_equal(read_all(path, 2, v, 4), 1);
+    assert_same(v[0], 0.25, 0);
+    assert_same(v[1], 0.5, 1);
+    /* A row with the wrong count names its line and the header's count. */
+    write_text(path, "x,y,z\n1,2,3\n1,2\n");
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, v, 4, msg, sizeof msg), CF_EPARSE);
+    assert_msg(":3: 2 values, the header names 3");
+    cf_points_close(r);
+    /* Missing and repeated names. */
+    write_text(path, "x,y,height\n1,2,3\n");
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_EPARSE);
+    assert_msg(":1: the header names no 'z' column");
+    write_text(path, "x,y,z,x\n1,2,3,4\n");
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_EPARSE);
+    assert_msg("names column 'x' twice");
+    /* Numbers among words: a bad data line, not a header. */
+    write_text(path, "information 2 3\n");
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, v, 4, msg, sizeof msg), CF_EPARSE);
+    assert_msg("'information' is not a number");
+    cf_points_close(r);
+    remove(path);
+}
+
 static void test_empty_files(void **state)
 {
     (void)state;
@@ -650,6 +704,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_five_columns_crlf),
         cmocka_unit_test(test_first_line_decides),
         cmocka_unit_test(test_empty_files),
+        cmocka_unit_test(test_csv_header),
         cmocka_unit_test(test_batches_across_buffer),
         cmocka_unit_test(test_bit_identical_to_strtod),
         cmocka_unit_test(test_rewind),
