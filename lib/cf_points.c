@@ -470,17 +470,24 @@ static int cp_csv_header(cf_points_t *r)
         if (*p == '\0' || *p == '#')
             continue;
         int words = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || *p == '"';
-        /* A header holds names only: "information 2 3" is a bad data line. */
+        /* A header holds names only ("information 2 3" is a bad data line)
+         * and names at least one of u v x y z ("hello world" is junk). */
+        int named = 0;
         for (const char *t = p; words && t < e;) {
             double d;
             const char *q;
             if (cp_num(t, &q, &d) == CP_NUM_OK && (cp_sep(*q) || *q == ';'))
                 words = 0;
+            const char *w0 = t + (*t == '"');
             while (t < e && !cp_space(*t) && *t != ',' && *t != ';')
                 t++;
+            size_t wl = (size_t)(t - w0) - (t > w0 && t[-1] == '"');
+            if (wl == 1 && strchr("uvxyzUVXYZ", *w0))
+                named = 1;
             while (t < e && (cp_space(*t) || *t == ',' || *t == ';'))
                 t++;
         }
+        words = words && named;
         if (!words) {
             r->pending = 1; /* a data line, read first */
             r->ps = s;

@@ -208,6 +208,12 @@ static void test_csv_header(void **state)
     write_text(path, "x,y,z,x\n1,2,3,4\n");
     assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_EPARSE);
     assert_msg("names column 'x' twice");
+    /* Words naming no coordinate: junk, not a header. */
+    write_text(path, "hello world\n");
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, v, 4, msg, sizeof msg), CF_EPARSE);
+    assert_msg(":1: 'hello' is not a number");
+    cf_points_close(r);
     /* Numbers among words: a bad data line, not a header. */
     write_text(path, "information 2 3\n");
     assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
