@@ -10,8 +10,8 @@
 #include "cf_cli.h"
 #include "cf_json.h"
 #include "cf_opt.h"
-#include "cmd.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_quad.h"
 #include <math.h>

@@ -11,14 +11,14 @@
  * `cellfit base --extract SURF.igs --out CURVES.igs` writes a surface's
  * four boundary curves as entities 126. */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_base.h"
 #include "nf_coons.h"
 #include "nf_curvefit.h"

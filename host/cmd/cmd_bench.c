@@ -7,8 +7,8 @@
 #include "cf_cli.h"
 #include "cf_json.h"
 #include "cf_opt.h"
-#include "cmd.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_fit.h"
 #include <math.h>
@@ -126,17 +126,6 @@ static const struct {
     {"project", "projection of points generated near a known surface (Section 3)"},
 };
 
-/* `cellfit bench --help`: the benchmarks, each with its own --help. */
-static void bench_usage(FILE *f)
-{
-    fprintf(f, "usage: cellfit bench BENCHMARK [options]\n"
-               "single measurements on generated, seeded data; figures printed, nothing "
-               "asserted\n\nbenchmarks (cellfit bench BENCHMARK --help lists its options):\n");
-    for (int k = 0; k < NBENCH; k++)
-        fprintf(f, "  %-10s %s\n", benches[k].name, benches[k].summary);
-    fputs("exit status: 0 success, 1 the work failed, 2 bad usage or input\n", f);
-}
-
 static int solver_arg(const char *v, void *dst)
 {
     return cli_solver(v, dst);
@@ -245,24 +234,41 @@ static int parse(int k, int argc, char **argv, bench_opts_t *o)
     return cf_opt_parse(&cmd, argc - 1, argv + 1, NULL, NULL);
 }
 
-int cmd_bench(int argc, char **argv)
+/* `cellfit bench` without a benchmark: its own table (no options), whose
+ * description lists the benchmarks; --help-man adds every benchmark's
+ * section. */
+static int bench_top(int argc, char **argv)
 {
-    if (argc < 2) {
-        bench_usage(stderr);
-        return CLI_USAGE;
-    }
-    const char *what = argv[1];
-    if (!strcmp(what, "--help") || !strcmp(what, "-h")) {
-        bench_usage(stdout);
-        return CLI_OK;
-    }
-    if (!strcmp(what, "--help-man")) { /* every benchmark's section */
+    char list[1024];
+    size_t n = (size_t)snprintf(list, sizeof list,
+                                "Single measurements on generated, seeded data; figures printed, "
+                                "nothing asserted. Benchmarks (cellfit bench BENCHMARK --help "
+                                "lists its options):");
+    for (int k = 0; k < NBENCH && n < sizeof list; k++)
+        n += (size_t)snprintf(list + n, sizeof list - n, "\n  %-10s %s", benches[k].name,
+                              benches[k].summary);
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "bench",
+                          .args = "BENCHMARK",
+                          .summary = "benchmarks on generated data",
+                          .descr = list,
+                          .min_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc < 2 ? 1 : 2, argv, NULL, NULL);
+    if (rc < 0 && !strcmp(argv[1], "--help-man")) {
         bench_opts_t o;
         char *av[] = {argv[0], argv[1], argv[1], NULL};
         for (int k = 0; k < B_PROJECT; k++)
             parse(k, 3, av, &o);
-        return bench_project(3, av);
+        bench_project(3, av);
     }
+    return rc ? cf_opt_exit(rc) : CLI_USAGE;
+}
+
+int cmd_bench(int argc, char **argv)
+{
+    if (argc < 2 || argv[1][0] == '-')
+        return bench_top(argc, argv);
+    const char *what = argv[1];
     int b = 0;
     while (b < NBENCH && strcmp(what, benches[b].name))
         b++;

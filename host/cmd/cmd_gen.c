@@ -3,11 +3,11 @@
  * Gaussian noise along z, optional gross outliers; optional narrow bump and
  * ridge on the part), plus a check grid of true points. */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_iges.h"
 #include "cf_opt.h"
 #include "cf_part.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>

@@ -1,11 +1,11 @@
 /* cmd_info.c: `cellfit info SURF.igs`: what a surface is and what a fit of
  * its space costs on this board. */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_iges.h"
 #include "cf_json.h"
 #include "cf_opt.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_budget.h"
 #include <math.h>
 

@@ -3,9 +3,9 @@
  * on a serial port (M0 readings, libserialport) and the USB trigger box
  * (identity, encoder packets, libusb). */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_json.h"
 #include "cf_opt.h"
+#include "cmd.h"
 #include "hal.h"
 #include "hal_serial.h"
 #include "hal_trig.h"

@@ -6,12 +6,12 @@
  * seed samples where it cannot serve (cf_seedgrid); memory is that and one
  * read batch, whatever the number of points. */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_iges.h"
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_project.h"
 #include <stdlib.h>

@@ -5,15 +5,15 @@
  * points are streamed (three passes with --png: plane, extent, deviations);
  * memory is fixed by the surface, the map raster and the histogram. */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_devmap.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_stats.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -50,7 +50,10 @@ static int parse(int argc, char **argv, report_opts_t *o)
          .fn = positive,
          .fn_what = "a number > 0 (mm)",
          .req = 1},
-        {.name = "png", .kind = CF_OPT_STR, .dst = &o->png, .arg = "MAP.png",
+        {.name = "png",
+         .kind = CF_OPT_STR,
+         .dst = &o->png,
+         .arg = "MAP.png",
          .help = "write a colour deviation map on the points' best-fit plane"},
         {.name = "entity",
          .kind = CF_OPT_LONG,

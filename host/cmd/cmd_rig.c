@@ -2,9 +2,9 @@
  * tests: status, home, move X Y, probe readings, fault reset, stop, on the
  * devices the --stage and --probe URIs name (hal.h). */
 #include "cf_cli.h"
-#include "cmd.h"
 #include "cf_json.h"
 #include "cf_opt.h"
+#include "cmd.h"
 #include "hal_rig.h"
 #include <stdio.h>
 #include <string.h>
@@ -117,17 +117,6 @@ static const rig_op_t ops[NOPS] = {
     {"stop", NULL, "stop the stage", 2, 0},
 };
 
-/* `cellfit rig --help`: the operations, each with its own --help. */
-static void rig_usage(FILE *f)
-{
-    fprintf(f, "usage: cellfit rig OPERATION [options]\n"
-               "the stage and the probe by hand: the devices the --stage and --probe URIs name\n"
-               "\noperations (cellfit rig OPERATION --help lists its options):\n");
-    for (int k = 0; k < NOPS; k++)
-        fprintf(f, "  %-7s %s\n", ops[k].name, ops[k].summary);
-    fputs("exit status: 0 success, 1 the work failed, 2 bad usage or input\n", f);
-}
-
 typedef struct rig_args {
     const char *stage, *probe;
     long count;
@@ -208,25 +197,41 @@ static int rig_parse(int k, int argc, char **argv, rig_args_t *a, const char **p
     return cf_opt_parse(&cmd, argc, argv, pos, NULL);
 }
 
+/* `cellfit rig` without an operation: its own table (no options), whose
+ * description lists the operations; --help-man adds every operation's
+ * section. */
+static int rig_top(int argc, char **argv)
+{
+    char list[1024];
+    size_t n = (size_t)snprintf(list, sizeof list,
+                                "The devices the --stage and --probe URIs name (hal.h). "
+                                "Operations (cellfit rig OPERATION --help lists its options):");
+    for (int k = 0; k < NOPS && n < sizeof list; k++)
+        n +=
+            (size_t)snprintf(list + n, sizeof list - n, "\n  %-7s %s", ops[k].name, ops[k].summary);
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "rig",
+                          .args = "OPERATION",
+                          .summary = "the stage and the probe by hand: status, home, move, probe, "
+                                     "reset, stop",
+                          .descr = list,
+                          .min_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc < 2 ? 1 : 2, argv, NULL, NULL);
+    if (rc < 0 && !strcmp(argv[1], "--help-man")) {
+        rig_args_t ra;
+        const char *pos[2];
+        for (int k = 0; k < NOPS; k++)
+            rig_parse(k, 2, argv, &ra, pos);
+    }
+    return rc ? cf_opt_exit(rc) : CLI_USAGE;
+}
+
 int cmd_rig(int argc, char **argv)
 {
-    if (argc < 2) {
-        rig_usage(stderr);
-        return CLI_USAGE;
-    }
-    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
-        rig_usage(stdout);
-        return CLI_OK;
-    }
+    if (argc < 2 || argv[1][0] == '-')
+        return rig_top(argc, argv);
     rig_args_t ra = {.count = 1, .ho = HAL_OPTS_DEFAULT};
     const char *pos[2];
-    if (!strcmp(argv[1], "--help-man")) { /* every operation's section */
-        for (int k = 0; k < NOPS; k++) {
-            char *av[] = {argv[0], argv[1], NULL};
-            rig_parse(k, 2, av, &ra, pos);
-        }
-        return CLI_OK;
-    }
     int k = 0;
     while (k < NOPS && strcmp(argv[1], ops[k].name))
         k++;
@@ -243,7 +248,8 @@ int cmd_rig(int argc, char **argv)
         return cli_error("rig", CLI_USAGE, "move: '%s' is not a number (mm)",
                          cli_double(pos[0], &mx) ? pos[0] : pos[1]);
     if (!ra.stage && !ra.probe)
-        return cli_error("rig", CLI_USAGE, "%s needs --stage URI, --probe URI or both", ops[k].name);
+        return cli_error("rig", CLI_USAGE, "%s needs --stage URI, --probe URI or both",
+                         ops[k].name);
     const char *stage = ra.stage, *probe = ra.probe, *op = ops[k].name;
     hal_opts_t o = ra.ho;
     long count = ra.count;

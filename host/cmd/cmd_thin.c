@@ -7,12 +7,12 @@
  * (memory: the decomposition, never the points); the kept ones are written
  * to FILE as x y z, in input order, each once. */
 #include "cf_cli.h"
-#include "cmd.h"
-#include "cf_json.h"
 #include "cf_iges.h"
+#include "cf_json.h"
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_surf.h"
+#include "cmd.h"
 #include "nf_err.h"
 #include "nf_quad.h"
 #include <math.h>
@@ -165,8 +165,8 @@ int cmd_thin(int argc, char **argv)
     const nf_quad_params_t prm = {o.tol, 0.0, 0};
     rc = nf_quad_init(&q, &s, &prm, THIN_MAXQ, qmem, qb);
     if (rc == NF_EBUDGET) {
-        ec = cli_error("thin", CLI_FAIL, "%s: --quad-tol %g needs more than %ld quadrilaterals", o.surf,
-                       o.tol, THIN_MAXQ);
+        ec = cli_error("thin", CLI_FAIL, "%s: --quad-tol %g needs more than %ld quadrilaterals",
+                       o.surf, o.tol, THIN_MAXQ);
         goto done;
     } else if (rc) {
         ec = cli_error("thin", CLI_FAIL, "%s: %s", o.surf, nf_strerror(rc));
