@@ -218,7 +218,7 @@ static int rig_top(int argc, char **argv)
                           .min_pos = 1};
     int rc = cf_opt_parse(&cmd, argc < 2 ? 1 : 2, argv, NULL, NULL);
     if (rc < 0 && !strcmp(argv[1], "--help-man")) {
-        rig_args_t ra;
+        rig_args_t ra = {.count = 1, .ho = HAL_OPTS_DEFAULT};
         const char *pos[2];
         for (int k = 0; k < NOPS; k++)
             rig_parse(k, 2, argv, &ra, pos);
