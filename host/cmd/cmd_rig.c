@@ -243,10 +243,11 @@ int cmd_rig(int argc, char **argv)
     int prc = rig_parse(k, argc - 1, argv + 1, &ra, pos);
     if (prc)
         return cf_opt_exit(prc);
-    double mx = 0, my = 0;
-    if (k == OP_MOVE && (cli_double(pos[0], &mx) || cli_double(pos[1], &my)))
-        return cli_error("rig", CLI_USAGE, "move: '%s' is not a number (mm)",
-                         cli_double(pos[0], &mx) ? pos[0] : pos[1]);
+    double xy[2] = {0, 0};
+    for (int i = 0; k == OP_MOVE && i < 2; i++)
+        if (cli_double(pos[i], &xy[i]))
+            return cli_error("rig", CLI_USAGE, "move: '%s' is not a number (mm)", pos[i]);
+    const double mx = xy[0], my = xy[1];
     if (!ra.stage && !ra.probe)
         return cli_error("rig", CLI_USAGE, "%s needs --stage URI, --probe URI or both",
                          ops[k].name);
