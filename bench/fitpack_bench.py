@@ -1,7 +1,7 @@
 """bench/fitpack_bench.py: FITPACK (scipy LSQBivariateSpline, surfit) on the
 height field of `cellfit bench fit`, same points, same knots; one JSON line.
 
-Usage: python3 bench/fitpack_bench.py --points M --cp N [--order random|raster]
+Usage: python3 bench/fitpack_bench.py --count M --cp N [--order random|raster]
 
 The points are those host/cmd/cmd_bench.c generates (its xorshift64 generator and
 seed, or its raster), x = 100u, y = 100v, z = height(u, v); the spline is
@@ -46,15 +46,15 @@ def height(u, v):
 
 def main():
     ap = argparse.ArgumentParser(description="FITPACK surfit on cellfit's bench data")
-    ap.add_argument("--points", type=int, required=True)
+    ap.add_argument("--count", type=int, required=True)
     ap.add_argument("--cp", type=int, required=True)
     ap.add_argument("--order", choices=("random", "raster"), default="random")
     a = ap.parse_args()
     side = max(4, round(math.sqrt(a.cp)))
-    u, v = points(a.points, a.order)
+    u, v = points(a.count, a.order)
     x, y, z = 100.0 * u, 100.0 * v, height(u, v)
     knots = 100.0 * np.arange(1, side - 3) / (side - 3)
-    res = {"bench": "fitpack", "points": a.points, "control_points": side * side,
+    res = {"bench": "fitpack", "points": a.count, "control_points": side * side,
            "degree": 3, "order": a.order, "values": "z"}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -74,7 +74,7 @@ def main():
         if caught:
             res["message"] = " ".join(" ".join(str(w.message) for w in caught).split())
         res["fp"] = float(spl.get_residual())
-        res["rms"] = math.sqrt(res["fp"] / a.points)
+        res["rms"] = math.sqrt(res["fp"] / a.count)
     print(json.dumps(res))
     return 0
 

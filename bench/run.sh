@@ -124,19 +124,19 @@ say "accumulation: M x N grid, raster and random order"
 for m in 10000 100000 1000000; do
     for n in 100 1000 10000 100000; do
         for o in raster random; do
-            cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points "$m" --cp "$n" \
+            cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --count "$m" --cp "$n" \
                 --order "$o" --json
         done
     done
 done
 for o in raster random; do
-    cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points 1000000 --cp 1000000 \
+    cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --count 1000000 --cp 1000000 \
         --order "$o" --json
 done
 say "accumulation on two cores (a shard each, merged at the end), M = 10^6"
 for n in 100 1000 10000 100000 1000000; do
     for o in raster random; do
-        cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --points 1000000 --cp "$n" \
+        cell "$OUT/accumulate.jsonl" "$CF" bench accumulate --count 1000000 --cp "$n" \
             --order "$o" --threads 2 --json
     done
 done
@@ -197,15 +197,15 @@ say "FITPACK (scipy) and cellfit on the same random points"
 for mn in 10000:100 10000:1000 10000:10000 100000:100 100000:961 100000:1000 100000:10000; do
     m=${mn%:*}
     n=${mn#*:}
-    cell "$OUT/fitpack.jsonl" "$PY" "$HERE/fitpack_bench.py" --points "$m" --cp "$n"
-    cell "$OUT/fit.jsonl" "$CF" bench fit --points "$m" --cp "$n" --order random --json
+    cell "$OUT/fitpack.jsonl" "$PY" "$HERE/fitpack_bench.py" --count "$m" --cp "$n"
+    cell "$OUT/fit.jsonl" "$CF" bench fit --count "$m" --cp "$n" --order random --json
 done
 table fitpack
 
 # --- end to end: 10^6 ASCII points onto ~10^5 control points -----------------
 say "end to end: cellfit gen (not timed), then cellfit fit --uv"
 i=0
-if ! run "$CF" gen --dir "$OUT/e2e" --nu 316 --nv 316 --points 1000000; then
+if ! run "$CF" gen --dir "$OUT/e2e" --nu 316 --nv 316 --count 1000000; then
     printf '{"bench": "error", "command": "gen", "message": "%s"}\n' "$(errmsg)" >>"$OUT/e2e.jsonl"
     i=$REPS
 fi
@@ -229,7 +229,7 @@ table e2e
 say "projection: cellfit bench project (random and raster order)"
 for n in 1000 10000 100000; do
     for o in random raster; do
-        cell "$OUT/project.jsonl" "$CF" bench project --points 200000 --cp "$n" --order "$o" --json
+        cell "$OUT/project.jsonl" "$CF" bench project --count 200000 --cp "$n" --order "$o" --json
     done
 done
 table project

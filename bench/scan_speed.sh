@@ -25,7 +25,7 @@ wait_for() {
         i=$((i + 1)); [ $i -gt 200 ] && return 1; sleep 0.05
     done
 }
-"$CF" gen --dir "$T/part" --points 1 >/dev/null
+"$CF" gen --dir "$T/part" --count 1 >/dev/null
 echo "| wire | speed mm/s | points | s | points/s | ms/point | travel ms/point | overhead ms/point |"
 echo "|---|---|---|---|---|---|---|---|"
 for w in ${SCAN_WIRES:-tcp rtu}; do

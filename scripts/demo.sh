@@ -108,7 +108,7 @@ EOF
 # 1. The CAD side: the nominal the cell fits against, and cellfit gen's
 # check grid of the true part (the same lib/cf_part.c formula cellsim's
 # built-in part uses; tests/cli/demo.sh checks that they agree).
-"$CF" gen --dir "$D/part" --points 1 --noise 0 >/dev/null || die "cellfit gen failed"
+"$CF" gen --dir "$D/part" --count 1 --noise 0 >/dev/null || die "cellfit gen failed"
 NOM=$D/part/nominal.igs
 
 # 2. The rig: two pty pairs, cellsim on one end of each; a second,

@@ -2,6 +2,7 @@
  * options, the part, the stage and probe models, the servers, the control
  * file, and the "ready" lines tests wait for. */
 #include "cf_cli.h"
+#include "cf_opt.h"
 #include "hal_regmap.h"
 #include "sim.h"
 #include "sim_net.h"
@@ -20,57 +21,36 @@ static void on_signal(int sig)
     g_stop = 1;
 }
 
-static int usage(FILE *f, int code)
-{
-    fprintf(
-        f,
-        "usage: cellsim [options]   the simulated rig (docs/rig-devices.md)\n"
-        "servers (at least one):\n"
-        "  --tcp PORT          Modbus TCP on 127.0.0.1:PORT (0: a free port, printed)\n"
-        "  --rtu PATH          Modbus RTU on the tty PATH (e.g. one end of a socat pty pair)\n"
-        "  --ascii PATH        the probe's ASCII protocol on the tty PATH\n"
-        "                      (each may be given up to 8 times in all)\n"
-        "  Every Modbus server carries the stage (holding registers, --stage-unit, default 1;\n"
-        "  on TCP also units 0 and 255) and the probe (input registers, --probe-unit, default 2).\n"
-        "the part under the probe:\n"
-        "  --part FILE.igs     nominal surface (first entity 128); default: the built-in panel\n"
-        "                      (cellfit gen's nominal: 200 x 150 mm, 40 x 30 bicubic)\n"
-        "  --dent-depth MM     depth of the dent (0.4; 0: none)   --warp MM  twist (0.3; 0: none)\n"
-        "  The real part is the nominal plus the dent and warp of host/cf_part.h.\n"
-        "the probe (kinematic model: a point is (sx + ox, sy + oy, z0 - d)):\n"
-        "  --z0 MM             height of the beam origin (50)\n"
-        "  --offset OX,OY      beam offset from the stage position (0,0)\n"
-        "  --range LO,HI       measuring range (30,60): out of range outside it or off the part\n"
-        "  --noise SIGMA       Gaussian noise on the distance, mm (0.002)\n"
-        "  --seed S            seeds noise and fault probabilities (1)\n"
-        "the stage:\n"
-        "  --speed MM/S        both axes (200)   --settle-ms MS   after each move (0)\n"
-        "  --limits XLO,XHI,YLO,YHI  soft limits (-10,210,-10,160); home is (0,0)\n"
-        "  --homed             start homed, at home (default: unreferenced at 37.5,12.25)\n"
-        "faults (repeatable): --fault KIND[@WIRE]:WHEN[:MS]\n"
-        "  KIND   crc     RTU: CRC bit flipped; TCP: transaction id flipped; ASCII: garble\n"
-        "         garble  one reply byte changed       drop    one reply byte left out\n"
-        "         slow    reply held back MS ms          silent  no reply\n"
-        "         disconnect  the line or server closed for MS ms\n"
-        "         busy    Modbus exception 06\n"
-        "         nosurf  probe reads out of range       proberr probe error (ER,M0,01)\n"
-        "         stagefault  the move faults half-way (drive fault latched)\n"
-        "  WIRE   tcp | rtu | ascii: count and hit only requests on that wire\n"
-        "  WHEN   nK: at the K-th event only; eK: every K-th; pP: with probability P\n"
-        "         events: wire faults count requests, nosurf/proberr probe readings,\n"
-        "         stagefault accepted moves; each fault counts its own\n"
-        "  e.g. --fault crc@rtu:n3 --fault slow:n5:800 --fault disconnect@tcp:n10:500\n"
-        "  --control FILE      polled every 100 ms; when it exists its lines are obeyed and it\n"
-        "                      is removed: 'fault SPEC' (counting from now), 'estop on|off',\n"
-        "                      'stagefault' (latch a drive fault now)\n"
-        "  Holding registers 100 (E-stop 1/0) and 101 (write 1: drive fault) do the same.\n"
-        "  --verbose           log faults and line events on stderr\n"
-        "start-up: prints 'cellsim: tcp 127.0.0.1 PORT', 'cellsim: rtu PATH', 'cellsim: ascii\n"
-        "  PATH' and last 'cellsim: ready pid PID' on stdout; --pidfile FILE writes the PID.\n"
-        "  SIGTERM or SIGINT stops it. Exit status: 0 stopped, 1 failed, 2 bad usage.\n");
-    return code;
-}
+/* What --help says beyond the option lines: the wires, the part, the
+ * fault language and the start-up lines tests wait for. */
+static const char descr[] =
+    "Servers: at least one of --tcp, --rtu, --ascii (up to 8 in all). Every Modbus server "
+    "carries the stage (holding registers, --stage-unit; on TCP also units 0 and 255) and the "
+    "probe (input registers, --probe-unit). docs/rig-devices.md has the register map.\n"
+    "The part: the nominal (--part, or the built-in panel: cellfit gen's nominal, 200 x 150 mm, "
+    "40 x 30 bicubic) plus the dent and warp of lib/cf_part.h. The probe's kinematic model: a "
+    "point is (sx + ox, sy + oy, z0 - d); out of range outside --range or off the part.\n"
+    "Faults (--fault, repeatable): KIND[@WIRE]:WHEN[:MS]\n"
+    "  KIND   crc     RTU: CRC bit flipped; TCP: transaction id flipped; ASCII: garble\n"
+    "         garble  one reply byte changed       drop    one reply byte left out\n"
+    "         slow    reply held back MS ms          silent  no reply\n"
+    "         disconnect  the line or server closed for MS ms\n"
+    "         busy    Modbus exception 06\n"
+    "         nosurf  probe reads out of range       proberr probe error (ER,M0,01)\n"
+    "         stagefault  the move faults half-way (drive fault latched)\n"
+    "  WIRE   tcp | rtu | ascii: count and hit only requests on that wire\n"
+    "  WHEN   nK: at the K-th event only; eK: every K-th; pP: with probability P\n"
+    "         events: wire faults count requests, nosurf/proberr probe readings,\n"
+    "         stagefault accepted moves; each fault counts its own\n"
+    "  e.g. --fault crc@rtu:n3 --fault slow:n5:800 --fault disconnect@tcp:n10:500\n"
+    "The control file (--control) is polled every 100 ms; when it exists its lines are obeyed "
+    "and it is removed: 'fault SPEC' (counting from now), 'estop on|off', 'stagefault' (latch "
+    "a drive fault now). Holding registers 100 (E-stop 1/0) and 101 (write 1: drive fault) do "
+    "the same.\n"
+    "Start-up: prints 'cellsim: tcp 127.0.0.1 PORT', 'cellsim: rtu PATH', 'cellsim: ascii "
+    "PATH' and last 'cellsim: ready pid PID' on stdout. SIGTERM or SIGINT stops it (exit 0).";
 
+/* "a,b[,c,d]": exactly n comma-separated finite numbers. */
 static int pair(const char *s, int n, double *out)
 {
     char buf[128];
@@ -88,6 +68,87 @@ static int pair(const char *s, int n, double *out)
             return -1;
         p = c ? c + 1 : p;
     }
+    return 0;
+}
+
+static int offset_arg(const char *v, void *dst)
+{
+    return pair(v, 2, dst);
+}
+
+static int range_arg(const char *v, void *dst)
+{
+    double r[2];
+    if (pair(v, 2, r) || !(r[0] < r[1]))
+        return -1;
+    memcpy(dst, r, sizeof r);
+    return 0;
+}
+
+static int limits_arg(const char *v, void *dst)
+{
+    double l[4];
+    if (pair(v, 4, l) || !(l[0] < l[1] && l[2] < l[3]))
+        return -1;
+    memcpy(dst, l, sizeof l);
+    return 0;
+}
+
+static int positive(const char *v, void *dst)
+{
+    double d;
+    if (cli_double(v, &d) || !(d > 0))
+        return -1;
+    *(double *)dst = d;
+    return 0;
+}
+
+/* --tcp PORT, --rtu PATH, --ascii PATH: one more server each time. */
+static int add_port(sim_net_t *net, int wire, const char *v)
+{
+    long port = 0;
+    if (net->nports == SIM_MAX_PORTS)
+        return -1;
+    sim_port_t *p = &net->port[net->nports];
+    if (wire == SIM_W_TCP ? cli_int(v, 0, 65535, &port) : strlen(v) >= sizeof p->path || !v[0])
+        return -1;
+    p->wire = wire;
+    p->tcp_port = (int)port;
+    if (wire != SIM_W_TCP)
+        strcpy(p->path, v);
+    p->fd = -1;
+    net->nports++;
+    return 0;
+}
+
+static int tcp_arg(const char *v, void *dst)
+{
+    return add_port(dst, SIM_W_TCP, v);
+}
+
+static int rtu_arg(const char *v, void *dst)
+{
+    return add_port(dst, SIM_W_RTU, v);
+}
+
+static int ascii_arg(const char *v, void *dst)
+{
+    return add_port(dst, SIM_W_ASCII, v);
+}
+
+/* --fault SPEC, repeatable: the specs are kept and parsed after the
+ * options, so a bad one is reported with sim_fault_parse's reason. */
+typedef struct fault_specs {
+    const char *v[SIM_MAX_FAULTS];
+    int n;
+} fault_specs_t;
+
+static int fault_arg(const char *v, void *dst)
+{
+    fault_specs_t *fs = dst;
+    if (fs->n == SIM_MAX_FAULTS)
+        return -1;
+    fs->v[fs->n++] = v;
     return 0;
 }
 
@@ -143,89 +204,170 @@ int main(int argc, char **argv)
     const char *part_path = NULL, *pidfile = NULL, *ctl = NULL;
     double dent = -1, warp = 0, z0 = 50, off[2] = {0, 0}, range[2] = {30, 60}, noise = 0.002;
     double speed = 200, settle = 0, lim[4] = {-10, 210, -10, 160};
-    long seed = 1, unit;
+    long seed = 1;
     int homed = 0, verbose = 0, warp_set = 0;
+    int stage_unit = HAL_STAGE_UNIT, probe_unit = HAL_PROBE_UNIT;
+    fault_specs_t specs = {{0}, 0};
     sim_stage_init(&stage, &faults);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--help") || !strcmp(a, "-h"))
-            return usage(stdout, 0);
-        if (!strcmp(a, "--homed")) {
-            homed = 1;
-            continue;
-        }
-        if (!strcmp(a, "--verbose")) {
-            verbose = 1;
-            continue;
-        }
-        const char *v = i + 1 < argc ? argv[++i] : NULL;
-        if (!v) {
-            fprintf(stderr, "cellsim: option %s needs a value\n", a);
+    const cf_opt_t opts[] = {
+        {.name = "tcp",
+         .kind = CF_OPT_FUNC,
+         .dst = &net,
+         .arg = "PORT",
+         .help = "a Modbus TCP server on 127.0.0.1:PORT (0: a free port, printed)",
+         .fn = tcp_arg,
+         .fn_what = "a port 0..65535 (8 servers at most)"},
+        {.name = "rtu",
+         .kind = CF_OPT_FUNC,
+         .dst = &net,
+         .arg = "PATH",
+         .help = "a Modbus RTU server on the tty PATH (e.g. one end of a socat pty pair)",
+         .fn = rtu_arg,
+         .fn_what = "a tty path (8 servers at most)"},
+        {.name = "ascii",
+         .kind = CF_OPT_FUNC,
+         .dst = &net,
+         .arg = "PATH",
+         .help = "the probe's ASCII protocol on the tty PATH",
+         .fn = ascii_arg,
+         .fn_what = "a tty path (8 servers at most)"},
+        {.name = "stage-unit",
+         .kind = CF_OPT_INT,
+         .dst = &stage_unit,
+         .arg = "UNIT",
+         .help = "the stage's Modbus unit",
+         .lo = 1,
+         .hi = 247},
+        {.name = "probe-unit",
+         .kind = CF_OPT_INT,
+         .dst = &probe_unit,
+         .arg = "UNIT",
+         .help = "the probe's Modbus unit",
+         .lo = 1,
+         .hi = 247},
+        {.name = "part",
+         .kind = CF_OPT_STR,
+         .dst = &part_path,
+         .arg = "FILE.igs",
+         .help = "the nominal surface (first entity 128)",
+         .def = "the built-in panel"},
+        {.name = "dent-depth",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &dent,
+         .arg = "MM",
+         .help = "depth of the dent (0: none)",
+         .lo = 0,
+         .hi = 1e308,
+         .def = "0.4"},
+        {.name = "warp",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &warp,
+         .arg = "MM",
+         .help = "twist of the part (0: none)",
+         .lo = 1,
+         .hi = 0,
+         .def = "0.3",
+         .given = &warp_set},
+        {.name = "z0",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &z0,
+         .arg = "MM",
+         .help = "height of the probe's beam origin",
+         .lo = 1,
+         .hi = 0},
+        {.name = "offset",
+         .kind = CF_OPT_FUNC,
+         .dst = off,
+         .arg = "OX,OY",
+         .help = "the beam's offset from the stage position",
+         .fn = offset_arg,
+         .fn_what = "two numbers OX,OY (mm)",
+         .def = "0,0"},
+        {.name = "range",
+         .kind = CF_OPT_FUNC,
+         .dst = range,
+         .arg = "LO,HI",
+         .help = "the probe's measuring range",
+         .fn = range_arg,
+         .fn_what = "two numbers LO,HI with LO < HI (mm)",
+         .def = "30,60"},
+        {.name = "noise",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &noise,
+         .arg = "SIGMA",
+         .help = "Gaussian noise on the distance, mm",
+         .lo = 0,
+         .hi = 1e308},
+        {.name = "seed",
+         .kind = CF_OPT_LONG,
+         .dst = &seed,
+         .arg = "S",
+         .help = "seeds the noise and the fault probabilities",
+         .lo = 0,
+         .hi = 4611686018427387904.0},
+        {.name = "speed",
+         .kind = CF_OPT_FUNC,
+         .dst = &speed,
+         .arg = "MM/S",
+         .help = "the stage's speed, both axes",
+         .fn = positive,
+         .fn_what = "a number > 0",
+         .def = "200"},
+        {.name = "settle-ms",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &settle,
+         .arg = "MS",
+         .help = "the stage's settling time after each move",
+         .lo = 0,
+         .hi = 1e308},
+        {.name = "limits",
+         .kind = CF_OPT_FUNC,
+         .dst = lim,
+         .arg = "XLO,XHI,YLO,YHI",
+         .help = "the stage's soft limits; home is (0,0)",
+         .fn = limits_arg,
+         .fn_what = "four numbers XLO,XHI,YLO,YHI with XLO < XHI, YLO < YHI (mm)",
+         .def = "-10,210,-10,160"},
+        {.name = "homed",
+         .kind = CF_OPT_FLAG,
+         .dst = &homed,
+         .help = "start homed, at home (else unreferenced at 37.5,12.25)"},
+        {.name = "fault",
+         .kind = CF_OPT_FUNC,
+         .dst = &specs,
+         .arg = "KIND[@WIRE]:WHEN[:MS]",
+         .help = "inject a fault (repeatable; the language below)",
+         .fn = fault_arg,
+         .fn_what = "a fault spec (32 at most)",
+         .def = "none"},
+        {.name = "control",
+         .kind = CF_OPT_STR,
+         .dst = &ctl,
+         .arg = "FILE",
+         .help = "a control file, polled every 100 ms (below)"},
+        {.name = "pidfile",
+         .kind = CF_OPT_STR,
+         .dst = &pidfile,
+         .arg = "FILE",
+         .help = "write the PID to FILE (removed at exit)"},
+        {.name = "verbose",
+         .kind = CF_OPT_FLAG,
+         .dst = &verbose,
+         .help = "log faults and line events on stderr"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellsim",
+                          .summary = "the simulated rig on the real wire protocols "
+                                     "(docs/rig-devices.md)",
+                          .descr = descr,
+                          .opts = opts};
+    int prc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    if (prc)
+        return cf_opt_exit(prc);
+    for (int k = 0; k < specs.n; k++)
+        if (add_fault(&faults, specs.v[k]))
             return 2;
-        }
-        int bad = 0;
-        if (!strcmp(a, "--tcp") || !strcmp(a, "--rtu") || !strcmp(a, "--ascii")) {
-            if (net.nports == SIM_MAX_PORTS) {
-                fprintf(stderr, "cellsim: at most %d servers\n", SIM_MAX_PORTS);
-                return 2;
-            }
-            sim_port_t *p = &net.port[net.nports];
-            long port = 0;
-            p->wire = a[2] == 't' ? SIM_W_TCP : a[2] == 'r' ? SIM_W_RTU : SIM_W_ASCII;
-            if (p->wire == SIM_W_TCP)
-                bad = cli_int(v, 0, 65535, &port);
-            else
-                bad = strlen(v) >= sizeof p->path || !v[0];
-            p->tcp_port = (int)port;
-            if (!bad && p->wire != SIM_W_TCP)
-                strcpy(p->path, v);
-            p->fd = -1;
-            net.nports++;
-        } else if (!strcmp(a, "--stage-unit") || !strcmp(a, "--probe-unit")) {
-            bad = cli_int(v, 1, 247, &unit);
-            if (a[2] == 's')
-                rig.stage_unit = (int)unit;
-            else
-                rig.probe_unit = (int)unit;
-        } else if (!strcmp(a, "--part"))
-            part_path = v;
-        else if (!strcmp(a, "--dent-depth"))
-            bad = cli_double(v, &dent) || dent < 0;
-        else if (!strcmp(a, "--warp")) {
-            bad = cli_double(v, &warp);
-            warp_set = 1;
-        } else if (!strcmp(a, "--z0"))
-            bad = cli_double(v, &z0);
-        else if (!strcmp(a, "--offset"))
-            bad = pair(v, 2, off);
-        else if (!strcmp(a, "--range"))
-            bad = pair(v, 2, range) || !(range[0] < range[1]);
-        else if (!strcmp(a, "--noise"))
-            bad = cli_double(v, &noise) || noise < 0;
-        else if (!strcmp(a, "--seed"))
-            bad = cli_int(v, 0, 1L << 62, &seed);
-        else if (!strcmp(a, "--speed"))
-            bad = cli_double(v, &speed) || !(speed > 0);
-        else if (!strcmp(a, "--settle-ms"))
-            bad = cli_double(v, &settle) || settle < 0;
-        else if (!strcmp(a, "--limits"))
-            bad = pair(v, 4, lim) || !(lim[0] < lim[1] && lim[2] < lim[3]);
-        else if (!strcmp(a, "--fault")) {
-            if (add_fault(&faults, v))
-                return 2;
-        } else if (!strcmp(a, "--control"))
-            ctl = v;
-        else if (!strcmp(a, "--pidfile"))
-            pidfile = v;
-        else {
-            fprintf(stderr, "cellsim: unknown option '%s' (cellsim --help)\n", a);
-            return 2;
-        }
-        if (bad) {
-            fprintf(stderr, "cellsim: %s '%s': bad value (cellsim --help)\n", a, v);
-            return 2;
-        }
-    }
+    rig.stage_unit = stage_unit;
+    rig.probe_unit = probe_unit;
     if (!net.nports) {
         fprintf(stderr, "cellsim: no server asked (--tcp, --rtu or --ascii; cellsim --help)\n");
         return 2;

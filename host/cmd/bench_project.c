@@ -1,5 +1,5 @@
-/* bench_project.c: `cellfit bench project --points M [--cp N] [--degree P]
- * [--tol REL] [--offset MM] [--order random|raster] [--json]`: projection of
+/* bench_project.c: `cellfit bench project --count M [--cp N] [--degree P]
+ * [--quad-tol REL] [--offset MM] [--order random|raster] [--json]`: projection of
  * points generated near a known surface (Piegl & Tiller 2001, Section 3:
  * quadrilateral decomposition, grid search, then Newton, nf_quad) with
  * their true parameters known: Q = S(u, v) + d n(u, v), |d| <= offset
@@ -9,6 +9,7 @@
 #include "bench_project.h"
 #include "cf_cli.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_surf.h"
 #include "cmd.h"
 #include "nf_err.h"
@@ -84,41 +85,83 @@ static void gen(const nf_surf_t *s, long k0, long n, long total, int random, dou
     }
 }
 
+static int rel_tol(const char *v, void *dst)
+{
+    double d;
+    if (cli_double(v, &d) || !(d > 0 && d < 1))
+        return -1;
+    *(double *)dst = d;
+    return 0;
+}
+
 int bench_project(int argc, char **argv)
 {
     long points = 1000000, cp = 10000, degree = 3, maxq = 200000;
     double rel = NF_QUAD_SEED_TOL, off = 1.0; /* as cf_seedgrid's projections */
     int json = 0, random = 1;
-    for (int i = 2; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
-        int bad = 0;
-        if (!strcmp(a, "--json")) {
-            json = 1;
-            continue;
-        }
-        if (!strcmp(a, "--points"))
-            bad = cli_int(v, 1, 4000000000L, &points);
-        else if (!strcmp(a, "--cp"))
-            bad = cli_int(v, 4, NF_MAX_CP, &cp);
-        else if (!strcmp(a, "--degree"))
-            bad = cli_int(v, 1, NF_MAX_DEGREE, &degree);
-        else if (!strcmp(a, "--maxq"))
-            bad = cli_int(v, 1, 100000000L, &maxq);
-        else if (!strcmp(a, "--tol"))
-            bad = cli_double(v, &rel) || !(rel > 0 && rel < 1);
-        else if (!strcmp(a, "--offset"))
-            bad = cli_double(v, &off) || !(off >= 0);
-        else if (!strcmp(a, "--order")) {
-            if (!strcmp(v, "raster"))
-                random = 0;
-            else
-                bad = strcmp(v, "random") != 0;
-        } else
-            return cli_error("bench", CLI_USAGE, "unknown option '%s'", a);
-        if (bad)
-            return cli_error("bench", CLI_USAGE, "bad value '%s' for %s", v, a);
-        i++;
-    }
+    char quad_tol_def[32]; /* a FUNC option's default is shown as text */
+    snprintf(quad_tol_def, sizeof quad_tol_def, "%g", rel);
+    static const char *const orders[] = {"raster", "random", NULL};
+    const cf_opt_t opts[] = {
+        {.name = "count",
+         .kind = CF_OPT_LONG,
+         .dst = &points,
+         .arg = "M",
+         .help = "points to project",
+         .lo = 1,
+         .hi = 4e9},
+        {.name = "cp",
+         .kind = CF_OPT_LONG,
+         .dst = &cp,
+         .arg = "N",
+         .help = "control points of the square net (rounded to a square)",
+         .lo = 4,
+         .hi = NF_MAX_CP},
+        {.name = "degree",
+         .kind = CF_OPT_LONG,
+         .dst = &degree,
+         .arg = "P",
+         .help = "degree in u and v",
+         .lo = 1,
+         .hi = NF_MAX_DEGREE},
+        {.name = "maxq",
+         .kind = CF_OPT_LONG,
+         .dst = &maxq,
+         .arg = "Q",
+         .help = "quadrilaterals at most",
+         .lo = 1,
+         .hi = 100000000},
+        {.name = "quad-tol",
+         .kind = CF_OPT_FUNC,
+         .dst = &rel,
+         .arg = "REL",
+         .help = "the decomposition's relative tolerance (Section 3)",
+         .fn = rel_tol,
+         .fn_what = "a number in (0, 1)",
+         .def = quad_tol_def},
+        {.name = "offset",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &off,
+         .arg = "MM",
+         .help = "largest distance of a point from the surface, along its normal",
+         .lo = 0,
+         .hi = 1e308},
+        {.name = "order",
+         .kind = CF_OPT_CHOICE,
+         .dst = &random,
+         .arg = "ORDER",
+         .help = "the points' parameters: a raster or uniformly random",
+         .choices = orders},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &json, .help = "one JSON object on stdout"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "bench project",
+                          .summary = "projection of points generated near a known surface "
+                                     "(Section 3): time and largest parameter error",
+                          .opts = opts};
+    int prc = cf_opt_parse(&cmd, argc - 1, argv + 1, NULL, NULL);
+    if (prc)
+        return cf_opt_exit(prc);
     nf_surf_t s;
     if (make_part(cp, (int)degree, &s))
         return cli_error("bench", CLI_FAIL, "out of memory");

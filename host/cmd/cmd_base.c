@@ -14,6 +14,7 @@
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
@@ -33,7 +34,7 @@
 #define PROJ_TOL 1e-9
 
 enum { M_PLANE, M_BILINEAR, M_BICUBIC, M_TENSOR };
-static const char *const method_name[] = {"plane", "bilinear", "bicubic", "tensor"};
+static const char *const method_name[] = {"plane", "bilinear", "bicubic", "tensor", NULL};
 
 typedef struct base_opts {
     const char *points, *curves, *out, *extract;
@@ -44,8 +45,10 @@ typedef struct base_opts {
     long edge_cp;
 } base_opts_t;
 
-static int parse_de(const char *s, long de[4])
+/* --de a,b,c,d: four odd directory-entry numbers. */
+static int parse_de(const char *s, void *dst)
 {
+    long *de = dst;
     char buf[128];
     if (strlen(s) >= sizeof buf)
         return -1;
@@ -57,6 +60,29 @@ static int parse_de(const char *s, long de[4])
     return tok ? -1 : 0;
 }
 
+/* A percentage in (0, hi]: the lower end is open, which a cf_opt range
+ * (inclusive) cannot say. */
+static int pct_in(const char *v, double *dst, double hi)
+{
+    double d;
+    if (cli_double(v, &d) || !(d > 0) || d > hi)
+        return -1;
+    *dst = d;
+    return 0;
+}
+
+static int pct100(const char *v, void *dst)
+{
+    return pct_in(v, dst, 100.0);
+}
+
+static int pct50(const char *v, void *dst)
+{
+    return pct_in(v, dst, 50.0);
+}
+
+/* 0 to go on; otherwise cf_opt_parse's result (-1: --help answered) or
+ * CLI_USAGE after a line on stderr. */
 static int parse(int argc, char **argv, base_opts_t *o)
 {
     memset(o, 0, sizeof *o);
@@ -67,81 +93,141 @@ static int parse(int argc, char **argv, base_opts_t *o)
     o->margin = 0.02;
     o->band = 3.0;
     o->edge_cp = 8;
-    for (int i = 1; i < argc;) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int takes = 1;
-        if (!strcmp(a, "--json"))
-            o->json = 1, takes = 0;
-        else if (!strcmp(a, "--scale"))
-            o->scale = 1, takes = 0;
-        else if (!v)
-            return cli_error("base", CLI_USAGE, "option %s needs a value", a);
-        else if (!strcmp(a, "--points"))
-            o->points = v;
-        else if (!strcmp(a, "--curves"))
-            o->curves = v;
-        else if (!strcmp(a, "--out"))
-            o->out = v;
-        else if (!strcmp(a, "--extract"))
-            o->extract = v;
-        else if (!strcmp(a, "--de")) {
-            if (parse_de(v, o->de))
-                return cli_error("base", CLI_USAGE, "--de '%s': need four odd DE numbers a,b,c,d",
-                                 v);
-            o->have_de = 1;
-        } else if (!strcmp(a, "--entity")) {
-            if (cli_int(v, 1, 9999999, &o->entity))
-                return cli_error("base", CLI_USAGE, "--entity '%s': need a DE number", v);
-        } else if (!strcmp(a, "--method")) {
-            o->method = -2;
-            for (int m = 0; m < 4; m++)
-                if (!strcmp(v, method_name[m]))
-                    o->method = m;
-            if (o->method < 0)
-                return cli_error("base", CLI_USAGE,
-                                 "--method '%s': plane, bilinear, bicubic or tensor", v);
-        } else if (!strcmp(a, "--subset")) {
-            if (cli_double(v, &o->subset) || !(o->subset > 0) || o->subset > 100)
-                return cli_error("base", CLI_USAGE, "--subset '%s': percent of the points, 0..100",
-                                 v);
-        } else if (!strcmp(a, "--seed")) {
-            if (cli_int(v, 0, 1L << 62, &o->seed))
-                return cli_error("base", CLI_USAGE, "--seed '%s'", v);
-        } else if (!strcmp(a, "--nu")) {
-            if (cli_int(v, 2, NF_MAX_CP, &o->nu))
-                return cli_error("base", CLI_USAGE, "--nu '%s'", v);
-        } else if (!strcmp(a, "--nv")) {
-            if (cli_int(v, 2, NF_MAX_CP, &o->nv))
-                return cli_error("base", CLI_USAGE, "--nv '%s'", v);
-        } else if (!strcmp(a, "--degree")) {
-            if (cli_int(v, 1, NF_MAX_DEGREE, &o->degree))
-                return cli_error("base", CLI_USAGE, "--degree '%s': 1..%d", v, NF_MAX_DEGREE);
-        } else if (!strcmp(a, "--tol")) {
-            if (cli_double(v, &o->tol) || !(o->tol >= 0))
-                return cli_error("base", CLI_USAGE, "--tol '%s': corner tolerance, mm >= 0", v);
-        } else if (!strcmp(a, "--edge-band")) {
-            if (cli_double(v, &o->band) || !(o->band > 0) || o->band > 50)
-                return cli_error("base", CLI_USAGE,
-                                 "--edge-band '%s': percent of the rectangle, 0..50", v);
-        } else if (!strcmp(a, "--edge-cp")) {
-            if (cli_int(v, 4, NF_CURVEFIT_MAX_CP, &o->edge_cp))
-                return cli_error("base", CLI_USAGE, "--edge-cp '%s': control points, 4..%d", v,
-                                 NF_CURVEFIT_MAX_CP);
-        } else if (!strcmp(a, "--margin")) {
-            if (cli_double(v, &o->margin) || !(o->margin >= 0) || o->margin > 1)
-                return cli_error("base", CLI_USAGE, "--margin '%s': fraction 0..1", v);
-        } else
-            return cli_error("base", CLI_USAGE, "unknown option '%s'", a);
-        i += 1 + takes;
-    }
-    if (!o->out)
-        return cli_error(
-            "base", CLI_USAGE,
-            "usage: cellfit base --points FILE [--curves CURVES.igs [--de a,b,c,d]] "
-            "[--method plane|bilinear|bicubic|tensor] [--subset PCT] [--seed S] [--scale] "
-            "[--nu N --nv N --degree P] [--edge-band PCT] [--edge-cp N] --out BASE.igs [--json]; "
-            "or cellfit base "
-            "--extract SURF.igs --out CURVES.igs");
+    const cf_opt_t opts[] = {
+        {.name = "points",
+         .kind = CF_OPT_STR,
+         .dst = &o->points,
+         .arg = "FILE",
+         .help = "the scattered points, x y z (streamed; '-': standard input)"},
+        {.name = "curves",
+         .kind = CF_OPT_STR,
+         .dst = &o->curves,
+         .arg = "CURVES.igs",
+         .help = "four boundary curves (IGES 126); without them the edges are fitted to the "
+                 "points"},
+        {.name = "de",
+         .kind = CF_OPT_FUNC,
+         .dst = o->de,
+         .arg = "a,b,c,d",
+         .help = "the four curves' directory entries in CURVES",
+         .fn = parse_de,
+         .fn_what = "four odd DE numbers a,b,c,d",
+         .def = "the first four curves",
+         .given = &o->have_de},
+        {.name = "method",
+         .kind = CF_OPT_CHOICE,
+         .dst = &o->method,
+         .arg = "M",
+         .help = "the base surface",
+         .choices = method_name,
+         .def = "plane without --curves, bilinear with"},
+        {.name = "subset",
+         .kind = CF_OPT_FUNC,
+         .dst = &o->subset,
+         .arg = "PCT",
+         .help = "percent of the points that bicubic and tensor fit to",
+         .fn = pct100,
+         .fn_what = "a percentage in (0, 100]",
+         .def = "30"},
+        {.name = "seed",
+         .kind = CF_OPT_LONG,
+         .dst = &o->seed,
+         .arg = "S",
+         .help = "random seed of the subset",
+         .lo = 0,
+         .hi = 4611686018427387904.0},
+        {.name = "scale",
+         .kind = CF_OPT_FLAG,
+         .dst = &o->scale,
+         .help = "bicubic: scale the cross derivatives (the paper's remedy for overshoot)"},
+        {.name = "nu",
+         .kind = CF_OPT_LONG,
+         .dst = &o->nu,
+         .arg = "N",
+         .help = "control points in u",
+         .lo = 2,
+         .hi = NF_MAX_CP,
+         .def = "from the method"},
+        {.name = "nv",
+         .kind = CF_OPT_LONG,
+         .dst = &o->nv,
+         .arg = "N",
+         .help = "control points in v",
+         .lo = 2,
+         .hi = NF_MAX_CP,
+         .def = "from the method"},
+        {.name = "degree",
+         .kind = CF_OPT_LONG,
+         .dst = &o->degree,
+         .arg = "P",
+         .help = "degree of plane and tensor",
+         .lo = 1,
+         .hi = NF_MAX_DEGREE,
+         .def = "from the method"},
+        {.name = "corner-tol",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->tol,
+         .arg = "MM",
+         .help = "largest gap where two boundary curves meet at a corner",
+         .lo = 0,
+         .hi = 1e308},
+        {.name = "edge-band",
+         .kind = CF_OPT_FUNC,
+         .dst = &o->band,
+         .arg = "PCT",
+         .help = "fitted edges: the band of points along each edge, percent of the rectangle",
+         .fn = pct50,
+         .fn_what = "a percentage in (0, 50]",
+         .def = "3"},
+        {.name = "edge-cp",
+         .kind = CF_OPT_LONG,
+         .dst = &o->edge_cp,
+         .arg = "N",
+         .help = "fitted edges: control points per curve",
+         .lo = 4,
+         .hi = NF_CURVEFIT_MAX_CP},
+        {.name = "margin",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->margin,
+         .arg = "F",
+         .help = "grow the points' rectangle by this fraction on each side",
+         .lo = 0,
+         .hi = 1},
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &o->entity,
+         .arg = "DE",
+         .help = "--extract: the surface's directory entry (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {.name = "extract",
+         .kind = CF_OPT_STR,
+         .dst = &o->extract,
+         .arg = "SURF.igs",
+         .help = "write SURF's four boundary curves (IGES 126) to --out instead"},
+        {.name = "out",
+         .kind = CF_OPT_STR,
+         .dst = &o->out,
+         .arg = "FILE.igs",
+         .help = "the base surface (or the curves with --extract)",
+         .req = 1},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "one JSON object on stdout"},
+        {0}};
+    const cf_cmd_t cmd = {
+        .prog = "cellfit",
+        .name = "base",
+        .summary = "a base surface for parameterising scattered points (Section 2), for "
+                   "`cellfit fit --base`",
+        .descr = "Methods: plane (a plane patch over the points' plane), bilinear (the Coons "
+                 "patch of the four curves), bicubic (Coons with cross derivatives fitted to a "
+                 "random --subset of the points), tensor (a tensor-product fit to that subset). "
+                 "Without --curves the four curves are fitted to the points near the edges of "
+                 "their rectangle. `cellfit base --extract SURF.igs --out CURVES.igs` writes a "
+                 "surface's boundary curves.",
+        .opts = opts};
+    int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    if (rc)
+        return rc;
     if (o->extract)
         return CLI_OK;
     o->cname = o->curves ? o->curves : "edges fitted to the points";
@@ -562,7 +648,7 @@ static int prepare(const base_opts_t *o, const nf_curve_t c[4], int pmin, nf_coo
                      o->de[3]);
         return cli_error("base", CLI_USAGE,
                          "%s: boundary curves (%s) do not meet at corner (u,v) = %s: gap %.6g mm "
-                         "> --tol %g",
+                         "> --corner-tol %g",
                          o->cname, which, cn[cs->corner], cs->gap, o->tol);
     }
     if (rc)
@@ -760,7 +846,7 @@ int cmd_base(int argc, char **argv)
     base_opts_t o;
     int ec = parse(argc, argv, &o);
     if (ec)
-        return ec;
+        return cf_opt_exit(ec);
     if (o.extract)
         return extract(&o);
     char msg[512];

@@ -1,10 +1,12 @@
-/* cmd_bench.c: `cellfit bench accumulate|solve|fit`: single measurements
+/* cmd_bench.c: `cellfit bench accumulate|solve|fit|export` (project:
+ * bench_project.c): single measurements
  * on generated, seeded data streamed without files (issue 6). Prints
  * figures; asserts nothing. Nets are square, bicubic, uniform knots. */
 #include "bench_project.h"
 #include "cf_accum.h"
 #include "cf_cli.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_surf.h"
 #include "cmd.h"
 #include "nf_err.h"
@@ -111,8 +113,37 @@ static long peak_rss(void)
     return getrusage(RUSAGE_SELF, &ru) ? -1 : ru.ru_maxrss * 1024L;
 }
 
-static int parse(int argc, char **argv, bench_opts_t *o)
+enum { B_ACCUMULATE, B_SOLVE, B_FIT, B_EXPORT, B_PROJECT, NBENCH };
+
+static const struct {
+    const char *name, *summary;
+} benches[NBENCH] = {
+    {"accumulate", "accumulate Eq. 7 from --count generated points: points per second"},
+    {"solve", "solve Eq. 7 assembled from 10 random points per control point: seconds, "
+              "iterations"},
+    {"fit", "accumulate and solve: the whole fit of --count points"},
+    {"export", "write the assembled Eq. 7 of the solve benchmark for other solvers (bench/)"},
+    {"project", "projection of points generated near a known surface (Section 3)"},
+};
+
+static int solver_arg(const char *v, void *dst)
 {
+    return cli_solver(v, dst);
+}
+
+static int positive(const char *v, void *dst)
+{
+    double d;
+    if (cli_double(v, &d) || !(d > 0))
+        return -1;
+    *(double *)dst = d;
+    return 0;
+}
+
+/* The options of benchmark k (not project: bench_project.c), one table. */
+static int parse(int k, int argc, char **argv, bench_opts_t *o)
+{
+    static const char *const orders[] = {"raster", "random", NULL};
     memset(o, 0, sizeof *o);
     o->points = 1000000;
     o->cp = 10000;
@@ -122,58 +153,138 @@ static int parse(int argc, char **argv, bench_opts_t *o)
     o->alpha = NF_ALPHA_DEFAULT;
     o->beta = NF_BETA_DEFAULT;
     o->tol = 1e-10;
-    for (int i = 2; i < argc;) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
-        int takes = 1, bad = 0;
-        if (!strcmp(a, "--json"))
-            o->json = 1, takes = 0;
-        else if (!strcmp(a, "--points"))
-            bad = cli_int(v, 1, 4000000000L, &o->points);
-        else if (!strcmp(a, "--cp"))
-            bad = cli_int(v, 4, NF_MAX_CP, &o->cp);
-        else if (!strcmp(a, "--threads"))
-            bad = cli_int(v, 1, 2, &o->threads);
-        else if (!strcmp(a, "--degree"))
-            bad = cli_int(v, 1, NF_MAX_DEGREE, &o->degree);
-        else if (!strcmp(a, "--out"))
-            o->out = v;
-        else if (!strcmp(a, "--tol"))
-            bad = cli_double(v, &o->tol) || !(o->tol > 0);
-        else if (!strcmp(a, "--order")) {
-            if (!strcmp(v, "random"))
-                o->random = 1;
-            else if (strcmp(v, "raster"))
-                bad = 1;
-        } else if (!strcmp(a, "--solver"))
-            bad = cli_solver(v, &o->solver);
-        else
-            return cli_error("bench", CLI_USAGE, "unknown option '%s'", a);
-        if (bad)
-            return cli_error("bench", CLI_USAGE, "bad value '%s' for %s", v, a);
-        i += 1 + takes;
+    cf_opt_t opts[12];
+    int n = 0;
+    if (k == B_ACCUMULATE || k == B_FIT)
+        opts[n++] = (cf_opt_t){.name = "count",
+                               .kind = CF_OPT_LONG,
+                               .dst = &o->points,
+                               .arg = "M",
+                               .help = "points to accumulate",
+                               .lo = 1,
+                               .hi = 4e9};
+    opts[n++] = (cf_opt_t){.name = "cp",
+                           .kind = CF_OPT_LONG,
+                           .dst = &o->cp,
+                           .arg = "N",
+                           .help = "control points of the square net (rounded to a square)",
+                           .lo = 4,
+                           .hi = NF_MAX_CP};
+    opts[n++] = (cf_opt_t){.name = "degree",
+                           .kind = CF_OPT_LONG,
+                           .dst = &o->degree,
+                           .arg = "P",
+                           .help = "degree in u and v",
+                           .lo = 1,
+                           .hi = NF_MAX_DEGREE};
+    if (k == B_ACCUMULATE || k == B_FIT)
+        opts[n++] = (cf_opt_t){.name = "order",
+                               .kind = CF_OPT_CHOICE,
+                               .dst = &o->random,
+                               .arg = "ORDER",
+                               .help = "the points' parameters: a raster (as a scanner delivers) "
+                                       "or uniformly random",
+                               .choices = orders};
+    opts[n++] = (cf_opt_t){.name = "threads",
+                           .kind = CF_OPT_LONG,
+                           .dst = &o->threads,
+                           .arg = "T",
+                           .help = "accumulating cores (2: a second accumulator, merged)",
+                           .lo = 1,
+                           .hi = 2};
+    opts[n++] = (cf_opt_t){.name = "solver",
+                           .kind = CF_OPT_FUNC,
+                           .dst = &o->solver,
+                           .arg = "S",
+                           .help = "the solver of Eq. 7 (and the storage it needs)",
+                           .fn = solver_arg,
+                           .fn_what = "one of auto, gs, chol, pcg",
+                           .def = "auto"};
+    if (k == B_SOLVE || k == B_FIT)
+        opts[n++] = (cf_opt_t){.name = "solve-tol",
+                               .kind = CF_OPT_FUNC,
+                               .dst = &o->tol,
+                               .arg = "REL",
+                               .help = "the iterative solvers' relative residual",
+                               .fn = positive,
+                               .fn_what = "a number > 0",
+                               .def = "1e-10"};
+    if (k == B_EXPORT)
+        opts[n++] = (cf_opt_t){.name = "out",
+                               .kind = CF_OPT_STR,
+                               .dst = &o->out,
+                               .arg = "FILE",
+                               .help = "the system: \"CFNE0001\", n, nnz, (row, col, value) of "
+                                       "the upper triangle, n x 3 right-hand side",
+                               .req = 1};
+    else
+        opts[n++] = (cf_opt_t){.name = "json",
+                               .kind = CF_OPT_FLAG,
+                               .dst = &o->json,
+                               .help = "one JSON object on stdout"};
+    opts[n] = (cf_opt_t){0};
+    char name[24];
+    snprintf(name, sizeof name, "bench %s", benches[k].name);
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = name,
+                          .summary = benches[k].summary,
+                          .descr = "Nets are square with uniform knots; the data are generated "
+                                   "and seeded, streamed without files.",
+                          .opts = opts};
+    return cf_opt_parse(&cmd, argc - 1, argv + 1, NULL, NULL);
+}
+
+/* `cellfit bench` without a benchmark: its own table (no options), whose
+ * description lists the benchmarks; --help-man adds every benchmark's
+ * section. */
+static int bench_top(int argc, char **argv)
+{
+    char list[1024];
+    size_t n = (size_t)snprintf(list, sizeof list,
+                                "Single measurements on generated, seeded data; figures printed, "
+                                "nothing asserted. Benchmarks (cellfit bench BENCHMARK --help "
+                                "lists its options):");
+    for (int k = 0; k < NBENCH && n < sizeof list; k++)
+        n += (size_t)snprintf(list + n, sizeof list - n, "\n  %-10s %s", benches[k].name,
+                              benches[k].summary);
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "bench",
+                          .args = "BENCHMARK",
+                          .summary = "benchmarks on generated data",
+                          .descr = list,
+                          .min_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc < 2 ? 1 : 2, argv, NULL, NULL);
+    if (rc < 0 && !strcmp(argv[1], "--help-man")) {
+        bench_opts_t o;
+        char *av[] = {argv[0], argv[1], argv[1], NULL};
+        for (int k = 0; k < B_PROJECT; k++)
+            parse(k, 3, av, &o);
+        bench_project(3, av);
     }
-    return CLI_OK;
+    return rc ? cf_opt_exit(rc) : CLI_USAGE;
 }
 
 int cmd_bench(int argc, char **argv)
 {
-    if (argc < 2)
-        return cli_error("bench", CLI_USAGE,
-                         "usage: cellfit bench accumulate|solve|fit "
-                         "[--points M] [--cp N] [--order raster|random] [--threads 1|2] "
-                         "[--solver S] [--json]");
+    if (argc < 2 || argv[1][0] == '-')
+        return bench_top(argc, argv);
     const char *what = argv[1];
-    if (!strcmp(what, "project")) /* host/bench_project.c */
+    int b = 0;
+    while (b < NBENCH && strcmp(what, benches[b].name))
+        b++;
+    if (b == NBENCH)
+        return cli_error("bench", CLI_USAGE,
+                         "unknown benchmark '%s' (accumulate, solve, fit, export, project; "
+                         "cellfit bench --help)",
+                         what);
+    if (b == B_PROJECT) /* bench_project.c */
         return bench_project(argc, argv);
-    int acc = !strcmp(what, "accumulate"), sol = !strcmp(what, "solve"), fit = !strcmp(what, "fit");
-    int exp = !strcmp(what, "export");
-    sol |= exp; /* export writes the system the solve benchmark solves */
-    if (!acc && !sol && !fit)
-        return cli_error("bench", CLI_USAGE, "unknown benchmark '%s'", what);
+    int acc = b == B_ACCUMULATE, sol = b == B_SOLVE || b == B_EXPORT, fit = b == B_FIT;
+    int exp = b == B_EXPORT; /* export writes the system the solve benchmark solves */
     bench_opts_t o;
-    int rc = parse(argc, argv, &o);
+    int rc = parse(b, argc, argv, &o);
     if (rc)
-        return rc;
+        return cf_opt_exit(rc);
     if (sol) {
         o.points = 10 * o.cp; /* enough data to determine every control point */
         o.random = 1;

@@ -4,6 +4,7 @@
  * ridge on the part), plus a check grid of true points. */
 #include "cf_cli.h"
 #include "cf_iges.h"
+#include "cf_opt.h"
 #include "cf_part.h"
 #include "cf_surf.h"
 #include "cmd.h"
@@ -43,55 +44,111 @@ static int numbers(const char *s, int n, double *out)
     return k == n && !t ? 0 : -1;
 }
 
+static int bump_arg(const char *v, void *dst)
+{
+    double *b = dst;
+    return numbers(v, 4, b) || !(b[3] > 0) ? -1 : 0;
+}
+
+static int ridge_arg(const char *v, void *dst)
+{
+    double *r = dst;
+    return numbers(v, 3, r) || !(r[2] > 0) ? -1 : 0;
+}
+
 int cmd_gen(int argc, char **argv)
 {
     const char *dir = NULL;
     long nu = 40, nv = 30, deg = 3, m = 100000, seed = 1;
     double noise = 0.005, outliers = 0.0, spike = 5.0, bump[4] = {0, 0, 0, 1}, ridge[3] = {0, 0, 1};
-    for (int i = 1; i < argc; i += 2) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!v)
-            return cli_error("gen", CLI_USAGE, "option %s needs a value", a);
-        if (!strcmp(a, "--dir"))
-            dir = v;
-        else if (!strcmp(a, "--nu")) {
-            if (cli_int(v, 2, 100000, &nu))
-                return cli_error("gen", CLI_USAGE, "--nu '%s'", v);
-        } else if (!strcmp(a, "--nv")) {
-            if (cli_int(v, 2, 100000, &nv))
-                return cli_error("gen", CLI_USAGE, "--nv '%s'", v);
-        } else if (!strcmp(a, "--degree")) {
-            if (cli_int(v, 1, NF_MAX_DEGREE, &deg))
-                return cli_error("gen", CLI_USAGE, "--degree '%s': 1..%d", v, NF_MAX_DEGREE);
-        } else if (!strcmp(a, "--points")) {
-            if (cli_int(v, 1, 1000000000L, &m))
-                return cli_error("gen", CLI_USAGE, "--points '%s'", v);
-        } else if (!strcmp(a, "--seed")) {
-            if (cli_int(v, 0, 1L << 62, &seed))
-                return cli_error("gen", CLI_USAGE, "--seed '%s'", v);
-        } else if (!strcmp(a, "--noise")) {
-            if (cli_double(v, &noise) || noise < 0)
-                return cli_error("gen", CLI_USAGE, "--noise '%s': need >= 0 (mm)", v);
-        } else if (!strcmp(a, "--bump")) {
-            if (numbers(v, 4, bump) || !(bump[3] > 0))
-                return cli_error("gen", CLI_USAGE, "--bump '%s': need H,X,Y,R (mm, R > 0)", v);
-        } else if (!strcmp(a, "--ridge")) {
-            if (numbers(v, 3, ridge) || !(ridge[2] > 0))
-                return cli_error("gen", CLI_USAGE, "--ridge '%s': need H,X,W (mm, W > 0)", v);
-        } else if (!strcmp(a, "--outliers")) {
-            if (cli_double(v, &outliers) || outliers < 0 || outliers > 1)
-                return cli_error("gen", CLI_USAGE, "--outliers '%s': need a fraction 0..1", v);
-        } else if (!strcmp(a, "--spike")) {
-            if (cli_double(v, &spike) || spike < 0)
-                return cli_error("gen", CLI_USAGE, "--spike '%s': need >= 0 (mm)", v);
-        } else
-            return cli_error("gen", CLI_USAGE, "unknown option '%s'", a);
-    }
-    if (!dir)
-        return cli_error("gen", CLI_USAGE,
-                         "usage: cellfit gen --dir DIR [--nu N --nv N "
-                         "--degree P --points M --noise SIGMA --seed S --bump H,X,Y,R "
-                         "--ridge H,X,W --outliers FRAC --spike MM]");
+    const cf_opt_t opts[] = {
+        {.name = "dir",
+         .kind = CF_OPT_STR,
+         .dst = &dir,
+         .arg = "DIR",
+         .help = "where the files go (created if missing)",
+         .req = 1},
+        {.name = "nu",
+         .kind = CF_OPT_LONG,
+         .dst = &nu,
+         .arg = "N",
+         .help = "control points in u",
+         .lo = 2,
+         .hi = 100000},
+        {.name = "nv",
+         .kind = CF_OPT_LONG,
+         .dst = &nv,
+         .arg = "N",
+         .help = "control points in v",
+         .lo = 2,
+         .hi = 100000},
+        {.name = "degree",
+         .kind = CF_OPT_LONG,
+         .dst = &deg,
+         .arg = "P",
+         .help = "degree in u and v",
+         .lo = 1,
+         .hi = NF_MAX_DEGREE},
+        {.name = "count",
+         .kind = CF_OPT_LONG,
+         .dst = &m,
+         .arg = "M",
+         .help = "measured points (a raster in u, v)",
+         .lo = 1,
+         .hi = 1e9},
+        {.name = "noise",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &noise,
+         .arg = "MM",
+         .help = "standard deviation of the Gaussian noise along z",
+         .lo = 0,
+         .hi = 1e308},
+        {.name = "seed",
+         .kind = CF_OPT_LONG,
+         .dst = &seed,
+         .arg = "S",
+         .help = "random seed",
+         .lo = 0,
+         .hi = 4611686018427387904.0},
+        {.name = "bump",
+         .kind = CF_OPT_FUNC,
+         .dst = bump,
+         .arg = "H,X,Y,R",
+         .help = "a Gaussian bump on the part: height H, centre (X, Y), radius R (mm)",
+         .fn = bump_arg,
+         .fn_what = "H,X,Y,R (mm, R > 0)",
+         .def = "none"},
+        {.name = "ridge",
+         .kind = CF_OPT_FUNC,
+         .dst = ridge,
+         .arg = "H,X,W",
+         .help = "a ridge on the part along y at x = X: height H, half-width W (mm)",
+         .fn = ridge_arg,
+         .fn_what = "H,X,W (mm, W > 0)",
+         .def = "none"},
+        {.name = "outliers",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &outliers,
+         .arg = "FRAC",
+         .help = "fraction of the points made gross outliers",
+         .lo = 0,
+         .hi = 1},
+        {.name = "spike",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &spike,
+         .arg = "MM",
+         .help = "largest offset of an outlier along z",
+         .lo = 0,
+         .hi = 1e308},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "gen",
+                          .summary = "write a synthetic part: nominal.igs, points.uvxyz (measured, "
+                                     "with noise), check.uv and check.xyz (true points)",
+                          .opts = opts};
+    int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
     if (nu <= deg || nv <= deg)
         return cli_error("gen", CLI_USAGE, "net %ld x %ld too small for degree %ld", nu, nv, deg);
     if (mkdir(dir, 0777) && errno != EEXIST)

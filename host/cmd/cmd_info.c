@@ -3,11 +3,11 @@
 #include "cf_cli.h"
 #include "cf_iges.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_surf.h"
 #include "cmd.h"
 #include "nf_budget.h"
 #include <math.h>
-#include <string.h>
 
 static void bbox(const nf_surf_t *s, double lo[3], double hi[3], double *wlo, double *whi)
 {
@@ -61,25 +61,31 @@ static void print_knots(const char *name, const double *U, int len)
 
 int cmd_info(int argc, char **argv)
 {
-    const char *path = NULL;
+    const char *pos[1];
     long entity = 0;
     int json = 0;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--json"))
-            json = 1;
-        else if (!strcmp(argv[i], "--entity")) {
-            if (i + 1 >= argc || cli_int(argv[i + 1], 1, 9999999, &entity))
-                return cli_error("info", CLI_USAGE, "--entity needs a DE number");
-            i++;
-        } else if (argv[i][0] == '-' && argv[i][1])
-            return cli_error("info", CLI_USAGE, "unknown option '%s'", argv[i]);
-        else if (!path)
-            path = argv[i];
-        else
-            return cli_error("info", CLI_USAGE, "unexpected argument '%s'", argv[i]);
-    }
-    if (!path)
-        return cli_error("info", CLI_USAGE, "usage: cellfit info SURF.igs [--json]");
+    const cf_opt_t opts[] = {
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in SURF (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &json, .help = "one JSON object on stdout"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "info",
+                          .args = "SURF.igs",
+                          .summary = "degrees, net, knots, weights, bounding boxes and the bytes a "
+                                     "fit of SURF needs on this board",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
+    const char *path = pos[0];
     char msg[512];
     nf_surf_t s;
     if (cf_iges_read(path, (int)entity, &s, msg, sizeof msg))

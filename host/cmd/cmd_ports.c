@@ -4,6 +4,7 @@
  * (identity, encoder packets, libusb). */
 #include "cf_cli.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cmd.h"
 #include "hal.h"
 #include "hal_serial.h"
@@ -16,21 +17,6 @@
 
 #define MAX_PORTS 64
 
-static void json_string(const char *s)
-{
-    putchar('"');
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\')
-            printf("\\%c", c);
-        else if (c < 0x20)
-            printf("\\u%04x", c);
-        else
-            putchar(c);
-    }
-    putchar('"');
-}
-
 static int list_ports(int json)
 {
     static hal_serial_port_t p[MAX_PORTS];
@@ -42,22 +28,22 @@ static int list_ports(int json)
     if (n > MAX_PORTS)
         n = MAX_PORTS;
     if (json) {
-        printf("{\"count\": %zu, \"ports\": [", n);
+        cf_json_t j;
+        cf_json_begin(&j, stdout);
+        cf_json_int(&j, "count", (long)n);
+        cf_json_arr(&j, "ports");
         for (size_t i = 0; i < n; i++) {
             char id[16] = "";
             if (p[i].usb)
                 snprintf(id, sizeof id, "%04x:%04x", p[i].vid, p[i].pid);
-            printf("%s{\"name\": ", i ? ", " : "");
-            json_string(p[i].name);
-            printf(", \"usb\": ");
-            json_string(id);
-            printf(", \"serial\": ");
-            json_string(p[i].serial);
-            printf(", \"description\": ");
-            json_string(p[i].description);
-            printf("}");
+            cf_json_obj(&j, NULL);
+            cf_json_str(&j, "name", p[i].name);
+            cf_json_str(&j, "usb", id);
+            cf_json_str(&j, "serial", p[i].serial);
+            cf_json_str(&j, "description", p[i].description);
+            cf_json_close(&j);
         }
-        printf("]}\n");
+        cf_json_end(&j);
         return CLI_OK;
     }
     for (size_t i = 0; i < n; i++) {
@@ -312,37 +298,72 @@ static int read_trig(const char *id, long count, long period, const hal_opts_t *
 int cmd_ports(int argc, char **argv)
 {
     const char *probe = NULL, *trig = NULL;
-    long baud = 115200, count = 1, period = 10000, v;
+    long baud = 115200, count = 1, period = 10000;
     int json = 0;
     hal_opts_t o = HAL_OPTS_DEFAULT;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--json")) {
-            json = 1;
-            continue;
-        }
-        if (!val)
-            return cli_error("ports", CLI_USAGE, "%s needs a value", a);
-        i++;
-        if (!strcmp(a, "--probe"))
-            probe = val;
-        else if (!strcmp(a, "--trig"))
-            trig = val;
-        else if (!strcmp(a, "--baud") && !cli_int(val, 50, 4000000, &baud))
-            ;
-        else if (!strcmp(a, "--n") && !cli_int(val, 1, 1000000, &count))
-            ;
-        else if (!strcmp(a, "--period") && !cli_int(val, TRIG_MIN_PERIOD, TRIG_MAX_PERIOD, &period))
-            ;
-        else if (!strcmp(a, "--timeout") && !cli_int(val, 1, 600000, &v))
-            o.timeout_ms = (int)v;
-        else if (!strcmp(a, "--retries") && !cli_int(val, 0, 100, &v))
-            o.retries = (int)v;
-        else if (!strcmp(a, "--reconnect") && !cli_int(val, 0, 600000, &v))
-            o.reconnect_ms = (int)v;
-        else
-            return cli_error("ports", CLI_USAGE, "bad option or value: %s %s", a, val);
-    }
+    const cf_opt_t opts[] = {
+        {.name = "probe",
+         .kind = CF_OPT_STR,
+         .dst = &probe,
+         .arg = "PORT",
+         .help = "read the laser probe on this serial port (M0 readings)"},
+        {.name = "trig",
+         .kind = CF_OPT_STR,
+         .dst = &trig,
+         .arg = "VID:PID[:SERIAL]",
+         .help = "read the USB trigger box (hex ids): identity, encoder packets"},
+        {.name = "baud",
+         .kind = CF_OPT_LONG,
+         .dst = &baud,
+         .arg = "BAUD",
+         .help = "--probe: the line's speed",
+         .lo = 50,
+         .hi = 4000000},
+        {.name = "count",
+         .kind = CF_OPT_LONG,
+         .dst = &count,
+         .arg = "N",
+         .help = "readings (--probe) or packets (--trig) to take",
+         .lo = 1,
+         .hi = 1000000},
+        {.name = "period",
+         .kind = CF_OPT_LONG,
+         .dst = &period,
+         .arg = "US",
+         .help = "--trig: the trigger period",
+         .lo = TRIG_MIN_PERIOD,
+         .hi = TRIG_MAX_PERIOD},
+        {.name = "timeout",
+         .kind = CF_OPT_INT,
+         .dst = &o.timeout_ms,
+         .arg = "MS",
+         .help = "one request or read",
+         .lo = 1,
+         .hi = 600000},
+        {.name = "retries",
+         .kind = CF_OPT_INT,
+         .dst = &o.retries,
+         .arg = "N",
+         .help = "extra attempts after a timeout or a bad reply",
+         .lo = 0,
+         .hi = 100},
+        {.name = "reconnect",
+         .kind = CF_OPT_INT,
+         .dst = &o.reconnect_ms,
+         .arg = "MS",
+         .help = "how long to keep reopening a lost line",
+         .lo = 0,
+         .hi = 600000},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &json, .help = "one JSON object on stdout"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "ports",
+                          .summary = "the serial ports (with their USB ids); with --probe or "
+                                     "--trig, a check of the device behind one",
+                          .opts = opts};
+    int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
     if (probe && trig)
         return cli_error("ports", CLI_USAGE, "--probe and --trig: one at a time");
     if (probe)

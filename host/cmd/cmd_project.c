@@ -7,6 +7,7 @@
  * read batch, whatever the number of points. */
 #include "cf_cli.h"
 #include "cf_iges.h"
+#include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
@@ -21,25 +22,29 @@
 
 int cmd_project(int argc, char **argv)
 {
-    const char *surf = NULL, *xyzf = NULL;
+    const char *pos[2];
     long entity = 0;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--entity")) {
-            if (i + 1 >= argc || cli_int(argv[i + 1], 1, 9999999, &entity))
-                return cli_error("project", CLI_USAGE, "--entity needs a DE number");
-            i++;
-        } else if (argv[i][0] == '-' && argv[i][1])
-            return cli_error("project", CLI_USAGE, "unknown option '%s'", argv[i]);
-        else if (!surf)
-            surf = argv[i];
-        else if (!xyzf)
-            xyzf = argv[i];
-        else
-            return cli_error("project", CLI_USAGE, "unexpected argument '%s'", argv[i]);
-    }
-    if (!surf || !xyzf)
-        return cli_error("project", CLI_USAGE,
-                         "usage: cellfit project SURF.igs XYZFILE [--entity N]");
+    const cf_opt_t opts[] = {
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in SURF (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "project",
+                          .args = "SURF.igs XYZFILE",
+                          .summary = "\"u v distance\" (%.17g) of each point of XYZFILE projected "
+                                     "onto SURF",
+                          .opts = opts,
+                          .min_pos = 2,
+                          .max_pos = 2};
+    int prc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (prc)
+        return cf_opt_exit(prc);
+    const char *surf = pos[0], *xyzf = pos[1];
     char msg[512];
     nf_surf_t s;
     if (cf_iges_read(surf, (int)entity, &s, msg, sizeof msg))

@@ -8,6 +8,7 @@
 #include "cf_devmap.h"
 #include "cf_iges.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_stats.h"
@@ -21,45 +22,65 @@
 typedef struct report_opts {
     const char *surf, *points, *png;
     double tol;
-    int json, tol_set;
+    int json;
     long entity;
 } report_opts_t;
 
+/* --tol: a deviation tolerance, strictly positive. */
+static int positive(const char *v, void *dst)
+{
+    double d;
+    if (cli_double(v, &d) || !(d > 0))
+        return -1;
+    *(double *)dst = d;
+    return 0;
+}
+
+/* 0 to go on; otherwise cf_opt_parse's result (-1: --help answered). */
 static int parse(int argc, char **argv, report_opts_t *o)
 {
     memset(o, 0, sizeof *o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--json")) {
-            o->json = 1;
-            continue;
-        }
-        if (a[0] == '-' && a[1]) {
-            if (!v)
-                return cli_error("report", CLI_USAGE, "option %s needs a value", a);
-            i++;
-            if (!strcmp(a, "--tol")) {
-                if (cli_double(v, &o->tol) || !(o->tol > 0))
-                    return cli_error("report", CLI_USAGE, "--tol '%s': need a number > 0 (mm)", v);
-                o->tol_set = 1;
-            } else if (!strcmp(a, "--png"))
-                o->png = v;
-            else if (!strcmp(a, "--entity")) {
-                if (cli_int(v, 1, 9999999, &o->entity))
-                    return cli_error("report", CLI_USAGE, "--entity '%s': need a DE number", v);
-            } else
-                return cli_error("report", CLI_USAGE, "unknown option '%s'", a);
-        } else if (!o->surf)
-            o->surf = a;
-        else if (!o->points)
-            o->points = a;
-        else
-            return cli_error("report", CLI_USAGE, "unexpected argument '%s'", a);
-    }
-    if (!o->surf || !o->points || !o->tol_set)
-        return cli_error("report", CLI_USAGE,
-                         "usage: cellfit report SURF.igs POINTS --tol T [--png MAP.png] [--json]");
-    return CLI_OK;
+    const char *pos[2];
+    const cf_opt_t opts[] = {
+        {.name = "tol",
+         .kind = CF_OPT_FUNC,
+         .dst = &o->tol,
+         .arg = "MM",
+         .help = "the deviation tolerance: the histogram's and the map's scale",
+         .fn = positive,
+         .fn_what = "a number > 0 (mm)",
+         .req = 1},
+        {.name = "png",
+         .kind = CF_OPT_STR,
+         .dst = &o->png,
+         .arg = "MAP.png",
+         .help = "write a colour deviation map on the points' best-fit plane"},
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &o->entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in SURF (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "one JSON object on stdout"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "report",
+                          .args = "SURF.igs POINTS",
+                          .summary = "signed normal distances of POINTS to SURF (+ along Su x Sv): "
+                                     "statistics, histogram, deviation map",
+                          .descr = "POINTS is a file of x y z or u v x y z rows (the last three "
+                                   "columns are used); with --png it is read three times, so it "
+                                   "must be a file, not standard input.",
+                          .opts = opts,
+                          .min_pos = 2,
+                          .max_pos = 2};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return rc;
+    o->surf = pos[0];
+    o->points = pos[1];
+    return 0;
 }
 
 /* The x y z of a point row: the last three columns (x y z or u v x y z). */
@@ -73,7 +94,7 @@ int cmd_report(int argc, char **argv)
     report_opts_t o;
     int rc = parse(argc, argv, &o);
     if (rc)
-        return rc;
+        return cf_opt_exit(rc);
     char msg[512];
     double t0 = cli_now();
     nf_surf_t s;

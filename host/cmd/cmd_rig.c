@@ -3,14 +3,11 @@
  * devices the --stage and --probe URIs name (hal.h). */
 #include "cf_cli.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cmd.h"
 #include "hal_rig.h"
 #include <stdio.h>
 #include <string.h>
-
-#define RIG_USAGE                                                                                  \
-    "usage: cellfit rig status|home|move X Y|probe|reset|stop [--stage URI] [--probe URI]\n"       \
-    "       [--count N] [--timeout MS] [--retries N] [--late MS] [--reconnect MS] [--json]"
 
 /* One line: the driver's detail (it names the device), the code's name. */
 static int rig_fail(int rc, const char *detail)
@@ -104,69 +101,160 @@ static int do_status(hal_rig_t *r, int json)
     return CLI_OK;
 }
 
+enum { OP_STATUS, OP_HOME, OP_MOVE, OP_PROBE, OP_RESET, OP_STOP, NOPS };
+
+typedef struct rig_op {
+    const char *name, *args, *summary;
+    int stage, probe; /* 2: required, 1: optional, 0: not taken */
+} rig_op_t;
+
+static const rig_op_t ops[NOPS] = {
+    {"status", NULL, "the stage's status bits, position and limits, the probe's range", 1, 1},
+    {"home", NULL, "home the stage", 2, 0},
+    {"move", "X Y", "move the stage to (X, Y) mm", 2, 0},
+    {"probe", NULL, "--count readings of the probe (mm; \"nosurf\" out of range)", 0, 2},
+    {"reset", NULL, "reset the stage's fault", 2, 0},
+    {"stop", NULL, "stop the stage", 2, 0},
+};
+
+typedef struct rig_args {
+    const char *stage, *probe;
+    long count;
+    int json;
+    hal_opts_t ho;
+} rig_args_t;
+
+/* The options of operation k, from one table; pos gets X Y for move. */
+static int rig_parse(int k, int argc, char **argv, rig_args_t *a, const char **pos)
+{
+    const rig_op_t *op = &ops[k];
+    cf_opt_t opts[12];
+    int n = 0;
+    if (op->stage)
+        opts[n++] = (cf_opt_t){.name = "stage",
+                               .kind = CF_OPT_STR,
+                               .dst = &a->stage,
+                               .arg = "URI",
+                               .help = "the stage's URI (hal.h: rtu:..., tcp:HOST:PORT[:UNIT])",
+                               .req = op->stage == 2};
+    if (op->probe)
+        opts[n++] = (cf_opt_t){.name = "probe",
+                               .kind = CF_OPT_STR,
+                               .dst = &a->probe,
+                               .arg = "URI",
+                               .help = "the probe's URI (hal.h: serial:..., tty:..., tcp:...)",
+                               .req = op->probe == 2};
+    if (k == OP_PROBE)
+        opts[n++] = (cf_opt_t){.name = "count",
+                               .kind = CF_OPT_LONG,
+                               .dst = &a->count,
+                               .arg = "N",
+                               .help = "readings to take",
+                               .lo = 1,
+                               .hi = 100000000};
+    opts[n++] = (cf_opt_t){.name = "timeout",
+                           .kind = CF_OPT_INT,
+                           .dst = &a->ho.timeout_ms,
+                           .arg = "MS",
+                           .help = "one request or read",
+                           .lo = 1,
+                           .hi = 600000};
+    opts[n++] = (cf_opt_t){.name = "retries",
+                           .kind = CF_OPT_INT,
+                           .dst = &a->ho.retries,
+                           .arg = "N",
+                           .help = "extra attempts after a timeout or a bad frame",
+                           .lo = 0,
+                           .hi = 600000};
+    opts[n++] = (cf_opt_t){.name = "late",
+                           .kind = CF_OPT_INT,
+                           .dst = &a->ho.late_ms,
+                           .arg = "MS",
+                           .help = "a device's worst-case reply delay: later replies are dropped",
+                           .lo = 1,
+                           .hi = 600000,
+                           .def = "the --timeout"};
+    opts[n++] = (cf_opt_t){.name = "reconnect",
+                           .kind = CF_OPT_INT,
+                           .dst = &a->ho.reconnect_ms,
+                           .arg = "MS",
+                           .help = "how long to keep reopening a lost line",
+                           .lo = 1,
+                           .hi = 600000};
+    opts[n++] = (cf_opt_t){
+        .name = "json", .kind = CF_OPT_FLAG, .dst = &a->json, .help = "one JSON object on stdout"};
+    opts[n] = (cf_opt_t){0};
+    char name[16];
+    snprintf(name, sizeof name, "rig %s", op->name);
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = name,
+                          .args = op->args,
+                          .summary = op->summary,
+                          .descr = op->stage == 1 ? "Give --stage, --probe or both." : NULL,
+                          .opts = opts,
+                          .min_pos = k == OP_MOVE ? 2 : 0,
+                          .max_pos = k == OP_MOVE ? 2 : 0};
+    return cf_opt_parse(&cmd, argc, argv, pos, NULL);
+}
+
+/* `cellfit rig` without an operation: its own table (no options), whose
+ * description lists the operations; --help-man adds every operation's
+ * section. */
+static int rig_top(int argc, char **argv)
+{
+    char list[1024];
+    size_t n = (size_t)snprintf(list, sizeof list,
+                                "The devices the --stage and --probe URIs name (hal.h). "
+                                "Operations (cellfit rig OPERATION --help lists its options):");
+    for (int k = 0; k < NOPS && n < sizeof list; k++)
+        n +=
+            (size_t)snprintf(list + n, sizeof list - n, "\n  %-7s %s", ops[k].name, ops[k].summary);
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "rig",
+                          .args = "OPERATION",
+                          .summary = "the stage and the probe by hand: status, home, move, probe, "
+                                     "reset, stop",
+                          .descr = list,
+                          .min_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc < 2 ? 1 : 2, argv, NULL, NULL);
+    if (rc < 0 && !strcmp(argv[1], "--help-man")) {
+        rig_args_t ra = {.count = 1, .ho = HAL_OPTS_DEFAULT};
+        const char *pos[2];
+        for (int k = 0; k < NOPS; k++)
+            rig_parse(k, 2, argv, &ra, pos);
+    }
+    return rc ? cf_opt_exit(rc) : CLI_USAGE;
+}
+
 int cmd_rig(int argc, char **argv)
 {
-    const char *stage = NULL, *probe = NULL, *op = NULL;
-    double mx = 0, my = 0;
-    long count = 1, v;
-    int json = 0, npos = 0;
-    hal_opts_t o = HAL_OPTS_DEFAULT;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--json")) {
-            json = 1;
-            continue;
-        }
-        if (a[0] != '-' || (a[1] >= '0' && a[1] <= '9') || a[1] == '.') {
-            if (!op)
-                op = a;
-            else if (!strcmp(op, "move") && npos < 2) {
-                if (cli_double(a, npos ? &my : &mx))
-                    return cli_error("rig", CLI_USAGE, "move: '%s' is not a number (mm)", a);
-                npos++;
-            } else
-                return cli_error("rig", CLI_USAGE, "unexpected argument '%s'", a);
-            continue;
-        }
-        const char *val = i + 1 < argc ? argv[++i] : NULL;
-        if (!val)
-            return cli_error("rig", CLI_USAGE, "option %s needs a value", a);
-        if (!strcmp(a, "--stage"))
-            stage = val;
-        else if (!strcmp(a, "--probe"))
-            probe = val;
-        else if (!strcmp(a, "--count")) {
-            if (cli_int(val, 1, 100000000L, &count))
-                return cli_error("rig", CLI_USAGE, "--count '%s'", val);
-        } else if (!strcmp(a, "--timeout") || !strcmp(a, "--retries") || !strcmp(a, "--late") ||
-                   !strcmp(a, "--reconnect")) {
-            int retries = !strcmp(a, "--retries");
-            if (cli_int(val, retries ? 0 : 1, 600000, &v))
-                return cli_error("rig", CLI_USAGE, "%s '%s'", a, val);
-            if (retries)
-                o.retries = (int)v;
-            else if (!strcmp(a, "--timeout"))
-                o.timeout_ms = (int)v;
-            else if (!strcmp(a, "--late"))
-                o.late_ms = (int)v;
-            else
-                o.reconnect_ms = (int)v;
-        } else
-            return cli_error("rig", CLI_USAGE, "unknown option '%s'", a);
-    }
-    if (!op)
-        return cli_error("rig", CLI_USAGE, "%s", RIG_USAGE);
-    int need_stage = strcmp(op, "probe") && strcmp(op, "status");
-    int need_probe = !strcmp(op, "probe");
-    if (strcmp(op, "status") && strcmp(op, "home") && strcmp(op, "move") && strcmp(op, "probe") &&
-        strcmp(op, "reset") && strcmp(op, "stop"))
-        return cli_error("rig", CLI_USAGE, "unknown operation '%s' (%s)", op,
-                         "status, home, move, probe, reset, stop");
-    if (!strcmp(op, "move") && npos != 2)
-        return cli_error("rig", CLI_USAGE, "move needs X and Y (mm)");
-    if ((need_stage && !stage) || (need_probe && !probe) || (!stage && !probe))
-        return cli_error("rig", CLI_USAGE, "%s needs %s", op,
-                         need_probe ? "--probe URI" : "--stage URI");
+    if (argc < 2 || argv[1][0] == '-')
+        return rig_top(argc, argv);
+    rig_args_t ra = {.count = 1, .ho = HAL_OPTS_DEFAULT};
+    const char *pos[2];
+    int k = 0;
+    while (k < NOPS && strcmp(argv[1], ops[k].name))
+        k++;
+    if (k == NOPS)
+        return cli_error("rig", CLI_USAGE,
+                         "unknown operation '%s' (status, home, move, probe, reset, stop; "
+                         "cellfit rig --help)",
+                         argv[1]);
+    int prc = rig_parse(k, argc - 1, argv + 1, &ra, pos);
+    if (prc)
+        return cf_opt_exit(prc);
+    double xy[2] = {0, 0};
+    for (int i = 0; k == OP_MOVE && i < 2; i++)
+        if (cli_double(pos[i], &xy[i]))
+            return cli_error("rig", CLI_USAGE, "move: '%s' is not a number (mm)", pos[i]);
+    const double mx = xy[0], my = xy[1];
+    if (!ra.stage && !ra.probe)
+        return cli_error("rig", CLI_USAGE, "%s needs --stage URI, --probe URI or both",
+                         ops[k].name);
+    const char *stage = ra.stage, *probe = ra.probe, *op = ops[k].name;
+    hal_opts_t o = ra.ho;
+    long count = ra.count;
+    int json = ra.json;
     hal_rig_t *r;
     char msg[512];
     int rc = hal_rig_open(stage, probe, &o, &r, msg, sizeof msg);
@@ -174,16 +262,16 @@ int cmd_rig(int argc, char **argv)
         return cli_error("rig", rc == RIG_EARG ? CLI_USAGE : CLI_FAIL, "%s [%s, %d]", msg,
                          rig_strerror(rc), rc);
     int code = CLI_OK;
-    if (!strcmp(op, "status"))
+    if (k == OP_STATUS)
         code = do_status(r, json);
-    else if (!strcmp(op, "probe"))
+    else if (k == OP_PROBE)
         code = do_probe(r, count, json);
     else {
         void *c = r->stage.ctx;
-        rc = !strcmp(op, "home")    ? r->stage.ops->home(c)
-             : !strcmp(op, "move")  ? r->stage.ops->move_to(c, mx, my)
-             : !strcmp(op, "reset") ? r->stage.ops->reset_fault(c)
-                                    : r->stage.ops->stop(c);
+        rc = k == OP_HOME    ? r->stage.ops->home(c)
+             : k == OP_MOVE  ? r->stage.ops->move_to(c, mx, my)
+             : k == OP_RESET ? r->stage.ops->reset_fault(c)
+                             : r->stage.ops->stop(c);
         if (rc)
             code = rig_fail(rc, hal_stage_error(c));
         else {

@@ -1,4 +1,4 @@
-/* cmd_thin.c: `cellfit thin SURF.igs POINTS --tol T [--radius R] [--entity N]
+/* cmd_thin.c: `cellfit thin SURF.igs POINTS --quad-tol T [--radius R] [--entity N]
  * --out FILE [--json]`: thinning (Piegl & Tiller 2001, Section 3.3): the
  * surface is decomposed into quadrilaterals to the relative tolerance T
  * (the paper's thinning tolerance, e.g. 0.005 or 0.5%), and for each vertex
@@ -9,6 +9,7 @@
 #include "cf_cli.h"
 #include "cf_iges.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_surf.h"
 #include "cmd.h"
@@ -29,9 +30,10 @@ typedef struct thin_opts {
 } thin_opts_t;
 
 /* A relative tolerance: a fraction in (0, 1), or a percentage "0.5%". */
-static int parse_rel(const char *v, double *out)
+static int parse_rel(const char *v, void *dst)
 {
     char buf[64];
+    double *out = dst;
     size_t n = strlen(v);
     if (n > 1 && n < sizeof buf && v[n - 1] == '%') {
         memcpy(buf, v, n - 1);
@@ -44,47 +46,66 @@ static int parse_rel(const char *v, double *out)
     return *out > 0.0 && *out < 1.0 ? 0 : -1;
 }
 
+static int positive(const char *v, void *dst)
+{
+    double d;
+    if (cli_double(v, &d) || !(d > 0))
+        return -1;
+    *(double *)dst = d;
+    return 0;
+}
+
+/* 0 to go on; otherwise cf_opt_parse's result (-1: --help answered). */
 static int parse(int argc, char **argv, thin_opts_t *o)
 {
     memset(o, 0, sizeof *o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--json")) {
-            o->json = 1;
-            continue;
-        }
-        if (a[0] == '-' && a[1]) {
-            if (!v)
-                return cli_error("thin", CLI_USAGE, "option %s needs a value", a);
-            i++;
-            if (!strcmp(a, "--tol")) {
-                if (parse_rel(v, &o->tol))
-                    return cli_error("thin", CLI_USAGE,
-                                     "--tol '%s': need a relative tolerance in (0, 1) or a "
-                                     "percentage (0.5%%)",
-                                     v);
-            } else if (!strcmp(a, "--radius")) {
-                if (cli_double(v, &o->radius) || !(o->radius > 0))
-                    return cli_error("thin", CLI_USAGE, "--radius '%s': need a number > 0", v);
-            } else if (!strcmp(a, "--out"))
-                o->out = v;
-            else if (!strcmp(a, "--entity")) {
-                if (cli_int(v, 1, 9999999, &o->entity))
-                    return cli_error("thin", CLI_USAGE, "--entity '%s': need a DE number", v);
-            } else
-                return cli_error("thin", CLI_USAGE, "unknown option '%s'", a);
-        } else if (!o->surf)
-            o->surf = a;
-        else if (!o->points)
-            o->points = a;
-        else
-            return cli_error("thin", CLI_USAGE, "unexpected argument '%s'", a);
-    }
-    if (!o->surf || !o->points || !o->out || !(o->tol > 0))
-        return cli_error("thin", CLI_USAGE,
-                         "usage: cellfit thin SURF.igs POINTS --tol T [--radius R] --out FILE "
-                         "[--json]");
-    return CLI_OK;
+    const char *pos[2];
+    const cf_opt_t opts[] = {
+        {.name = "quad-tol",
+         .kind = CF_OPT_FUNC,
+         .dst = &o->tol,
+         .arg = "REL",
+         .help = "the decomposition's relative tolerance (Section 3.3), e.g. 0.005 or 0.5%",
+         .fn = parse_rel,
+         .fn_what = "a relative tolerance in (0, 1) or a percentage (0.5%)",
+         .req = 1},
+        {.name = "radius",
+         .kind = CF_OPT_FUNC,
+         .dst = &o->radius,
+         .arg = "R",
+         .help = "keep a point only within R of its vertex (model units)",
+         .fn = positive,
+         .fn_what = "a number > 0",
+         .def = "half the mean quadrilateral edge"},
+        {.name = "out",
+         .kind = CF_OPT_STR,
+         .dst = &o->out,
+         .arg = "FILE",
+         .help = "the kept points, x y z, in input order",
+         .req = 1},
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &o->entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in SURF (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "one JSON object on stdout"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "thin",
+                          .args = "SURF.igs POINTS",
+                          .summary = "keep the nearest point of POINTS per vertex of SURF's "
+                                     "quadrilateral decomposition (Section 3.3)",
+                          .opts = opts,
+                          .min_pos = 2,
+                          .max_pos = 2};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return rc;
+    o->surf = pos[0];
+    o->points = pos[1];
+    return 0;
 }
 
 /* Half the mean edge length of the quadrilaterals: a vertex's share of
@@ -121,7 +142,7 @@ int cmd_thin(int argc, char **argv)
     thin_opts_t o;
     int rc = parse(argc, argv, &o);
     if (rc)
-        return rc;
+        return cf_opt_exit(rc);
     char msg[512];
     const double t0 = cli_now();
     nf_surf_t s;
@@ -144,8 +165,8 @@ int cmd_thin(int argc, char **argv)
     const nf_quad_params_t prm = {o.tol, 0.0, 0};
     rc = nf_quad_init(&q, &s, &prm, THIN_MAXQ, qmem, qb);
     if (rc == NF_EBUDGET) {
-        ec = cli_error("thin", CLI_FAIL, "%s: --tol %g needs more than %ld quadrilaterals", o.surf,
-                       o.tol, THIN_MAXQ);
+        ec = cli_error("thin", CLI_FAIL, "%s: --quad-tol %g needs more than %ld quadrilaterals",
+                       o.surf, o.tol, THIN_MAXQ);
         goto done;
     } else if (rc) {
         ec = cli_error("thin", CLI_FAIL, "%s: %s", o.surf, nf_strerror(rc));

@@ -36,7 +36,7 @@ bad() {
 }
 
 # A valid part: the nominal (6 x 4, degree 3) and points on it.
-"$CF" gen --dir "$T" --nu 6 --nv 4 --points 400 --noise 0.001 >/dev/null ||
+"$CF" gen --dir "$T" --nu 6 --nv 4 --count 400 --noise 0.001 >/dev/null ||
     { echo "badinput: cellfit gen failed"; exit 1; }
 N="$T/nominal.igs"
 grep -v '^#' "$T/points.uvxyz" >"$T/good.uvxyz"

@@ -14,7 +14,7 @@ maxdiff() { paste "$1" "$2" | awk '{ for (c = 1; c <= 3; c++) { a = $c - $(c+3);
 oneline() { [ "$(wc -l <"$T/err")" -eq 1 ] && ok "$1: one-line error" || no "$1: stderr has $(wc -l <"$T/err") lines"; }
 
 # The part: a 40 x 30 bicubic nominal; the real part has a dent and a warp.
-"$CF" gen --dir "$T" --nu 40 --nv 30 --points 60000 --noise 0.005 >/dev/null
+"$CF" gen --dir "$T" --nu 40 --nv 30 --count 60000 --noise 0.005 >/dev/null
 grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
 expect 0 "boundary curves of the nominal as IGES 126" "$CF" base --extract "$T/nominal.igs" --out "$T/curves.igs"
 [ "$(grep -c '^     126' "$T/curves.igs")" -eq 8 ] && ok "four 126 entities (8 D lines)" || no "curves.igs: $(grep -c '^     126' "$T/curves.igs") 126 D lines"

@@ -11,7 +11,7 @@ trap 'rm -rf "$T"' EXIT
 
 for t in 1 2; do
     for o in raster random; do
-        expect 0 "accumulate --threads $t --order $o" "$CF" bench accumulate --points 50000 \
+        expect 0 "accumulate --threads $t --order $o" "$CF" bench accumulate --count 50000 \
             --cp 2500 --order $o --threads $t --json
         [ "$(json "$T/out" threads)" = $t ] && ok "threads $t in JSON" || no "threads $t in JSON"
         [ "$(json "$T/out" points)" = 50000 ] && ok "50000 points" || no "points"
@@ -20,8 +20,8 @@ for t in 1 2; do
     done
 done
 # Two cores need a second store: the arena grows by the shard's bytes.
-"$CF" bench accumulate --points 1000 --cp 2500 --json >"$T/one"
-"$CF" bench accumulate --points 1000 --cp 2500 --threads 2 --json >"$T/two"
+"$CF" bench accumulate --count 1000 --cp 2500 --json >"$T/one"
+"$CF" bench accumulate --count 1000 --cp 2500 --threads 2 --json >"$T/two"
 a1=$(json "$T/one" arena_bytes)
 a2=$(json "$T/two" arena_bytes)
 # 2,500 control points, bicubic: 8 N (25 + 3) + 256 bytes more
@@ -29,7 +29,7 @@ a2=$(json "$T/two" arena_bytes)
     no "shard bytes: $a1 -> $a2"
 # The same system from one core and from two: the same iterations, residual.
 for t in 1 2; do
-    expect 0 "bench fit --threads $t" "$CF" bench fit --points 100000 --cp 2500 --order random \
+    expect 0 "bench fit --threads $t" "$CF" bench fit --count 100000 --cp 2500 --order random \
         --solver pcg --threads $t --json
     cp "$T/out" "$T/fit$t"
 done

@@ -12,7 +12,7 @@ maxabs() { awk '{ d = $3; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.
 oneline() { [ "$(wc -l <"$T/err")" -eq 1 ] && ok "$1: one-line error" || no "$1: stderr has $(wc -l <"$T/err") lines"; }
 
 # The part of base.sh: a 40 x 30 bicubic nominal, the real part dented and warped.
-"$CF" gen --dir "$T" --nu 40 --nv 30 --points 60000 --noise 0.005 >/dev/null
+"$CF" gen --dir "$T" --nu 40 --nv 30 --count 60000 --noise 0.005 >/dev/null
 grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
 
 expect 0 "bilinear base from fitted edges (no --curves)" "$CF" base --points "$T/points.xyz" --method bilinear \

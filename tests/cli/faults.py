@@ -759,7 +759,7 @@ def plc_column():
 
 def main():
     t0 = time.time()
-    r = run([CF, "gen", "--dir", os.path.join(T, "part"), "--nu", "40", "--nv", "30", "--points", "1000"])
+    r = run([CF, "gen", "--dir", os.path.join(T, "part"), "--nu", "40", "--nv", "30", "--count", "1000"])
     if r.returncode:
         no("gen: " + r.stderr)
         return

@@ -78,7 +78,7 @@ expect 2 "selftest-write never overwrites" "$CF" journal selftest-write "$T/a.jn
 # The streaming fit of a journal: a synthetic part's scattered points,
 # journalled; the fit equals `cellfit fit` of the same points (same
 # projection, same equations) and recovers the true part to the noise.
-"$CF" gen --dir "$T/part" --nu 40 --nv 30 --points 60000 --noise 0.005 >/dev/null
+"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 60000 --noise 0.005 >/dev/null
 grep -v '^#' "$T/part/points.uvxyz" | cut -d' ' -f3- >"$T/part/p.xyz"
 expect 0 "journal the part's points" "$CF" journal selftest-write "$T/p.jnl" --points "$T/part/p.xyz" \
     --nominal "$T/part/nominal.igs"
@@ -105,7 +105,7 @@ le "$d" 1e-9 && ok "journal fit --reparam 1 = cellfit fit --reparam 1 (max diff 
 cmp -s "$T/e-jf1" "$T/e-jf" && no "--reparam 1 changed nothing" || ok "--reparam 1 is a different fit from pass 0"
 r=$(json "$T/jf.json" rms)
 le "$r" 0.006 && ok "residual rms $r from the second pass over the journal (noise 0.005)" || no "rms $r"
-"$CF" gen --dir "$T/other" --nu 8 --nv 8 --points 100 >/dev/null
+"$CF" gen --dir "$T/other" --nu 8 --nv 8 --count 100 >/dev/null
 expect 2 "journal fit against another nominal: exit 2" "$CF" journal fit "$T/p.jnl" --nominal "$T/other/nominal.igs" --out "$T/x.igs"
 grep -q "measured against 'nominal.igs'" "$T/err" && one_line && ok "says which nominal it was measured against" ||
     no "nominal mismatch message: $(cat "$T/err")"

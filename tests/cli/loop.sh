@@ -24,11 +24,11 @@ maxdev() {
 
 # A 200 x 150 mm panel (dent, warp) with a narrow bump (0.5 mm high, radius
 # 4 mm at the centre, on a check point); a 12 x 10 start net (20 mm spans).
-"$CF" gen --dir "$T/b" --nu 12 --nv 10 --points 30000 --noise 0.005 --bump 0.5,100,75,4 >/dev/null
+"$CF" gen --dir "$T/b" --nu 12 --nv 10 --count 30000 --noise 0.005 --bump 0.5,100,75,4 >/dev/null
 grep -v '^#' "$T/b/points.uvxyz" | cut -d' ' -f3- >"$T/b/points.xyz"
 # The true part densely (noise-free, 10^5 points off the scan lines): a fit
 # must not wiggle between the lines it was fitted to.
-"$CF" gen --dir "$T/bt" --nu 12 --nv 10 --points 100000 --noise 0 --bump 0.5,100,75,4 >/dev/null
+"$CF" gen --dir "$T/bt" --nu 12 --nv 10 --count 100000 --noise 0 --bump 0.5,100,75,4 >/dev/null
 grep -v '^#' "$T/bt/points.uvxyz" | cut -d' ' -f3- >"$T/bt/check.xyz"
 TOL=0.03
 expect 1 "start net alone misses the tolerance (--max-rounds 1: exit 1)" "$CF" fit --base "$T/b/nominal.igs" \
@@ -90,7 +90,7 @@ expect 2 "--max-cp below the base net" "$CF" fit --base "$T/b/nominal.igs" --poi
 [ "$(wc -l <"$T/err")" -eq 1 ] && ok "refusal is one line" || no "refusal: $(cat "$T/err")"
 
 # Robust: 1 % gross outliers (+/- 5 mm spikes) on a net fine enough for the part.
-"$CF" gen --dir "$T/o" --nu 40 --nv 30 --points 40000 --noise 0.005 --outliers 0.01 --spike 5 >/dev/null
+"$CF" gen --dir "$T/o" --nu 40 --nv 30 --count 40000 --noise 0.005 --outliers 0.01 --spike 5 >/dev/null
 grep -v '^#' "$T/o/points.uvxyz" | cut -d' ' -f3- >"$T/o/points.xyz"
 spikes=$(grep -v '^#' "$T/o/points.uvxyz" | wc -l)
 expect 0 "plain fit with spikes" "$CF" fit --base "$T/o/nominal.igs" --points "$T/o/points.xyz" --out "$T/plain.igs"
@@ -107,7 +107,7 @@ le 0.004 "$sig" && le "$sig" 0.006 && ok "robust scale $sig mm (noise sigma 0.00
 # Robust and refined together: spikes on the bump panel. The start net
 # cannot follow the bump, whose points the robust pass rejects too; their
 # misfit sits in one place (unlike the spikes) and still drives the knots.
-"$CF" gen --dir "$T/bo" --nu 12 --nv 10 --points 40000 --noise 0.005 --bump 0.5,100,75,4 --outliers 0.01 >/dev/null
+"$CF" gen --dir "$T/bo" --nu 12 --nv 10 --count 40000 --noise 0.005 --bump 0.5,100,75,4 --outliers 0.01 >/dev/null
 grep -v '^#' "$T/bo/points.uvxyz" | cut -d' ' -f3- >"$T/bo/points.xyz"
 expect 0 "--robust --tol $TOL --within 98.9 with spikes and a bump" "$CF" fit --base "$T/bo/nominal.igs" \
     --points "$T/bo/points.xyz" --robust --tol $TOL --within 98.9 --out "$T/bo.igs" --json
@@ -119,7 +119,7 @@ e=$(maxdev "$T/bo.igs" "$T/bt")
     no "robust + refined: tol_met $(top "$T/bo.json" tol_met), dense truth $e, rejected $out"
 
 # On clean data the robust fit is the plain fit to the noise.
-"$CF" gen --dir "$T/c" --nu 40 --nv 30 --points 40000 --noise 0.005 >/dev/null
+"$CF" gen --dir "$T/c" --nu 40 --nv 30 --count 40000 --noise 0.005 >/dev/null
 expect 0 "--robust on clean data" "$CF" fit --base "$T/c/nominal.igs" --points "$T/c/points.uvxyz" --uv --robust --out "$T/rc.igs"
 "$CF" fit --base "$T/c/nominal.igs" --points "$T/c/points.uvxyz" --uv --out "$T/pc.igs" >/dev/null
 "$CF" eval "$T/rc.igs" "$T/c/check.uv" >"$T/e-rc"
@@ -130,8 +130,8 @@ le "$d" 0.002 && ok "robust and plain fits agree on data without outliers ($d mm
 # Memory flat in the number of points with --tol: same nets (uniform, two
 # rounds, a tolerance below the noise: never met, the finer fit the best),
 # 10^4 and 10^6 points.
-"$CF" gen --dir "$T/m4" --nu 60 --nv 45 --points 10000 >/dev/null &&
-    "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --points 1000000 >/dev/null
+"$CF" gen --dir "$T/m4" --nu 60 --nv 45 --count 10000 >/dev/null &&
+    "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --count 1000000 >/dev/null
 for m in m4 m6; do
     "$CF" fit --base "$T/$m/nominal.igs" --points "$T/$m/points.uvxyz" --uv --tol 0.004 --refine uniform \
         --max-rounds 2 --out "$T/$m.igs" --json >"$T/$m.json" 2>/dev/null

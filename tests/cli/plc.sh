@@ -29,9 +29,9 @@ mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
 # The part: 200000 x y z points (projected by the fit: a job of a few
 # tenths of a second). The watchdog's cell gets 10^6 (a job of seconds,
 # which must outlast WATCHDOG_MS = 300 ms on a fast machine too).
-"$CF" gen --dir "$T" --nu 16 --nv 12 --points 200000 --noise 0.002 >/dev/null
+"$CF" gen --dir "$T" --nu 16 --nv 12 --count 200000 --noise 0.002 >/dev/null
 grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
-"$CF" gen --dir "$T/big" --nu 16 --nv 12 --points 1000000 --noise 0.002 >/dev/null
+"$CF" gen --dir "$T/big" --nu 16 --nv 12 --count 1000000 --noise 0.002 >/dev/null
 grep -v '^#' "$T/big/points.uvxyz" | cut -d' ' -f3- >"$T/big/points.xyz"
 mkdir -p "$T/results"
 

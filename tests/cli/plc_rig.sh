@@ -42,7 +42,7 @@ start() {
     simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/$1.log")
 }
 
-"$CF" gen --dir "$T/part" --nu 40 --nv 30 --points 1000 >/dev/null
+"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
 mkdir -p "$T/res"
 SIMARGS="--speed 5000 --seed 1 --part $T/part/nominal.igs --control $T/a.ctl"
 start a --sim --sim-args "$SIMARGS" --nominal "$T/part/nominal.igs" --results "$T/res"

@@ -61,7 +61,7 @@ ctl() { # ctl LINE...: tell cellsim through its control file, wait until obeyed
 # The truth: the nominal as cellfit gen writes it (the simulator's built-in
 # part), evaluated at u = x/200, v = y/150 (the panel's Greville placement
 # reproduces x and y), plus the dent and warp of lib/cf_part.c.
-"$CF" gen --dir "$T/part" --points 10 >/dev/null || no "cellfit gen"
+"$CF" gen --dir "$T/part" --count 10 >/dev/null || no "cellfit gen"
 truth_d() { # truth_d X Y Z0: the distance the probe must read at stage (X, Y)
     printf '%.17g %.17g\n' "$(awk -v x="$1" 'BEGIN { print x / 200 }')" \
         "$(awk -v y="$2" 'BEGIN { print y / 150 }')" >"$T/uv"

@@ -10,7 +10,7 @@ T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-cli.XXXXXX")
 trap 'rm -rf "$T"' EXIT
 
 # A small synthetic part, fitted with each solver.
-expect 0 "gen small part" "$CF" gen --dir "$T" --nu 16 --nv 12 --points 20000 --noise 0.002
+expect 0 "gen small part" "$CF" gen --dir "$T" --nu 16 --nv 12 --count 20000 --noise 0.002
 for s in auto chol pcg gs; do
     expect 0 "fit --solver $s" "$CF" fit --base "$T/nominal.igs" --points "$T/points.uvxyz" --uv \
         --solver $s --out "$T/fit-$s.igs" --json
@@ -32,7 +32,7 @@ d=$(paste "$T/e-chol" "$T/e-pcg" "$T/e-gs" | awk '{ for (c = 1; c <= 3; c++) { a
 le "$d" 1e-6 && ok "chol, pcg and gs surfaces agree within 1e-6 mm ($d)" || no "solvers disagree by $d mm"
 # On a net fine enough for the dent (40 x 30: 5.4 mm spans, dent radius
 # 15 mm), the fit recovers the real part (nominal + dent + warp) to the noise.
-"$CF" gen --dir "$T/fine" --nu 40 --nv 30 --points 60000 --noise 0.005 >/dev/null
+"$CF" gen --dir "$T/fine" --nu 40 --nv 30 --count 60000 --noise 0.005 >/dev/null
 "$CF" fit --base "$T/fine/nominal.igs" --points "$T/fine/points.uvxyz" --uv --out "$T/fine.igs" >/dev/null
 "$CF" eval "$T/fine.igs" "$T/fine/check.uv" >"$T/e-fine"
 "$CF" eval "$T/fine/nominal.igs" "$T/fine/check.uv" >"$T/e-nom"
@@ -117,7 +117,7 @@ grep -q "control point" "$T/err" && ok "refusal names a control point" || no "re
 [ "$(wc -l <"$T/err")" -eq 1 ] && ok "refusal is one line" || no "refusal is $(wc -l <"$T/err") lines"
 expect 0 "fit: same data with beta keeps the rest at nominal" "$CF" fit --base "$T/nominal.igs" --points "$T/half.uvxyz" --uv --alpha 0 --beta 0.001 --out "$T/half.igs"
 # Over budget: Cholesky's band on a long 20000 x 4 net needs ~38 GB.
-"$CF" gen --dir "$T/long" --nu 20000 --nv 4 --points 10 >/dev/null
+"$CF" gen --dir "$T/long" --nu 20000 --nv 4 --count 10 >/dev/null
 expect 2 "fit: Cholesky over the board budget refused" "$CF" fit --base "$T/long/nominal.igs" --points "$T/long/points.uvxyz" --uv --solver chol --out "$T/x.igs"
 grep -q "needs [0-9]* bytes" "$T/err" && ok "refusal says the bytes needed" || no "budget message: $(cat "$T/err")"
 # info and eval
@@ -131,8 +131,8 @@ expect 2 "eval outside the domain" "$CF" eval "$T/nominal.igs" "$T/bad.uv"
 grep -q "bad.uv:3:" "$T/err" && ok "eval error names file:line 3" || no "eval error: $(cat "$T/err")"
 
 # Memory flat in the number of points: same net, 10^4 and 10^6 points.
-"$CF" gen --dir "$T/m4" --nu 60 --nv 45 --points 10000 >/dev/null &&
-    "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --points 1000000 >/dev/null
+"$CF" gen --dir "$T/m4" --nu 60 --nv 45 --count 10000 >/dev/null &&
+    "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --count 1000000 >/dev/null
 # A run's peak RSS moves by a few hundred kB between identical runs (where
 # the allocator and the kernel place pages): the smallest of 3 runs each.
 min_rss() { # min_rss DIR: smallest peak_rss_bytes of 3 fits of DIR's points

@@ -48,7 +48,7 @@ scan() { # scan JOURNAL ARGS...: the rig of the last start_sim
         --nominal "$T/part/nominal.igs" --journal "$j" --region 0:100:0:50 --step 10 "$@"
 }
 
-"$CF" gen --dir "$T/part" --nu 40 --nv 30 --points 1000 >/dev/null
+"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
 
 # A clean scan with a beam offset: 11 x 6 points, fitted as they arrive.
 start_sim a --offset 1.5,2 --noise 0.002

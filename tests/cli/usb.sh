@@ -36,11 +36,11 @@ grep -q '"name": "/dev/ttyUSB0", "usb": "0403:6001"' "$T/out" && ok "ports --jso
     no "ports --json: $(cat "$T/out")"
 
 # Probe readings are the simulator's table, in order, with out-of-range.
-expect 0 "probe: 5 readings" sim --no-usb --table 1.5,-2.25,oor,3.125 -- "$CF" ports --probe $P --n 5
+expect 0 "probe: 5 readings" sim --no-usb --table 1.5,-2.25,oor,3.125 -- "$CF" ports --probe $P --count 5
 printf 'reading 1: 1.500 mm\nreading 2: -2.250 mm\nreading 3: out of range\nreading 4: 3.125 mm\nreading 5: 1.500 mm\n' >"$T/want"
 cmp -s "$T/out" "$T/want" && ok "probe: the table, out of range included" ||
     no "probe readings: $(tr '\n' '|' <"$T/out")"
-expect 0 "probe --baud 9600 --json" sim --no-usb --table 7.5 -- "$CF" ports --probe $P --baud 9600 --n 3 --json
+expect 0 "probe --baud 9600 --json" sim --no-usb --table 7.5 -- "$CF" ports --probe $P --baud 9600 --count 3 --json
 field readings 3 "three readings at 9600 baud"
 field mean_mm 7.5 "mean of the table"
 
@@ -55,24 +55,24 @@ field retries 1 "one retry"
 field last_error -204 "after RIG_EPROTO"
 field first_mm 2.5 "the retry's reply"
 # A probe error code is the device refusing, not retried.
-expect 1 "ER,M0,07" sim --no-usb --error 2:07 -- "$CF" ports --probe $P --n 3
+expect 1 "ER,M0,07" sim --no-usb --error 2:07 -- "$CF" ports --probe $P --count 3
 grep -q "reading 2: error -205" "$T/out" && grep -q "probe error 07" "$T/err" &&
     ok "ER,M0,07 is RIG_EEXCEPTION with the code" || no "ER: $(cat "$T/out" "$T/err")"
 grep -q "reading 3: " "$T/out" && ok "readings go on after a probe error" || no "after ER"
 
 # Adapter pulled: reads fail, reopening by name fails: RIG_EDISCONNECT.
-expect 1 "adapter pulled" sim --no-usb --serial-unplug 2 -- "$CF" ports --probe $P --n 5 --reconnect 300 --json
+expect 1 "adapter pulled" sim --no-usb --serial-unplug 2 -- "$CF" ports --probe $P --count 5 --reconnect 300 --json
 field readings 2 "two readings before the pull"
 field last_error -206 "then RIG_EDISCONNECT"
 grep -q "reopening for 300 ms failed" "$T/err" && ok "the error says reconnect was tried" ||
     no "unplug error: $(cat "$T/err")"
 expect 1 "no such port" sim --no-usb -- "$CF" ports --probe /dev/ttyUSB7
 grep -q "cannot open" "$T/err" && ok "no such port: RIG_EOPEN" || no "no port: $(cat "$T/err")"
-expect 2 "bad option" "$CF" ports --probe $P --n 0
+expect 2 "bad option" "$CF" ports --probe $P --count 0
 
 # Trigger box: identity by control IN, period and arm by control OUT,
 # encoder packets by bulk IN, checked against the simulator's model.
-expect 0 "trigger box: 12 packets" sim --no-serial -- "$CF" ports --trig 1209:cf01 --n 12 --period 2000
+expect 0 "trigger box: 12 packets" sim --no-serial -- "$CF" ports --trig 1209:cf01 --count 12 --period 2000
 grep -q "firmware 1.2.3, serial 42, 2 axes" "$T/out" && ok "identity via control IN" ||
     no "identity: $(head -1 "$T/out")"
 bad=$(awk '/^trigger [0-9]/ { k = n++; if ($2 != k || $4 != 2000 * k || $7 != 100 * k || $8 != 1000 - 3 * k) b++ }
@@ -87,22 +87,22 @@ expect 1 "no trigger box" sim --no-usb -- "$CF" ports --trig 1209:cf01
 grep -q "no such device" "$T/err" && ok "absent box: RIG_EOPEN, no such device" || no "absent: $(cat "$T/err")"
 
 # Faults: silence (timeout), bad CRC, a gap, a pull with and without replug.
-expect 1 "box goes silent" sim --no-serial --usb-silent 5 -- "$CF" ports --trig 1209:cf01 --n 10 --timeout 200 --json
+expect 1 "box goes silent" sim --no-serial --usb-silent 5 -- "$CF" ports --trig 1209:cf01 --count 10 --timeout 200 --json
 field error -202 "silence is RIG_ETIMEOUT"
 field packets 5 "after the 5 packets sent"
 grep -q "LIBUSB_ERROR_TIMEOUT" "$T/err" && ok "detail names LIBUSB_ERROR_TIMEOUT" || no "timeout: $(cat "$T/err")"
-expect 0 "bad CRC" sim --no-serial --usb-badcrc 3 -- "$CF" ports --trig 1209:cf01 --n 10 --json
+expect 0 "bad CRC" sim --no-serial --usb-badcrc 3 -- "$CF" ports --trig 1209:cf01 --count 10 --json
 field crc_errors 1 "one CRC error"
 l=$(json "$T/out" lost)
 [ "${l:-0}" -ge 1 ] && ok "the bad packet shows as a gap (lost $l)" || no "lost $l"
-expect 0 "skipped trigger" sim --no-serial --usb-skip 4 -- "$CF" ports --trig 1209:cf01 --n 10 --json
+expect 0 "skipped trigger" sim --no-serial --usb-skip 4 -- "$CF" ports --trig 1209:cf01 --count 10 --json
 field lost 1 "one trigger lost"
 field crc_errors 0 "no CRC errors"
-expect 1 "box pulled" sim --no-serial --usb-unplug 6 -- "$CF" ports --trig 1209:cf01 --n 10 --reconnect 300 --json
+expect 1 "box pulled" sim --no-serial --usb-unplug 6 -- "$CF" ports --trig 1209:cf01 --count 10 --reconnect 300 --json
 field error -206 "pull is RIG_EDISCONNECT"
 field packets 6 "after the 6 packets sent"
 grep -q "LIBUSB_ERROR_NO_DEVICE" "$T/err" && ok "detail names LIBUSB_ERROR_NO_DEVICE" || no "unplug: $(cat "$T/err")"
-expect 0 "box pulled and plugged back" sim --no-serial --usb-unplug 4 --usb-replug 200 -- "$CF" ports --trig 1209:cf01 --n 10 --reconnect 3000 --json
+expect 0 "box pulled and plugged back" sim --no-serial --usb-unplug 4 --usb-replug 200 -- "$CF" ports --trig 1209:cf01 --count 10 --reconnect 3000 --json
 field reconnects 1 "found again"
 field rearmed 1 "set up again"
 field packets 10 "all packets"
