@@ -29,9 +29,10 @@ static const cf_opt_t *find(const cf_cmd_t *c, const char *name, size_t len)
     return NULL;
 }
 
+/* lo > hi, or both 0 (a table that left them out), mean any value. */
 static int ranged(const cf_opt_t *o)
 {
-    return o->lo <= o->hi;
+    return o->lo <= o->hi && !(o->lo == 0 && o->hi == 0);
 }
 
 /* "a number in [0, 100]", "an integer >= 1", ... for error lines. */
@@ -276,6 +277,9 @@ void cf_opt_man(const cf_cmd_t *c, FILE *f)
         }
         fputc('\n', f);
         roff(f, o->help);
+        size_t hl = strlen(o->help);
+        if (hl && o->help[hl - 1] != '.')
+            fputc('.', f);
         if (o->kind == CF_OPT_CHOICE) {
             what(o, w, sizeof w);
             fputs(" (", f);
