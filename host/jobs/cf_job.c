@@ -14,6 +14,7 @@
 int cf_job_open(const cf_job_fit_opts_t *o, cf_fitjob_t **j, char *msg, size_t ml)
 {
     nf_surf_t s;
+    *j = NULL;
     int rc = cf_iges_read(o->nominal, 0, &s, msg, ml);
     if (rc)
         return rc;
