@@ -617,11 +617,16 @@ int cmd_journal(int argc, char **argv)
         return do_selftest_write(argc - 1, argv + 1);
     if (!strcmp(sub, "selftest-check"))
         return do_selftest_check(argc - 1, argv + 1);
-    if (!strcmp(sub, "--help") || !strcmp(sub, "-h")) {
-        printf("usage: cellfit journal export|info|recover|fit JOURNAL [options]\n"
-               "the journal of measured points read back; `cellfit journal SUB --help` for "
-               "each\n");
-        return CLI_OK;
+    if (sub[0] == '-') { /* --help, or an option before the subcommand */
+        const cf_opt_t none[] = {{0}};
+        const cf_cmd_t cmd = {.prog = "cellfit",
+                              .name = "journal",
+                              .args = "export|info|recover|fit JOURNAL ...",
+                              .summary = "the journal of measured points read back (`cellfit "
+                                         "journal SUB --help` for each)",
+                              .opts = none};
+        int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+        return rc ? cf_opt_exit(rc) : cli_error(CMD, CLI_USAGE, "need a subcommand");
     }
     return cli_error(CMD, CLI_USAGE,
                      "usage: cellfit journal export|info|recover|fit JOURNAL ... ('%s'?)", sub);

@@ -335,8 +335,10 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
 {
     int rc;
     if (!j->live) {
-        j->lp = calloc(1, sizeof *j->lp);
-        j->mem = malloc((size_t)j->need);
+        if (!j->lp)
+            j->lp = calloc(1, sizeof *j->lp);
+        if (!j->mem)
+            j->mem = malloc((size_t)j->need);
         if (!j->lp || !j->mem)
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
         if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, "live points", msg, ml)))
