@@ -30,6 +30,7 @@ struct cf_fitjob {
     void *mem;      /* the fitter's arena */
     double *buf, *rows;
     long *src; /* per kept row, its index in the batch (for messages) */
+    long cap;  /* rows the three buffers hold */
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
@@ -157,18 +158,12 @@ int cf_fitjob_open(cf_fitjob_t **jp, const nf_surf_t *nominal, const cf_fitjob_o
     if (!(j->o.far > 0)) /* default: 5 % of the diagonal of the base's control net */
         j->o.far = 0.05 * net_diagonal(nominal);
     j->need = need;
-    j->buf = malloc(sizeof(double) * 5 * BATCH);
-    j->rows = malloc(sizeof(double) * 5 * BATCH);
-    j->src = malloc(sizeof(long) * BATCH);
     int rc = CF_ENOMEM;
-    if (!j->buf || !j->rows || !j->src || cf_surf_copy(&j->base, nominal) ||
-        (rc = refine_dir(&j->base, nu, 0)) || (rc = refine_dir(&j->base, nv, 1))) {
+    if (cf_surf_copy(&j->base, nominal) || (rc = refine_dir(&j->base, nu, 0)) ||
+        (rc = refine_dir(&j->base, nv, 1))) {
         cf_fitjob_close(j);
         return cf_fail(msg, ml, rc, "refining the nominal to %d x %d: %s", nu, nv, cf_strerror(rc));
     }
-    memset(j->buf, 0, sizeof(double) * 5 * BATCH); /* resident now, whatever the points */
-    memset(j->rows, 0, sizeof(double) * 5 * BATCH);
-    memset(j->src, 0, sizeof(long) * BATCH);
     *jp = j;
     return 0;
 }
@@ -181,6 +176,28 @@ const nf_surf_t *cf_fitjob_base(const cf_fitjob_t *j)
 long cf_fitjob_bytes(const cf_fitjob_t *j)
 {
     return j->need;
+}
+
+/* Batch buffers for n rows (at most BATCH), touched whole when allocated so
+ * that memory never follows the points: a journal of a few hundred points
+ * (the cell's scans) needs no 5 MB of them, a file of unknown length gets
+ * BATCH. */
+static int buffers(cf_fitjob_t *j, long n)
+{
+    n = n < 1 ? BATCH : n > BATCH ? BATCH : n;
+    if (j->cap >= n)
+        return 0;
+    free(j->buf), free(j->rows), free(j->src);
+    j->buf = malloc(sizeof(double) * 5 * (size_t)n);
+    j->rows = malloc(sizeof(double) * 5 * (size_t)n);
+    j->src = malloc(sizeof(long) * (size_t)n);
+    j->cap = j->buf && j->rows && j->src ? n : 0;
+    if (!j->cap)
+        return CF_ENOMEM;
+    memset(j->buf, 0, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
+    memset(j->rows, 0, sizeof(double) * 5 * (size_t)n);
+    memset(j->src, 0, sizeof(long) * (size_t)n);
+    return 0;
 }
 
 /* Robust reweighting of a pass: Tukey weights of the residuals to the
@@ -339,7 +356,7 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
             j->lp = calloc(1, sizeof *j->lp);
         if (!j->mem)
             j->mem = malloc((size_t)j->need);
-        if (!j->lp || !j->mem)
+        if (!j->lp || !j->mem || buffers(j, 1))
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
         if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, "live points", msg, ml)))
             return rc;
@@ -392,7 +409,7 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
     if (!rc)
         rc = rewind_src(r);
     long got;
-    while (!rc && (got = s->read(s->ctx, j->buf, BATCH, r->msg, r->ml)) != 0) {
+    while (!rc && (got = s->read(s->ctx, j->buf, j->cap, r->msg, r->ml)) != 0) {
         if (got < 0) {
             rc = (int)got;
             break;
@@ -463,7 +480,7 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
     int rc = rewind_src(r);
     long got = 0;
-    while (!rc && (got = src->read(src->ctx, j->buf, BATCH, r->msg, r->ml)) > 0) {
+    while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
         if (stopped(r)) {
             rc = RIG_EABORTED;
             break;
@@ -651,7 +668,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (cf_surf_copy(&S.cur, &j->base)) {
+    if (buffers(j, src->total) || cf_surf_copy(&S.cur, &j->base)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }

@@ -98,7 +98,7 @@ void cf_fitsrc_journal(cf_fitsrc_t *s, cf_fitsrc_jnl_t *ctx, jnl_reader_t *rd, c
 
 int cf_fitsrc_nominal_id(const char *path, uint64_t *hash, char name[JNL_NAME_LEN])
 {
-    FILE *f = fopen(path, "rb");
+    FILE *f = path ? fopen(path, "rb") : NULL;
     if (!f)
         return CF_EIO;
     uint64_t h = 0xcbf29ce484222325ULL;
