@@ -178,6 +178,15 @@ long cf_fitjob_bytes(const cf_fitjob_t *j)
     return j->need;
 }
 
+/* Every page of p written: malloc followed by a zeroing memset may become
+ * calloc, whose fresh pages stay untouched until the points reach them. */
+static void touch(void *p, size_t n)
+{
+    volatile unsigned char *c = p;
+    for (size_t i = 0; i < n; i += 4096)
+        c[i] = 0;
+}
+
 /* Batch buffers for n rows (at most BATCH), touched whole when allocated so
  * that memory never follows the points: a journal of a few hundred points
  * (the cell's scans) needs no 5 MB of them, a file of unknown length gets
@@ -194,9 +203,9 @@ static int buffers(cf_fitjob_t *j, long n)
     j->cap = j->buf && j->rows && j->src ? n : 0;
     if (!j->cap)
         return CF_ENOMEM;
-    memset(j->buf, 0, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
-    memset(j->rows, 0, sizeof(double) * 5 * (size_t)n);
-    memset(j->src, 0, sizeof(long) * (size_t)n);
+    touch(j->buf, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
+    touch(j->rows, sizeof(double) * 5 * (size_t)n);
+    touch(j->src, sizeof(long) * (size_t)n);
     return 0;
 }
 
