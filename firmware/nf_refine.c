@@ -428,3 +428,35 @@ int nf_refine_uniform(const nf_surf_t *in, nf_surf_t *out)
     finish_net(in, out);
     return NF_OK;
 }
+
+/* The breakpoints are K[deg..n] merged with the knots chosen so far (both
+ * sorted), walked by merge each time: no buffer, O(r (n + r)) work. */
+int nf_refine_widest(const double *K, int n, int deg, int r, double *X)
+{
+    if (r < 0 || (r > 0 && (!K || !X)))
+        return NF_EARG;
+    for (int t = 0; t < r; t++) {
+        /* One merge walk over K's breakpoints and the t knots chosen so far:
+         * the first widest gap between consecutive distinct values. */
+        int i = deg, k = 0, have = 0, at = 0;
+        double prev = 0.0, lo = 0.0, hi = 0.0;
+        while (i <= n || k < t) {
+            double x = k >= t || (i <= n && K[i] <= X[k]) ? K[i++] : X[k++];
+            if (have && x > prev && (at == 0 || x - prev > hi - lo)) {
+                lo = prev;
+                hi = x;
+                at = 1;
+            }
+            prev = x;
+            have = 1;
+        }
+        double m = 0.5 * (lo + hi);
+        int j = t;
+        while (j > 0 && X[j - 1] > m) { /* sorted insertion */
+            X[j] = X[j - 1];
+            j--;
+        }
+        X[j] = m;
+    }
+    return NF_OK;
+}

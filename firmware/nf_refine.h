@@ -54,4 +54,13 @@ int nf_refine_insert_v(const nf_surf_t *in, double x, int times, nf_surf_t *out)
  * halved). out wired with nf_refine_uniform_size's net. */
 int nf_refine_uniform(const nf_surf_t *in, nf_surf_t *out);
 
+/* Knots that refine one direction to n + r control points: r times the
+ * widest span between distinct knots of K[deg..n] (n control points,
+ * degree deg), the first of equal ones, halved, counting the knots already
+ * chosen (Boehm insertion of X keeps the surface). X (room for r) gets them
+ * sorted. Insert them with nf_refine_u / nf_refine_v. This is "refine a
+ * net to N control points" for the fit job and for base surfaces. NF_EARG
+ * for r < 0 or null pointers with r > 0. */
+int nf_refine_widest(const double *K, int n, int deg, int r, double *X);
+
 #endif

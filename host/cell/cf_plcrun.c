@@ -16,11 +16,12 @@ static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_op
 {
     o->nominal = rr->nominal;
     o->points = rr->points;
-    o->alpha = p->alpha;
-    o->beta = p->beta;
-    o->tol = p->tol;
-    o->net_u = p->net_u;
-    o->net_v = p->net_v;
+    o->fit = rr->fit; /* the configured loop, robust passes, reprojection */
+    o->fit.alpha = p->alpha;
+    o->fit.beta = p->beta;
+    o->fit.tol = p->tol;
+    o->fit.net_u = p->net_u;
+    o->fit.net_v = p->net_v;
 }
 
 static const char *journal_dir(const cf_plcrun_t *rr, const plc_params_t *p)
@@ -239,14 +240,14 @@ static void fill_results(cf_plcrun_t *rr, const plc_params_t *p, double secs, pl
 {
     rr->have_last = 1;
     rr->last_part = p->part;
-    const cf_stats_t *st = rr->last.st;
+    const cf_stats_t *st = rr->last.stats;
     res->rms = (float)cf_stats_rms(st);
     res->max = (float)st->max;
     res->min = (float)st->min;
     res->within_pct = (float)cf_stats_within_pct(st);
     res->verdict = st->max_abs <= st->tol ? PLC_VERDICT_PASS : PLC_VERDICT_FAIL;
     res->points = (uint32_t)rr->last.points;
-    res->control_points = (uint32_t)((long)rr->last.fitted.nu * rr->last.fitted.nv);
+    res->control_points = (uint32_t)((long)rr->last.surf.nu * rr->last.surf.nv);
     res->duration_ms = (uint32_t)(secs * 1000.0 + 0.5);
 }
 
@@ -284,6 +285,12 @@ static int run_fit(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, pl
             return rc == NF_EDOMAIN || rc == NF_ENONFINITE ? PLC_E_POINTS : PLC_E_FIT;
         }
     }
+    cf_log(CF_LOG_INFO, "fit: %ld points, %d x %d net, %d round%s, fit_status %s%s%s",
+           rr->last.points, rr->last.surf.nu, rr->last.surf.nv, rr->last.nrounds,
+           rr->last.nrounds > 1 ? "s" : "", cf_fitjob_status_name(rr->last.status),
+           rr->last.why[0] ? ": " : "", rr->last.why);
+    for (int i = 0; i < rr->last.nwarn; i++)
+        cf_log(CF_LOG_WARN, "fit: %s", rr->last.warn[i]);
     rr->last_scan = scan;
     snprintf(rr->last_journal, sizeof rr->last_journal, "%s", scan ? rr->journal : "");
     fill_results(rr, p, scan ? cli_now() - rr->job_t0 : rr->last.seconds, res);

@@ -5,7 +5,10 @@
  *              the results folder RESULTS_FOLDER chooses) (cf_scanjob.h);
  *   fit      = FIT: the configured points file against the nominal
  *              (cf_job); SCAN_FIT: the journal just measured (cf_scanjob);
- *              results from the deviation statistics;
+ *              both through the fit job with the configured settings
+ *              (tolerance loop, robust, reprojection; rr->fit) and the
+ *              PLC's weights, net and tolerance; results from the
+ *              deviation statistics;
  *   export   = the last fit's IGES and report JSON (with the journal's
  *              path) into the results folder RESULTS_FOLDER chooses, in
  *              "<part>_<UTC timestamp>".
@@ -24,6 +27,7 @@
 
 typedef struct cf_plcrun {
     const char *nominal, *points;             /* fit inputs (config) */
+    cf_fitjob_opts_t fit;                     /* fit settings (config; PLC params override) */
     const char *results_dir[PLC_MAX_FOLDERS]; /* RESULTS_FOLDER choices */
     const char *journal_dir;                  /* scans' journals; NULL: the results folder */
     double z0, cal[3];                        /* kinematics of the probe (scan.h) */

@@ -1,11 +1,9 @@
 /* cf_scanjob.h: the cell's scan job for `cellfit serve`: the raster over
  * a region measured on the rig (firmware/scan.h) into a new journal file
  * (cf_store_file.h), with progress and a stop check; and the fit of such a
- * journal onto the nominal (refined to the net asked, as cf_job): every
- * valid point projected onto the nominal and streamed into the stripes
- * (Eq. 7), solved, then the signed normal deviations of the points to the
- * fit read back from the journal (cf_stats). Nothing is kept per point:
- * memory is the fit's byte formula and the seed grid. */
+ * journal onto the nominal through the fit job (cf_fitjob, as cf_job: the
+ * configured loop, robust passes and reprojection, the signed normal
+ * deviations read back from the journal). Nothing is kept per point. */
 #ifndef CF_SCANJOB_H
 #define CF_SCANJOB_H
 
@@ -36,7 +34,7 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
                    char *msg, size_t ml);
 
 /* Fit the journal's points onto f->nominal (f->points unused) with f's
- * weights, net and tolerance; progress over pct0..pct1. 0 with *out filled
+ * settings; progress over pct0..pct1. 0 with *out filled
  * (free with cf_job_result_free), RIG_EABORTED, CF_EEMPTY (no point), or
  * CF_E* / NF_E* / RIG_E* with msg. */
 int cf_scanjob_fit(const char *journal, const cf_job_fit_opts_t *f, const cf_job_ctl_t *ctl,

@@ -6,10 +6,11 @@
  * tests (tests/cli/journal.sh). */
 #include "cf_cli.h"
 #include "cf_err.h"
+#include "cf_fitjob.h"
 #include "cf_iges.h"
 #include "cf_json.h"
+#include "cf_opt.h"
 #include "cf_points.h"
-#include "cf_sfit.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
 #include "cmd.h"
@@ -83,19 +84,25 @@ static int valid_point(const jnl_rec_t *r)
 
 static int do_export(int argc, char **argv)
 {
-    const char *path = NULL, *out = NULL;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--out") && i + 1 < argc)
-            out = argv[++i];
-        else if (argv[i][0] == '-' && argv[i][1])
-            return cli_error(CMD, CLI_USAGE, "export: unknown option '%s'", argv[i]);
-        else if (!path)
-            path = argv[i];
-        else
-            return cli_error(CMD, CLI_USAGE, "export: one JOURNAL only ('%s')", argv[i]);
-    }
-    if (!path)
-        return cli_error(CMD, CLI_USAGE, "usage: cellfit journal export JOURNAL [--out FILE]");
+    const char *pos[1], *out = NULL;
+    const cf_opt_t opts[] = {{.name = "out",
+                              .kind = CF_OPT_STR,
+                              .dst = &out,
+                              .arg = "FILE",
+                              .help = "write the points here",
+                              .def = "standard output"},
+                             {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "journal export",
+                          .args = "JOURNAL",
+                          .summary = "the journal's measured points as x y z lines (%.17g)",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
+    const char *path = pos[0];
     jopen_t j;
     int ec = jopen_read(&j, path);
     if (ec)
@@ -106,7 +113,6 @@ static int do_export(int argc, char **argv)
         return cli_error(CMD, CLI_FAIL, "%s: cannot write", out);
     }
     jnl_rec_t r;
-    int rc;
     while ((rc = jnl_reader_next(&j.rd, &r)) == 1)
         if (valid_point(&r))
             fprintf(f, "%.17g %.17g %.17g\n", r.xyz[0], r.xyz[1], r.xyz[2]);
@@ -123,20 +129,22 @@ static int do_export(int argc, char **argv)
 
 static int do_info(int argc, char **argv)
 {
-    const char *path = NULL;
+    const char *pos[1];
     int json = 0;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--json"))
-            json = 1;
-        else if (argv[i][0] == '-' && argv[i][1])
-            return cli_error(CMD, CLI_USAGE, "info: unknown option '%s'", argv[i]);
-        else if (!path)
-            path = argv[i];
-        else
-            return cli_error(CMD, CLI_USAGE, "info: one JOURNAL only ('%s')", argv[i]);
-    }
-    if (!path)
-        return cli_error(CMD, CLI_USAGE, "usage: cellfit journal info JOURNAL [--json]");
+    const cf_opt_t opts[] = {
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &json, .help = "print the summary as JSON"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "journal info",
+                          .args = "JOURNAL",
+                          .summary = "the journal's header, records, ending and torn tail",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
+    const char *path = pos[0];
     jopen_t j;
     int ec = jopen_read(&j, path);
     if (ec)
@@ -198,9 +206,19 @@ static int do_info(int argc, char **argv)
 
 static int do_recover(int argc, char **argv)
 {
-    if (argc != 2 || argv[1][0] == '-')
-        return cli_error(CMD, CLI_USAGE, "usage: cellfit journal recover JOURNAL");
-    const char *path = argv[1];
+    const char *pos[1];
+    const cf_opt_t opts[] = {{0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "journal recover",
+                          .args = "JOURNAL",
+                          .summary = "cut a torn tail off the journal, keeping every valid record",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int prc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (prc)
+        return cf_opt_exit(prc);
+    const char *path = pos[0];
     char msg[512];
     cf_store_file_t f;
     rig_store_t st;
@@ -221,52 +239,73 @@ static int do_recover(int argc, char **argv)
 
 static int do_fit(int argc, char **argv)
 {
-    const char *path = NULL, *nominal = NULL, *out = NULL;
-    double alpha = NF_ALPHA_DEFAULT, beta = NF_BETA_DEFAULT;
-    long entity = 0, reparam = 0;
+    const char *pos[1], *nominal = NULL, *out = NULL;
+    long entity = 0;
     int json = 0, force = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--json"))
-            json = 1;
-        else if (!strcmp(a, "--force"))
-            force = 1;
-        else if (a[0] != '-' && !path)
-            path = a;
-        else if (a[0] != '-')
-            return cli_error(CMD, CLI_USAGE, "fit: one JOURNAL only ('%s')", a);
-        else if (!v)
-            return cli_error(CMD, CLI_USAGE, "fit: option %s needs a value", a);
-        else {
-            if (!strcmp(a, "--nominal"))
-                nominal = v;
-            else if (!strcmp(a, "--out"))
-                out = v;
-            else if (!strcmp(a, "--alpha")) {
-                if (cli_double(v, &alpha) || alpha < 0)
-                    return cli_error(CMD, CLI_USAGE, "--alpha '%s': need a number >= 0", v);
-            } else if (!strcmp(a, "--beta")) {
-                if (cli_double(v, &beta) || beta < 0)
-                    return cli_error(CMD, CLI_USAGE, "--beta '%s': need a number >= 0", v);
-            } else if (!strcmp(a, "--entity")) {
-                if (cli_int(v, 1, 9999999, &entity))
-                    return cli_error(CMD, CLI_USAGE, "--entity '%s': need a DE number", v);
-            } else if (!strcmp(a, "--reparam")) {
-                if (cli_int(v, 0, 100, &reparam))
-                    return cli_error(CMD, CLI_USAGE, "--reparam '%s': need 0..100", v);
-            } else
-                return cli_error(CMD, CLI_USAGE, "fit: unknown option '%s'", a);
-            i++;
-        }
-    }
-    if (!path || !nominal || !out)
-        return cli_error(CMD, CLI_USAGE,
-                         "usage: cellfit journal fit JOURNAL --nominal N.igs --out OUT.igs "
-                         "[--reparam K] [--alpha A] [--beta B] [--entity N] [--force] [--json]");
+    cf_fitjob_opts_t fo;
+    cf_fitjob_defaults(&fo);
+    const cf_opt_t opts[] = {
+        {.name = "nominal",
+         .kind = CF_OPT_STR,
+         .dst = &nominal,
+         .arg = "N.igs",
+         .help = "the nominal surface the journal was measured against",
+         .req = 1},
+        {.name = "out",
+         .kind = CF_OPT_STR,
+         .dst = &out,
+         .arg = "OUT.igs",
+         .help = "the fitted surface",
+         .req = 1},
+        {.name = "reparam",
+         .kind = CF_OPT_LONG,
+         .dst = &fo.reparam,
+         .arg = "K",
+         .help = "reprojection passes onto the fit, each refitted",
+         .lo = 0,
+         .hi = 100},
+        {.name = "alpha",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &fo.alpha,
+         .arg = "A",
+         .help = "pull toward the Greville points (Eq. 7)",
+         .lo = 0,
+         .hi = 1e300},
+        {.name = "beta",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &fo.beta,
+         .arg = "B",
+         .help = "pull toward the nominal P0 (Eq. 7)",
+         .lo = 0,
+         .hi = 1e300},
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in N.igs (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {.name = "force",
+         .kind = CF_OPT_FLAG,
+         .dst = &force,
+         .help = "fit even when the journal names another nominal"},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &json, .help = "print the summary as JSON"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "journal fit",
+                          .args = "JOURNAL",
+                          .summary = "fit the journal's measured points onto the nominal",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (rc)
+        return cf_opt_exit(rc);
+    const char *path = pos[0];
     double t0 = cli_now();
-    char msg[512], name[JNL_NAME_LEN];
+    char msg[1024], name[JNL_NAME_LEN];
     uint64_t hash;
-    if (cf_sfit_nominal_id(nominal, &hash, name))
+    if (cf_fitsrc_nominal_id(nominal, &hash, name))
         return cli_error(CMD, CLI_USAGE, "%s: cannot read", nominal);
     jopen_t j;
     int ec = jopen_read(&j, path);
@@ -280,98 +319,66 @@ static int do_fit(int argc, char **argv)
                          path, j.h.nominal_name, (unsigned long long)j.h.nominal_hash, nominal,
                          (unsigned long long)hash);
     }
-    nf_surf_t nom, fit;
-    memset(&fit, 0, sizeof fit);
+    nf_surf_t nom;
     if (cf_iges_read(nominal, (int)entity, &nom, msg, sizeof msg)) {
         cf_store_file_close(&j.f);
         return cli_error(CMD, CLI_USAGE, "%s", msg);
     }
-    cf_sfit_t sf;
-    memset(&sf, 0, sizeof sf);
-    nf_solve_stats_t sst = {NF_SOLVER_AUTO, 0, 0.0};
-    double dev_rms = 0, dev_max = 0;
-    if (cf_surf_copy(&fit, &nom)) {
-        ec = cli_error(CMD, CLI_FAIL, "out of memory");
-        goto out_nom;
+    cf_fitjob_t *fj = NULL;
+    cf_fitjob_result_t r;
+    memset(&r, 0, sizeof r);
+    rc = cf_fitjob_open(&fj, &nom, &fo, msg, sizeof msg);
+    cf_surf_free(&nom);
+    if (!rc) {
+        cf_fitsrc_t src;
+        cf_fitsrc_jnl_t jc;
+        cf_fitsrc_journal(&src, &jc, &j.rd, path, (long)j.in.points);
+        rc = cf_fitjob_run(fj, &src, NULL, 0, 100, &r, msg, sizeof msg);
     }
-    /* Pass 0 projects onto the nominal; each --reparam pass reads the
-     * journal again and projects onto the previous fit, refitting in the
-     * same space with the same P0 (Section 2.2). */
-    for (long pass = 0; pass <= reparam; pass++) {
-        ec = cf_sfit_init(&sf, &nom, pass ? &fit : NULL, alpha, beta, CMD);
-        if (ec)
-            goto out_nom;
-        jnl_reader_rewind(&j.rd);
-        jnl_rec_t r;
-        int rc;
-        while ((rc = jnl_reader_next(&j.rd, &r)) == 1) {
-            if (!valid_point(&r))
-                continue;
-            int e = cf_sfit_add(&sf, r.xyz);
-            if (e) {
-                ec = cli_error(CMD, CLI_USAGE, "%s: record %u: %s", path, r.seq, nf_strerror(e));
-                goto out_fit;
-            }
-        }
-        if (rc < 0) {
-            ec = read_error(path, &j, rc);
-            goto out_fit;
-        }
-        if (pass == 0) {
-            dev_rms = sf.points ? sqrt(sf.dev_ss / (double)sf.points) : 0;
-            dev_max = sf.dev_max;
-        }
-        if ((ec = cf_sfit_solve(&sf, &fit, &sst, CMD)) != 0)
-            goto out_fit;
-        if (pass < reparam)
-            cf_sfit_free(&sf);
+    cf_fitjob_close(fj);
+    if (rc) {
+        ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
+        goto out;
     }
-    cf_sfit_resid_t res;
-    int rc;
-    if ((rc = cf_sfit_residuals(&fit, &j.rd, &res)) != 0) {
-        ec = rc == CF_ENOMEM ? cli_error(CMD, CLI_FAIL, "out of memory") : read_error(path, &j, rc);
-        goto out_fit;
-    }
-    if (cf_iges_write(out, &fit, "cellfit journal fit", msg, sizeof msg)) {
+    if (cf_iges_write(out, &r.surf, "cellfit journal fit", msg, sizeof msg)) {
         ec = cli_error(CMD, CLI_FAIL, "%s", msg);
-        goto out_fit;
+        goto out;
     }
     if (json) {
         cf_json_t o;
         cf_json_begin(&o, stdout);
         cf_json_str(&o, "journal", path);
-        cf_json_int(&o, "points", sf.points);
+        cf_json_int(&o, "points", r.points);
         cf_json_int(&o, "flagged", (long)j.in.flagged);
-        cf_json_int(&o, "control_points", (long)nom.nu * nom.nv);
-        cf_json_num(&o, "alpha", alpha);
-        cf_json_num(&o, "beta", beta);
-        cf_json_str(&o, "solver", nf_solver_name(sst.solver));
-        cf_json_int(&o, "iterations", sst.iterations);
-        cf_json_num(&o, "rel_residual", sst.rel_residual);
-        cf_json_num(&o, "rms", res.rms);
-        cf_json_num(&o, "max_abs", res.max);
-        cf_json_num(&o, "nominal_rms", dev_rms);
-        cf_json_num(&o, "nominal_max_abs", dev_max);
-        cf_json_int(&o, "reparam", reparam);
+        cf_json_int(&o, "control_points", (long)r.surf.nu * r.surf.nv);
+        cf_json_num(&o, "alpha", fo.alpha);
+        cf_json_num(&o, "beta", fo.beta);
+        cf_json_str(&o, "solver", nf_solver_name(r.solve.solver));
+        cf_json_int(&o, "iterations", r.solve.iterations);
+        cf_json_num(&o, "rel_residual", r.solve.rel_residual);
+        cf_json_num(&o, "rms", r.rms);
+        cf_json_num(&o, "max_abs", r.max_abs);
+        cf_json_num(&o, "nominal_rms", r.nominal_rms);
+        cf_json_num(&o, "nominal_max_abs", r.nominal_max);
+        cf_json_int(&o, "reparam", fo.reparam);
+        cf_json_str(&o, "fit_status", cf_fitjob_status_name(r.status));
         cf_json_num(&o, "seconds", cli_now() - t0);
-        cf_json_int(&o, "bytes", sf.need);
+        cf_json_int(&o, "bytes", r.bytes);
         cf_json_str(&o, "out", out);
         cf_json_end(&o);
     } else {
         printf("cellfit journal fit: %ld points of %s (%llu without a surface), %d x %d control "
                "points\n",
-               sf.points, path, (unsigned long long)j.in.flagged, nom.nu, nom.nv);
-        printf("  measured vs nominal: rms %.6g  max %.6g;  vs fit: rms %.6g  max %.6g\n", dev_rms,
-               sf.dev_max, res.rms, res.max);
+               r.points, path, (unsigned long long)j.in.flagged, r.surf.nu, r.surf.nv);
+        printf("  measured vs nominal: rms %.6g  max %.6g;  vs fit: rms %.6g  max %.6g\n",
+               r.nominal_rms, r.nominal_max, r.rms, r.max_abs);
         printf("  solver %s, %d iterations, relative residual %.2e; %.3f s\n",
-               nf_solver_name(sst.solver), sst.iterations, sst.rel_residual, cli_now() - t0);
+               nf_solver_name(r.solve.solver), r.solve.iterations, r.solve.rel_residual,
+               cli_now() - t0);
         printf("  wrote %s\n", out);
     }
-out_fit:
-    cf_sfit_free(&sf);
-out_nom:
-    cf_surf_free(&fit);
-    cf_surf_free(&nom);
+out:
+    cf_fitjob_result_free(&r);
     cf_store_file_close(&j.f);
     return ec;
 }
@@ -446,32 +453,52 @@ static const rig_store_ops_t torn_ops = {RIG_OPS_VERSION, torn_append, torn_sync
  * durable, so a test that kills this process knows what was promised. */
 static int do_selftest_write(int argc, char **argv)
 {
-    const char *path = NULL, *points = NULL, *nominal = NULL;
+    const char *pos[1], *points = NULL, *nominal = NULL;
     long n = 1000, k = JNL_SYNC_EVERY_DEFAULT, seed = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (a[0] != '-' && !path) {
-            path = a;
-            continue;
-        }
-        if (!v)
-            return cli_error(CMD, CLI_USAGE, "selftest-write: '%s' needs a value", a);
-        if (!strcmp(a, "--records") && !cli_int(v, 0, 100000000, &n))
-            ;
-        else if (!strcmp(a, "--sync-every") && !cli_int(v, 1, 1000000, &k))
-            ;
-        else if (!strcmp(a, "--torn") && !cli_int(v, 0, 1000000000, &seed))
-            ;
-        else if (!strcmp(a, "--points"))
-            points = v;
-        else if (!strcmp(a, "--nominal"))
-            nominal = v;
-        else
-            return cli_error(CMD, CLI_USAGE, "selftest-write: bad option '%s %s'", a, v);
-        i++;
-    }
-    if (!path)
-        return cli_error(CMD, CLI_USAGE, "usage: cellfit journal selftest-write JOURNAL ...");
+    const cf_opt_t opts[] = {
+        {.name = "records",
+         .kind = CF_OPT_LONG,
+         .dst = &n,
+         .arg = "N",
+         .help = "known records to write",
+         .lo = 0,
+         .hi = 100000000},
+        {.name = "sync-every",
+         .kind = CF_OPT_LONG,
+         .dst = &k,
+         .arg = "K",
+         .help = "records per sync",
+         .lo = 1,
+         .hi = 1000000},
+        {.name = "torn",
+         .kind = CF_OPT_LONG,
+         .dst = &seed,
+         .arg = "SEED",
+         .help = "write each record in two pieces, cut where SEED says (-1: whole)",
+         .lo = 0,
+         .hi = 1000000000},
+        {.name = "points",
+         .kind = CF_OPT_STR,
+         .dst = &points,
+         .arg = "FILE",
+         .help = "journal the points of FILE instead of known records"},
+        {.name = "nominal",
+         .kind = CF_OPT_STR,
+         .dst = &nominal,
+         .arg = "N.igs",
+         .help = "the nominal named in the header"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "journal selftest-write",
+                          .args = "JOURNAL",
+                          .summary = "write known records through the file store (tests)",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int prc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (prc)
+        return cf_opt_exit(prc);
+    const char *path = pos[0];
     char msg[512];
     jnl_header_t h;
     memset(&h, 0, sizeof h);
@@ -479,7 +506,7 @@ static int do_selftest_write(int argc, char **argv)
     h.job_id = 1;
     h.z0 = 100.0;
     h.planned = (uint64_t)n;
-    if (nominal && cf_sfit_nominal_id(nominal, &h.nominal_hash, h.nominal_name))
+    if (nominal && cf_fitsrc_nominal_id(nominal, &h.nominal_hash, h.nominal_name))
         return cli_error(CMD, CLI_USAGE, "%s: cannot read", nominal);
     cf_points_t *pr = NULL;
     if (points && cf_points_open(&pr, points, 0, msg, sizeof msg))
@@ -535,10 +562,21 @@ static int do_selftest_write(int argc, char **argv)
 /* selftest-check JOURNAL: every record is the known one of its number. */
 static int do_selftest_check(int argc, char **argv)
 {
-    if (argc != 2)
-        return cli_error(CMD, CLI_USAGE, "usage: cellfit journal selftest-check JOURNAL");
+    const char *pos[1];
+    const cf_opt_t opts[] = {{0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "journal selftest-check",
+                          .args = "JOURNAL",
+                          .summary = "check that every record is the known one of its number",
+                          .opts = opts,
+                          .min_pos = 1,
+                          .max_pos = 1};
+    int prc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
+    if (prc)
+        return cf_opt_exit(prc);
+    const char *path = pos[0];
     jopen_t j;
-    int ec = jopen_read(&j, argv[1]);
+    int ec = jopen_read(&j, path);
     if (ec)
         return ec;
     jnl_rec_t r;
@@ -552,13 +590,13 @@ static int do_selftest_check(int argc, char **argv)
             memcmp(&r.dist, &w.dist, sizeof w.dist) || memcmp(r.xyz, w.xyz, sizeof w.xyz) ||
             memcmp(&r.t, &w.t, sizeof w.t)) {
             cf_store_file_close(&j.f);
-            return cli_error(CMD, CLI_FAIL, "%s: record %u is not the one written", argv[1], r.seq);
+            return cli_error(CMD, CLI_FAIL, "%s: record %u is not the one written", path, r.seq);
         }
         n++;
     }
     cf_store_file_close(&j.f);
     if (rc < 0)
-        return read_error(argv[1], &j, rc);
+        return read_error(path, &j, rc);
     printf("%llu records as written, %llu bytes of torn tail\n", n,
            (unsigned long long)j.in.tail_bytes);
     return CLI_OK;
@@ -579,6 +617,17 @@ int cmd_journal(int argc, char **argv)
         return do_selftest_write(argc - 1, argv + 1);
     if (!strcmp(sub, "selftest-check"))
         return do_selftest_check(argc - 1, argv + 1);
+    if (sub[0] == '-') { /* --help, or an option before the subcommand */
+        const cf_opt_t none[] = {{0}};
+        const cf_cmd_t cmd = {.prog = "cellfit",
+                              .name = "journal",
+                              .args = "export|info|recover|fit JOURNAL ...",
+                              .summary = "the journal of measured points read back (`cellfit "
+                                         "journal SUB --help` for each)",
+                              .opts = none};
+        int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+        return rc ? cf_opt_exit(rc) : cli_error(CMD, CLI_USAGE, "need a subcommand");
+    }
     return cli_error(CMD, CLI_USAGE,
                      "usage: cellfit journal export|info|recover|fit JOURNAL ... ('%s'?)", sub);
 }

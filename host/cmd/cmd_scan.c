@@ -1,14 +1,17 @@
 /* cmd_scan.c: `cellfit scan`: measure a part on the rig: open the stage and
  * the probe (hal/), plan a serpentine raster over the nominal's extent in
  * x y (or --region), run the scan job (firmware/scan.c) journalling every
- * point to a file, and with --fit stream the points into the fitter as they
- * arrive (projection onto the nominal) and write the fitted surface. A
+ * point to a file, and with --fit stream the points into the fit job as
+ * they arrive (projection onto the nominal; cf_fitjob_add), finish the job
+ * from the journal and write the fitted surface. A
  * progress bar on a terminal, progress lines otherwise; SIGINT/SIGTERM stop
  * the job cleanly (stage stopped, journal synced). */
 #include "cf_cli.h"
+#include "cf_err.h"
+#include "cf_fitjob.h"
 #include "cf_iges.h"
 #include "cf_json.h"
-#include "cf_sfit.h"
+#include "cf_opt.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
 #include "cmd.h"
@@ -84,6 +87,17 @@ static int parse_list(const char *s, double *out, int n)
     return 0;
 }
 
+static int region_arg(const char *v, void *dst)
+{
+    double *r = dst;
+    return parse_list(v, r, 4) || r[1] < r[0] || r[3] < r[2] ? -1 : 0;
+}
+
+static int cal_arg(const char *v, void *dst)
+{
+    return parse_list(v, dst, 3);
+}
+
 static int parse(int argc, char **argv, scan_opts_t *o)
 {
     memset(o, 0, sizeof *o);
@@ -93,65 +107,117 @@ static int parse(int argc, char **argv, scan_opts_t *o)
     o->z0 = 50.0; /* cellsim's default beam height */
     o->sync_every = JNL_SYNC_EVERY_DEFAULT;
     o->job_id = (long)time(NULL);
-    for (int i = 1; i < argc;) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int takes = 1;
-        if (!strcmp(a, "--json"))
-            o->json = 1, takes = 0;
-        else if (!strcmp(a, "--home"))
-            o->home = 1, takes = 0;
-        else if (!v)
-            return cli_error(CMD, CLI_USAGE, "option %s needs a value", a);
-        else if (!strcmp(a, "--stage"))
-            o->stage = v;
-        else if (!strcmp(a, "--probe"))
-            o->probe = v;
-        else if (!strcmp(a, "--nominal"))
-            o->nominal = v;
-        else if (!strcmp(a, "--journal"))
-            o->journal = v;
-        else if (!strcmp(a, "--fit"))
-            o->fit = v;
-        else if (!strcmp(a, "--report"))
-            o->report = v;
-        else if (!strcmp(a, "--step")) {
-            if (cli_double(v, &o->step) || !(o->step > 0))
-                return cli_error(CMD, CLI_USAGE, "--step '%s': need a length > 0 (mm)", v);
-        } else if (!strcmp(a, "--region")) {
-            if (parse_list(v, o->region, 4) || o->region[1] < o->region[0] ||
-                o->region[3] < o->region[2])
-                return cli_error(CMD, CLI_USAGE,
-                                 "--region '%s': need x0:x1:y0:y1, x0 <= x1, y0 <= y1", v);
-            o->have_region = 1;
-        } else if (!strcmp(a, "--alpha")) {
-            if (cli_double(v, &o->alpha) || o->alpha < 0)
-                return cli_error(CMD, CLI_USAGE, "--alpha '%s': need a number >= 0", v);
-        } else if (!strcmp(a, "--beta")) {
-            if (cli_double(v, &o->beta) || o->beta < 0)
-                return cli_error(CMD, CLI_USAGE, "--beta '%s': need a number >= 0", v);
-        } else if (!strcmp(a, "--z0")) {
-            if (cli_double(v, &o->z0))
-                return cli_error(CMD, CLI_USAGE, "--z0 '%s': need a height (mm)", v);
-        } else if (!strcmp(a, "--cal")) {
-            if (parse_list(v, o->cal, 3))
-                return cli_error(CMD, CLI_USAGE, "--cal '%s': need cx:cy:cz (mm)", v);
-        } else if (!strcmp(a, "--sync-every")) {
-            if (cli_int(v, 1, 1000000, &o->sync_every))
-                return cli_error(CMD, CLI_USAGE, "--sync-every '%s': need 1..1000000", v);
-        } else if (!strcmp(a, "--job-id")) {
-            if (cli_int(v, 0, 2147483647L, &o->job_id))
-                return cli_error(CMD, CLI_USAGE, "--job-id '%s': need 0..2^31-1", v);
-        } else if (!strcmp(a, "--entity")) {
-            if (cli_int(v, 1, 9999999, &o->entity))
-                return cli_error(CMD, CLI_USAGE, "--entity '%s': need a DE number", v);
-        } else
-            return cli_error(CMD, CLI_USAGE, "unknown option '%s'", a);
-        i += 1 + takes;
-    }
-    if (!o->stage || !o->probe || !o->nominal || !o->journal)
-        return cli_error(CMD, CLI_USAGE,
-                         "need --stage URI --probe URI --nominal NOMINAL.igs --journal FILE");
-    return CLI_OK;
+    const cf_opt_t opts[] = {
+        {.name = "stage",
+         .kind = CF_OPT_STR,
+         .dst = &o->stage,
+         .arg = "URI",
+         .help = "the motion stage (hal: modbus-tcp://, modbus-rtu://, sim://)",
+         .req = 1},
+        {.name = "probe",
+         .kind = CF_OPT_STR,
+         .dst = &o->probe,
+         .arg = "URI",
+         .help = "the laser probe",
+         .req = 1},
+        {.name = "nominal",
+         .kind = CF_OPT_STR,
+         .dst = &o->nominal,
+         .arg = "NOMINAL.igs",
+         .help = "the nominal surface (extent, header identity, fit base)",
+         .req = 1},
+        {.name = "journal",
+         .kind = CF_OPT_STR,
+         .dst = &o->journal,
+         .arg = "FILE",
+         .help = "the journal of measured points (created, never overwritten)",
+         .req = 1},
+        {.name = "fit",
+         .kind = CF_OPT_STR,
+         .dst = &o->fit,
+         .arg = "OUT.igs",
+         .help = "fit the points as they arrive and write the surface here"},
+        {.name = "report",
+         .kind = CF_OPT_STR,
+         .dst = &o->report,
+         .arg = "FILE",
+         .help = "write the JSON summary here too"},
+        {.name = "step",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->step,
+         .arg = "MM",
+         .help = "grid step in x and y",
+         .lo = 1e-300,
+         .hi = 1e300},
+        {.name = "region",
+         .kind = CF_OPT_FUNC,
+         .dst = o->region,
+         .arg = "x0:x1:y0:y1",
+         .help = "the region to scan",
+         .fn = region_arg,
+         .fn_what = "x0:x1:y0:y1, x0 <= x1, y0 <= y1",
+         .def = "the nominal's extent",
+         .given = &o->have_region},
+        {.name = "alpha",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->alpha,
+         .arg = "A",
+         .help = "pull toward the Greville points (Eq. 7)",
+         .lo = 0,
+         .hi = 1e300},
+        {.name = "beta",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->beta,
+         .arg = "B",
+         .help = "pull toward the nominal P0 (Eq. 7)",
+         .lo = 0,
+         .hi = 1e300},
+        {.name = "z0",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->z0,
+         .arg = "MM",
+         .help = "height of the probe's beam origin",
+         .lo = -1e300,
+         .hi = 1e300},
+        {.name = "cal",
+         .kind = CF_OPT_FUNC,
+         .dst = o->cal,
+         .arg = "cx:cy:cz",
+         .help = "probe offset (mm)",
+         .fn = cal_arg,
+         .fn_what = "cx:cy:cz (mm)",
+         .def = "0:0:0"},
+        {.name = "sync-every",
+         .kind = CF_OPT_LONG,
+         .dst = &o->sync_every,
+         .arg = "K",
+         .help = "journal records per sync",
+         .lo = 1,
+         .hi = 1000000},
+        {.name = "job-id",
+         .kind = CF_OPT_LONG,
+         .dst = &o->job_id,
+         .arg = "N",
+         .help = "job number in the journal header",
+         .lo = 0,
+         .hi = 2147483647.0,
+         .def = "the time"},
+        {.name = "entity",
+         .kind = CF_OPT_LONG,
+         .dst = &o->entity,
+         .arg = "DE",
+         .help = "the surface's directory entry in NOMINAL (0: the first surface)",
+         .lo = 0,
+         .hi = 9999999},
+        {.name = "home", .kind = CF_OPT_FLAG, .dst = &o->home, .help = "home the stage first"},
+        {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "print the summary as JSON"},
+        {0}};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "scan",
+                          .summary = "measure a part on the rig into a journal, optionally "
+                                     "fitting the points as they arrive",
+                          .opts = opts};
+    return cf_opt_parse(&cmd, argc, argv, NULL, NULL);
 }
 
 /* The nominal's extent in x y, from a 65 x 65 sampling of the surface. */
@@ -209,7 +275,7 @@ static int clk_should_stop(void *ctx)
 static const rig_clock_ops_t host_clock = {RIG_OPS_VERSION, clk_now, clk_should_stop};
 
 typedef struct scan_ctx {
-    cf_sfit_t *sf;
+    cf_fitjob_t *fj;
     int tty;
     long last_tenth;
     int fit_err; /* the nf_err_t that ended the job, 0 */
@@ -218,9 +284,10 @@ typedef struct scan_ctx {
 static int on_point(void *ctx, const jnl_rec_t *r)
 {
     scan_ctx_t *c = ctx;
-    if (!c->sf)
+    char msg[256];
+    if (!c->fj)
         return 0;
-    int rc = cf_sfit_add(c->sf, r->xyz);
+    int rc = cf_fitjob_add(c->fj, r->xyz, msg, sizeof msg);
     if (rc)
         c->fit_err = rc;
     return rc;
@@ -249,8 +316,7 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
 }
 
 static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const scan_result_t *res,
-                    const jnl_t *j, const cf_sfit_t *sf, const cf_sfit_resid_t *rs,
-                    const nf_solve_stats_t *sst, double secs)
+                    const jnl_t *j, const cf_fitjob_result_t *fr, double secs)
 {
     cf_json_t js;
     cf_json_begin(&js, f);
@@ -270,14 +336,15 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
     cf_json_int(&js, "code", res->code);
     cf_json_str(&js, "error", res->code ? rig_strerror(res->code) : "");
     cf_json_int(&js, "fail_index", res->fail_index);
-    if (sf && rs) {
+    if (fr) {
         cf_json_str(&js, "fit", o->fit);
-        cf_json_str(&js, "solver", nf_solver_name(sst->solver));
-        cf_json_int(&js, "iterations", sst->iterations);
-        cf_json_num(&js, "rms", rs->rms);
-        cf_json_num(&js, "max_abs", rs->max);
-        cf_json_num(&js, "nominal_rms", sqrt(sf->dev_ss / (double)sf->points));
-        cf_json_num(&js, "nominal_max_abs", sf->dev_max);
+        cf_json_str(&js, "solver", nf_solver_name(fr->solve.solver));
+        cf_json_int(&js, "iterations", fr->solve.iterations);
+        cf_json_num(&js, "rms", fr->rms);
+        cf_json_num(&js, "max_abs", fr->max_abs);
+        cf_json_num(&js, "nominal_rms", fr->nominal_rms);
+        cf_json_num(&js, "nominal_max_abs", fr->nominal_max);
+        cf_json_str(&js, "fit_status", cf_fitjob_status_name(fr->status));
     }
     cf_json_num(&js, "seconds", secs);
     cf_json_end(&js);
@@ -288,16 +355,15 @@ int cmd_scan(int argc, char **argv)
     scan_opts_t o;
     int ec = parse(argc, argv, &o);
     if (ec)
-        return ec;
+        return cf_opt_exit(ec);
     double t0 = cli_now();
     char msg[512];
-    nf_surf_t nom, fit;
-    memset(&fit, 0, sizeof fit);
+    nf_surf_t nom;
     if (cf_iges_read(o.nominal, (int)o.entity, &nom, msg, sizeof msg))
         return cli_error(CMD, CLI_USAGE, "%s", msg);
     jnl_header_t h;
     memset(&h, 0, sizeof h);
-    if (cf_sfit_nominal_id(o.nominal, &h.nominal_hash, h.nominal_name)) {
+    if (cf_fitsrc_nominal_id(o.nominal, &h.nominal_hash, h.nominal_name)) {
         cf_surf_free(&nom);
         return cli_error(CMD, CLI_USAGE, "%s: cannot read", o.nominal);
     }
@@ -315,11 +381,18 @@ int cmd_scan(int argc, char **argv)
     job.kin.z0 = o.z0;
     memcpy(job.kin.cal, o.cal, sizeof o.cal);
     job.home = o.home;
-    cf_sfit_t sf;
-    memset(&sf, 0, sizeof sf);
-    if (o.fit && (ec = cf_sfit_init(&sf, &nom, NULL, o.alpha, o.beta, CMD)) != 0) {
-        cf_surf_free(&nom);
-        return ec;
+    cf_fitjob_t *fj = NULL;
+    cf_fitjob_result_t fr;
+    memset(&fr, 0, sizeof fr);
+    if (o.fit) {
+        cf_fitjob_opts_t fo;
+        cf_fitjob_defaults(&fo);
+        fo.alpha = o.alpha;
+        fo.beta = o.beta;
+        if ((ec = cf_fitjob_open(&fj, &nom, &fo, msg, sizeof msg)) != 0) {
+            cf_surf_free(&nom);
+            return cli_error(CMD, ec == CF_ENOMEM ? CLI_FAIL : CLI_USAGE, "%s", msg);
+        }
     }
     const char *outs[2] = {o.fit, o.report};
     for (int i = 0; i < 2; i++)
@@ -362,15 +435,13 @@ int cmd_scan(int argc, char **argv)
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
-    scan_ctx_t sc = {o.fit ? &sf : NULL, isatty(2), -1, 0};
+    scan_ctx_t sc = {fj, isatty(2), -1, 0};
     job.clock = (rig_clock_t){&host_clock, NULL};
     job.cb = (scan_cb_t){on_point, on_progress, &sc};
     scan_result_t res;
     rc = scan_run(&job, &j, &res);
     if (sc.tty && rc)
         fputc('\n', stderr);
-    cf_sfit_resid_t rs = {0, 0.0, 0.0};
-    nf_solve_stats_t sst = {NF_SOLVER_AUTO, 0, 0.0};
     int fitted = 0;
     if (rc) {
         double x = NAN, y = NAN;
@@ -385,24 +456,24 @@ int cmd_scan(int argc, char **argv)
                        res.fail_index, x, y, at[res.where],
                        sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), rc,
                        *det ? ": " : "", det, o.journal, (unsigned long long)jnl_acked(&j));
-    } else if (o.fit) {
-        if (cf_surf_copy(&fit, &nom)) {
-            ec = cli_error(CMD, CLI_FAIL, "out of memory");
-            goto out_dev;
-        }
-        if ((ec = cf_sfit_solve(&sf, &fit, &sst, CMD)) != 0)
-            goto out_dev;
-        /* The residual pass reads the points back from the journal (they
-         * are not in memory). */
+    } else if (fj) {
+        /* The first pass took the points as they arrived; the job reads
+         * them back from the journal for the residuals (not in memory). */
         jnl_reader_t rd;
         jnl_header_t h2;
         jnl_info_t in;
-        if ((rc = jnl_reader_open(&rd, st, &h2, &in)) != 0 ||
-            (rc = cf_sfit_residuals(&fit, &rd, &rs)) != 0) {
+        if ((rc = jnl_reader_open(&rd, st, &h2, &in)) != 0) {
             ec = cli_error(CMD, CLI_FAIL, "%s: cannot read the journal back: %d", o.journal, rc);
             goto out_dev;
         }
-        if (cf_iges_write(o.fit, &fit, "cellfit scan", msg, sizeof msg)) {
+        cf_fitsrc_t src;
+        cf_fitsrc_jnl_t jc;
+        cf_fitsrc_journal(&src, &jc, &rd, o.journal, (long)in.points);
+        if ((rc = cf_fitjob_run(fj, &src, NULL, 0, 100, &fr, msg, sizeof msg)) != 0) {
+            ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
+            goto out_dev;
+        }
+        if (cf_iges_write(o.fit, &fr.surf, "cellfit scan", msg, sizeof msg)) {
             ec = cli_error(CMD, CLI_FAIL, "%s", msg);
             goto out_dev;
         }
@@ -413,8 +484,7 @@ int cmd_scan(int argc, char **argv)
         FILE *rf = fopen(o.report, "w");
         int werr = rf ? 0 : errno;
         if (rf) {
-            summary(rf, &o, &job.plan, &res, &j, fitted ? &sf : NULL, fitted ? &rs : NULL, &sst,
-                    secs);
+            summary(rf, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs);
             werr = ferror(rf) ? errno : 0;
             if (fclose(rf) && !werr)
                 werr = errno ? errno : EIO;
@@ -424,22 +494,21 @@ int cmd_scan(int argc, char **argv)
                            strerror(werr));
     }
     if (o.json)
-        summary(stdout, &o, &job.plan, &res, &j, fitted ? &sf : NULL, fitted ? &rs : NULL, &sst,
-                secs);
+        summary(stdout, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs);
     else if (!rc) {
         printf("cellfit scan: %ld points (%ld x %ld grid, step %g), %ld without a surface; "
                "journal %s\n",
                res.done, job.plan.nx, job.plan.ny, o.step, res.flagged, o.journal);
         if (fitted)
-            printf("  fit: rms %.6g  max %.6g (vs nominal rms %.6g); wrote %s\n", rs.rms, rs.max,
-                   sqrt(sf.dev_ss / (double)sf.points), o.fit);
+            printf("  fit: rms %.6g  max %.6g (vs nominal rms %.6g); wrote %s\n", fr.rms,
+                   fr.max_abs, fr.nominal_rms, o.fit);
     }
 out_dev:
     rig_close(devs);
     cf_store_file_close(&f);
 out:
-    cf_sfit_free(&sf);
-    cf_surf_free(&fit);
+    cf_fitjob_result_free(&fr);
+    cf_fitjob_close(fj);
     cf_surf_free(&nom);
     return ec;
 }

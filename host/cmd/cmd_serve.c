@@ -1,7 +1,8 @@
 /* cmd_serve.c: `cellfit serve`: the cell headless, driven by a PLC over
- * Modbus TCP (docs/plc-register-map.md). Options override the config file
- * (key = value, cf_conf.h; keys are the long options without "--", '-' as
- * '_'); logs with levels to stderr or syslog; the rig from --stage and
+ * Modbus TCP (docs/plc-register-map.md). Options (one table, cf_opt)
+ * override the config file (key = value, cf_conf.h; keys are the long
+ * options without "--", '-' as '_'), fit settings included (tolerance loop,
+ * robust, reprojection: the fit job's); logs with levels to stderr or syslog; the rig from --stage and
  * --probe URIs (hal_rig.h), or cellsim started as a child with --sim;
  * SIGTERM or SIGINT stops it cleanly (a running job is aborted, the
  * simulator stopped). */
@@ -9,6 +10,7 @@
 #include "cf_conf.h"
 #include "cf_err.h"
 #include "cf_log.h"
+#include "cf_opt.h"
 #include "cf_plcdoc.h"
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
@@ -149,13 +151,41 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         r->cal[2] = *e2 == ',' ? strtod(e2 + 1, &e3) : (e3 = e2, 0);
         if (e1 == v || *e1 != ',' || *e2 != ',' || *e3)
             return cf_fail(msg, ml, CF_EARG, "cal '%s': need CX,CY,CZ (mm)", v);
-    } else if (!strcmp(k, "tolerance") || !strcmp(k, "alpha") || !strcmp(k, "beta")) {
+    } else if (!strcmp(k, "tol") || !strcmp(k, "alpha") || !strcmp(k, "beta")) {
         double x;
         int tol = k[0] == 't';
         if (cli_double(v, &x) || x < (tol ? 0.0001 : 0) || x > (tol ? 100 : 1e6))
             return cf_fail(msg, ml, CF_EARG, "%s '%s': need %s", k, v,
                            tol ? "0.0001 .. 100 (mm)" : "0 .. 1e6");
         *(tol ? &c->tol : k[0] == 'a' ? &c->alpha : &c->beta) = x;
+    } else if (!strcmp(k, "fit_to_tol")) {
+        if (yesno(v, &r->fit.loop))
+            return cf_fail(msg, ml, CF_EARG, "fit_to_tol '%s': yes or no", v);
+    } else if (!strcmp(k, "robust")) {
+        if (yesno(v, &r->fit.robust))
+            return cf_fail(msg, ml, CF_EARG, "robust '%s': yes or no", v);
+    } else if (!strcmp(k, "within")) {
+        if (cli_double(v, &r->fit.within) || !(r->fit.within > 0) || r->fit.within > 100)
+            return cf_fail(msg, ml, CF_EARG, "within '%s': need a percentage in (0, 100]", v);
+    } else if (!strcmp(k, "max_cp")) {
+        if (cli_int(v, 4, NF_MAX_CP, &r->fit.max_cp))
+            return cf_fail(msg, ml, CF_EARG, "max_cp '%s': need 4 .. %ld (board %s)", v,
+                           (long)NF_MAX_CP, BOARD_NAME);
+    } else if (!strcmp(k, "max_rounds")) {
+        if (cli_int(v, 1, CF_FITJOB_MAX_ROUNDS, &r->fit.max_rounds))
+            return cf_fail(msg, ml, CF_EARG, "max_rounds '%s': need 1 .. %d", v,
+                           CF_FITJOB_MAX_ROUNDS);
+    } else if (!strcmp(k, "robust_iters")) {
+        if (cli_int(v, 1, 100, &r->fit.robust_iters))
+            return cf_fail(msg, ml, CF_EARG, "robust_iters '%s': need 1 .. 100", v);
+    } else if (!strcmp(k, "reparam")) {
+        if (cli_int(v, 0, 100, &r->fit.reparam))
+            return cf_fail(msg, ml, CF_EARG, "reparam '%s': need 0 .. 100", v);
+    } else if (!strcmp(k, "refine")) {
+        if (!strcmp(v, "uniform") || !strcmp(v, "residual"))
+            r->fit.refine = v[0] == 'u' ? CF_REFINE_UNIFORM : CF_REFINE_RESIDUAL;
+        else
+            return cf_fail(msg, ml, CF_EARG, "refine '%s': uniform or residual", v);
     } else if (!strncmp(k, "results_dir", 11)) {
         idx = 0;
         if (k[11] && (k[11] != '.' || cli_int(k + 12, 0, PLC_MAX_FOLDERS - 1, &idx)))
@@ -186,27 +216,6 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
     return 0;
 }
 
-static const char *const flags[] = {"--syslog", "--sim", "--print-map", NULL};
-
-static int is_flag(const char *a)
-{
-    for (int i = 0; flags[i]; i++)
-        if (!strcmp(a, flags[i]))
-            return 1;
-    return 0;
-}
-
-static int serve_usage(void)
-{
-    return cli_error("serve", CLI_USAGE,
-                     "usage: cellfit serve --plc tcp:ADDR:PORT [--config FILE] [--nominal F "
-                     "--points F] [--results DIR] [--word-order lo-hi|hi-lo] [--watchdog-ms T] "
-                     "[--port-file F] [--max-clients N] [--log-level L] [--syslog] [--board B] "
-                     "[--stage URI --probe URI | --sim [--sim-args ARGS]] [--journal-dir D] "
-                     "[--z0 MM] [--cal CX,CY,CZ] [--allow ADDR[/BITS],...] [--max-rate R] "
-                     "[--print-map]");
-}
-
 static volatile sig_atomic_t stop_flag;
 
 static void on_signal(int sig)
@@ -215,45 +224,103 @@ static void on_signal(int sig)
     stop_flag = 1;
 }
 
+/* The settings that are also options: --name for key name ('_' as '-'),
+ * in the order of docs/plc-register-map.md's table. */
+typedef struct serve_key {
+    const char *key, *arg, *help, *def;
+} serve_key_t;
+
+static const serve_key_t keys[] = {
+    {"plc", "tcp:ADDR:PORT", "the Modbus TCP server's address (IPv4; port 0: a free one)",
+     "(required)"},
+    {"port_file", "FILE", "write the port actually bound here", NULL},
+    {"word_order", "ORDER", "lo-hi or hi-lo (WORD_ORDER at start)", "lo-hi"},
+    {"watchdog_ms", "MS", "WATCHDOG_MS at start, 0 off", "0"},
+    {"max_clients", "N", "Modbus connections at once (1 .. 64)", "8"},
+    {"nominal", "FILE", "the nominal surface (FIT, SCAN_FIT), IGES entity 128", NULL},
+    {"points", "FILE", "the points file FIT fits: x y z or u v x y z", NULL},
+    {"results_dir", "DIR", "results folder 0 (config: results_dir.N for choice N)", NULL},
+    {"tol", "MM", "TOLERANCE at start: the deviation tolerance", "0.05"},
+    {"alpha", "A", "ALPHA at start (Eq. 7)", "0.1"},
+    {"beta", "B", "BETA at start (Eq. 7)", "0.001"},
+    {"within", "PCT", "with fit_to_tol: the share of points that must be within TOLERANCE", "100"},
+    {"max_cp", "N", "with fit_to_tol: control points the loop may reach at most", "the board's"},
+    {"max_rounds", "N", "with fit_to_tol: rounds of the loop at most", "12"},
+    {"refine", "HOW", "with fit_to_tol: uniform or residual knot insertion", "residual"},
+    {"robust_iters", "N", "with robust: Tukey passes", "3"},
+    {"reparam", "K", "reprojection passes onto the fit, each refitted", "0"},
+    {"log_level", "LEVEL", "error, warn, info or debug", "info"},
+    {"board", "NAME", "must name the board this cellfit is built for", NULL},
+    {"stage", "URI", "the rig's stage (docs/rig-devices.md)", NULL},
+    {"probe", "URI", "the rig's probe", NULL},
+    {"sim_args", "ARGS", "extra cellsim arguments, space-separated", NULL},
+    {"journal_dir", "DIR", "folder of the scans' journals", "the results folder"},
+    {"z0", "MM", "the probe's beam height", "50"},
+    {"cal", "CX,CY,CZ", "the probe's calibration offset, mm", "0,0,0"},
+    {"allow", "ADDR[/BITS],...", "client addresses allowed (IPv4, up to 16)", "any"},
+    {"max_rate", "R", "requests a second per client, 0 no limit", "1000"},
+};
+#define NKEYS ((int)(sizeof keys / sizeof keys[0]))
+
+/* Yes/no settings, given as flags. */
+enum { F_SYSLOG, F_SIM, F_FIT_TO_TOL, F_ROBUST, NFLAGS };
+static const serve_key_t flag_keys[NFLAGS] = {
+    {"syslog", NULL, "log to syslog (facility daemon) instead of stderr", NULL},
+    {"sim", NULL, "the simulated rig: cellsim started as a child on 127.0.0.1", NULL},
+    {"fit_to_tol", NULL,
+     "FIT and SCAN_FIT run the tolerance loop (fit, check, insert knots) to TOLERANCE", NULL},
+    {"robust", NULL, "FIT and SCAN_FIT fit robustly (Tukey passes against outliers)", NULL},
+};
+
+/* The config file first (--config), then the options over it. */
 static int parse(int argc, char **argv, serve_conf_t *c, int *print_map)
 {
-    char msg[1024];
-    /* The config file first, so that options override it. */
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--config")) {
-            if (i + 1 >= argc)
-                return cli_error("serve", CLI_USAGE, "option --config needs a value");
-            if (cf_conf_read(argv[i + 1], apply, c, msg, sizeof msg))
-                return cli_error("serve", CLI_USAGE, "%s", msg);
-        }
-        if (!is_flag(argv[i]))
-            i++;
+    char msg[1024], names[NKEYS + NFLAGS][32];
+    const char *val[NKEYS] = {0}, *config = NULL;
+    int flag[NFLAGS] = {0};
+    cf_opt_t opts[NKEYS + NFLAGS + 3];
+    int n = 0;
+    opts[n++] = (cf_opt_t){.name = "config",
+                           .kind = CF_OPT_STR,
+                           .dst = &config,
+                           .arg = "FILE",
+                           .help = "settings, key = value a line (options override them)"};
+    for (int i = 0; i < NKEYS + NFLAGS; i++) {
+        const serve_key_t *k = i < NKEYS ? &keys[i] : &flag_keys[i - NKEYS];
+        snprintf(names[i], sizeof names[i], "%s",
+                 !strcmp(k->key, "results_dir") ? "results" : k->key);
+        for (char *p = names[i]; *p; p++)
+            *p = *p == '_' ? '-' : *p;
+        opts[n++] = (cf_opt_t){.name = names[i],
+                               .kind = i < NKEYS ? CF_OPT_STR : CF_OPT_FLAG,
+                               .dst = i < NKEYS ? (void *)&val[i] : (void *)&flag[i - NKEYS],
+                               .arg = k->arg,
+                               .help = k->help,
+                               .def = k->def};
     }
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--print-map")) {
-            *print_map = 1;
-            continue;
-        }
-        if (!strcmp(a, "--syslog") || !strcmp(a, "--sim")) {
-            apply(c, a + 2, "yes", msg, sizeof msg);
-            continue;
-        }
-        if (strncmp(a, "--", 2) || !a[2])
-            return serve_usage();
-        if (!v)
-            return cli_error("serve", CLI_USAGE, "option %s needs a value", a);
-        i++;
-        if (!strcmp(a, "--config"))
-            continue;
-        char key[64];
-        snprintf(key, sizeof key, "%s", !strcmp(a, "--results") ? "--results_dir" : a);
-        for (char *p = key; *p; p++)
-            if (*p == '-')
-                *p = '_';
-        if (apply(c, key + 2, v, msg, sizeof msg))
-            return cli_error("serve", CLI_USAGE, "%s", msg);
-    }
+    opts[n++] = (cf_opt_t){.name = "print-map",
+                           .kind = CF_OPT_FLAG,
+                           .dst = print_map,
+                           .help = "print the register map (docs/plc-register-map.md) and exit"};
+    opts[n] = (cf_opt_t){0};
+    const cf_cmd_t cmd = {.prog = "cellfit",
+                          .name = "serve",
+                          .summary = "the cell headless, driven by a PLC over Modbus TCP "
+                                     "(docs/plc-register-map.md)",
+                          .descr = "Every option is also a config key: its name without the "
+                                   "dashes, '-' as '_' (--results is results_dir).",
+                          .opts = opts};
+    int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    if (rc)
+        return rc;
+    if (config && cf_conf_read(config, apply, c, msg, sizeof msg))
+        return cli_error("serve", CLI_USAGE, "%s", msg);
+    for (int i = 0; i < NKEYS; i++)
+        if (val[i] && apply(c, keys[i].key, val[i], msg, sizeof msg))
+            return cli_error("serve", CLI_USAGE, "--%s: %s", names[i], msg);
+    for (int i = 0; i < NFLAGS; i++)
+        if (flag[i])
+            apply(c, flag_keys[i].key, "yes", msg, sizeof msg);
     return CLI_OK;
 }
 
@@ -269,9 +336,12 @@ int cmd_serve(int argc, char **argv)
     c.beta = NF_BETA_DEFAULT;
     c.max_rate = 1000;
     c.run.z0 = 50.0; /* cellsim's beam height */
+    cf_fitjob_defaults(&c.run.fit);
     int print_map = 0, ec = parse(argc, argv, &c, &print_map);
-    if (ec)
+    if (ec) {
+        ec = cf_opt_exit(ec);
         goto done;
+    }
     if (print_map) {
         cf_plcdoc_print(stdout);
         goto done;
@@ -341,6 +411,10 @@ int cmd_serve(int argc, char **argv)
     cf_log(CF_LOG_INFO, "cellfit serve: board %s, nominal %s, points %s, results %s", BOARD_NAME,
            c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
            c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
+    const cf_fitjob_opts_t *fo = &c.run.fit;
+    cf_log(CF_LOG_INFO, "fit: %s%s, robust %s, reparam %ld", fo->loop ? "to TOLERANCE" : "plain",
+           fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : "",
+           fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
     cf_plcrun_free(&c.run);
     if (c.run.rig)

@@ -14,7 +14,7 @@ int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, 
 {
     int nu2, nv2, ru = 0, rv = 0, rc;
     double *Xu = NULL, *Xv = NULL;
-    *stop = 1;
+    *stop = CF_LOOP_STOP_MAX_CP;
     if (how == CF_REFINE_UNIFORM) {
         rc = nf_refine_uniform_size(fit, &nu2, &nv2);
         if (rc == NF_EBUDGET)
@@ -39,9 +39,10 @@ int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, 
     }
     long ncp = (long)nu2 * nv2, need = nf_fit_bytes(nu2, nv2, fit->p, fit->q, solver);
     rc = CF_OK;
-    if (how == CF_REFINE_RESIDUAL && ru + rv == 0)
+    if (how == CF_REFINE_RESIDUAL && ru + rv == 0) {
+        *stop = CF_LOOP_STOP_DATA;
         cf_fail(msg, ml, CF_OK, "no knot span left to split");
-    else if (ncp > max_cp || ncp > NF_MAX_CP)
+    } else if (ncp > max_cp || ncp > NF_MAX_CP)
         cf_fail(msg, ml, CF_OK, "the next net (%d x %d = %ld control points) would exceed %s %ld",
                 nu2, nv2, ncp, ncp > max_cp ? "--max-cp" : "the board's",
                 ncp > max_cp ? max_cp : (long)NF_MAX_CP);
@@ -65,7 +66,7 @@ int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, 
             if (rc != CF_ENOMEM)
                 cf_fail(msg, ml, rc, "knot insertion: %s", nf_strerror(rc));
         } else
-            *stop = 0;
+            *stop = CF_LOOP_GO;
     }
     free(Xu);
     free(Xv);

@@ -17,11 +17,19 @@ typedef enum cf_refine {
     CF_REFINE_RESIDUAL = 1 /* the spans holding most excess split (nf_spanres_choose) */
 } cf_refine_t;
 
+/* Why the loop cannot go on (cf_loop_next's *stop). */
+enum {
+    CF_LOOP_GO = 0,
+    CF_LOOP_STOP_DATA = 1,  /* no span with data on both sides of its midpoint left to split */
+    CF_LOOP_STOP_MAX_CP = 2 /* the next net exceeds max_cp, the board's points or its bytes */
+};
+
 /* The next net from fit: uniform, or residual-driven from sr (the span
- * counts of the check pass on fit). CF_OK with *stop = 0 and *nxt
- * allocated (cf_surf_free), or CF_OK with *stop = 1 and msg saying why the
- * loop ends: no span to split, more than max_cp (or the board's NF_MAX_CP)
- * control points, more bytes than the board's arena with this solver.
+ * counts of the check pass on fit). CF_OK with *stop = CF_LOOP_GO and *nxt
+ * allocated (cf_surf_free), or CF_OK with *stop = CF_LOOP_STOP_* and msg
+ * saying why the loop ends: no span to split, more than max_cp (or the
+ * board's NF_MAX_CP) control points, more bytes than the board's arena
+ * with this solver.
  * CF_ENOMEM, or an nf_err_t of knot insertion, with msg. */
 int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, long max_cp,
                  nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml);

@@ -106,6 +106,10 @@ cmp -s "$T/e-jf1" "$T/e-jf" && no "--reparam 1 changed nothing" || ok "--reparam
 r=$(json "$T/jf.json" rms)
 le "$r" 0.006 && ok "residual rms $r from the second pass over the journal (noise 0.005)" || no "rms $r"
 "$CF" gen --dir "$T/other" --nu 8 --nv 8 --count 100 >/dev/null
+for sub in export info recover fit; do
+    expect 0 "journal $sub --help: exit 0" "$CF" journal $sub --help
+done
+grep -q -- "--nominal N.igs" "$T/out" && ok "journal fit --help lists --nominal" || no "journal fit --help: $(head -3 "$T/out")"
 expect 2 "journal fit against another nominal: exit 2" "$CF" journal fit "$T/p.jnl" --nominal "$T/other/nominal.igs" --out "$T/x.igs"
 grep -q "measured against 'nominal.igs'" "$T/err" && one_line && ok "says which nominal it was measured against" ||
     no "nominal mismatch message: $(cat "$T/err")"

@@ -83,6 +83,14 @@ expect 0 "--within 95 met by the start net" "$CF" fit --base "$T/b/nominal.igs" 
 expect 0 "--uv --tol" "$CF" fit --base "$T/b/nominal.igs" --points "$T/b/points.uvxyz" --uv --tol $TOL --out "$T/uv.igs" --json
 [ "$(top "$T/out" tol_met)" = true ] && ok "--uv: tolerance met" || no "--uv: $(cat "$T/out")"
 # Bad usage.
+expect 0 "fit --help: exit 0" "$CF" fit --help
+grep -q -- "--tol MM" "$T/out" && grep -q -- "--robust-iters N" "$T/out" && grep -q "default: residual" "$T/out" &&
+    ok "fit --help lists --tol, --robust-iters and the defaults" || no "fit --help: $(head -3 "$T/out")"
+expect 2 "fit --bogus: exit 2" "$CF" fit --bogus
+grep -q "unknown option '--bogus'" "$T/err" && ok "  ... named as unknown" || no "fit --bogus: $(cat "$T/err")"
+expect 0 "fit --tol=VALUE accepted" "$CF" fit --base="$T/b/nominal.igs" --points="$T/b/points.uvxyz" --uv --tol=1 \
+    --out="$T/eq.igs" --json
+[ "$(json "$T/out" fit_status)" = met ] && ok "  ... fit_status met" || no "fit_status: $(cat "$T/out")"
 expect 2 "--within without --tol" "$CF" fit --base "$T/b/nominal.igs" --points "$T/b/points.xyz" --within 90 --out "$T/x.igs"
 expect 2 "--tol 0" "$CF" fit --base "$T/b/nominal.igs" --points "$T/b/points.xyz" --tol 0 --out "$T/x.igs"
 expect 2 "--refine bogus" "$CF" fit --base "$T/b/nominal.igs" --points "$T/b/points.xyz" --tol 1 --refine bogus --out "$T/x.igs"

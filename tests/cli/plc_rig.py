@@ -4,7 +4,8 @@
 # (and mbpoll as a second client), the way a PLC does; the simulator's own
 # registers (stage unit 1, docs/rig-devices.md) are read to see the stage
 # really stopped. Prints "ok ..." / "FAIL ..." lines; tests/cli/plc_rig.sh
-# counts them. Steps: cycle RESDIR MBPOLL OUT; abort RESDIR OUT; watchdog;
+# counts them. Steps: cycle RESDIR MBPOLL OUT; tolfit RESDIR NCP OUT;
+# abort RESDIR OUT; watchdog;
 # fault CONTROL_FILE KIND CODE; gone; garbage; rate; allow WANT; soak TX.
 import glob
 import os
@@ -130,6 +131,40 @@ def cycle(port, simport, resdir, mbpoll, out):
     s = c.command(ACK_RESULTS)
     check(s["result"] == 0 and not s["status"] & pc.RESULTS, "cycle: ACK_RESULTS")
     open(out, "w").write("%s\n%s\n" % (dirs[0] if dirs else "", jnl))
+
+
+def tolfit(port, simport, resdir, ncp, out):
+    """SCAN_FIT on a cell configured to fit to TOLERANCE (99 % within),
+    robustly: the results say more control points than the nominal's ncp
+    and 99 % within; the export names fit_status "met". OUT gets the export
+    folder and the journal."""
+    c = Cell(port)
+    home(c, "tolfit")
+    check(c.write(pc.PART, c.words(4712) + [4, 0] + c.fwords(0.01)) == 0,
+          "tolfit: part 4712, program 4, folder 0, tolerance 0.01 mm")
+    check(region(c, 100, 50, 0, 0, 2.5) == 0, "tolfit: region (100, 50)-(0, 0), step 2.5 mm")
+    s = c.command(SCAN_FIT)
+    seq = c.seq
+    check(s["result"] == 0, "tolfit: SCAN_FIT seq %d accepted" % seq)
+    s = c.wait_done(seq, 120)
+    check(s["status"] & pc.RESULTS and not s["status"] & pc.ERROR,
+          "tolfit: done with RESULTS, no error (0x%x)" % s["status"])
+    res = pc.results(c)
+    check(res["points"] == 41 * 21, "tolfit: 861 points fitted (%d)" % res["points"])
+    check(res["cps"] > ncp, "tolfit: the loop refined the net: %d control points > the nominal's %d"
+          % (res["cps"], ncp))
+    check(res["within"] >= 99.0, "tolfit: %.2f %% within 0.01 mm (the cell asks 99 %%)" % res["within"])
+    c.seq += 1
+    s = c.command(EXPORT)
+    s = c.wait_done(c.seq, 30)
+    check(not s["status"] & pc.ERROR, "tolfit: EXPORT done")
+    dirs = [d for d in glob.glob(os.path.join(resdir, "4712_*")) if os.path.isdir(d)]
+    rep = pc.json.load(open(os.path.join(dirs[0], "report.json"))) if dirs else {}
+    check(rep.get("fit_status") == "met" and rep.get("control_points") == res["cps"],
+          "tolfit: report.json: fit_status %s, %s control points" %
+          (rep.get("fit_status"), rep.get("control_points")))
+    s = c.command(ACK_RESULTS)
+    open(out, "w").write("%s\n%s\n" % (dirs[0] if dirs else "", rep.get("journal", "")))
 
 
 def abort(port, simport, resdir, out):
@@ -334,6 +369,8 @@ if __name__ == "__main__":
     try:
         if step == "cycle":
             cycle(port, simport, a[0], a[1], a[2])
+        elif step == "tolfit":
+            tolfit(port, simport, a[0], int(a[1]), a[2])
         elif step == "abort":
             abort(port, simport, a[0], a[1])
         elif step == "watchdog":

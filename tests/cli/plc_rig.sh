@@ -2,7 +2,8 @@
 # tests/cli/plc_rig.sh CELLFIT: `cellfit serve --sim` (cellsim started as
 # its child, beside CELLFIT) driven through its registers only by pymodbus
 # and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig,
-# results, EXPORT, ACK_RESULTS; the journal checked by `cellfit journal`;
+# results, EXPORT, ACK_RESULTS; a SCAN_FIT to a tolerance, robustly (the
+# cell's fit_to_tol, within, robust), equal to the shell's fit; the journal checked by `cellfit journal`;
 # invalid commands while scanning; an abort and a watchdog trip mid-scan
 # (cellsim's stage seen stopped, journal consistent); a drive fault and an
 # e-stop injected in cellsim (307, 311), RESET, HOME, next job; cellsim
@@ -45,7 +46,7 @@ start() {
 "$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
 mkdir -p "$T/res"
 SIMARGS="--speed 5000 --seed 1 --part $T/part/nominal.igs --control $T/a.ctl"
-start a --sim --sim-args "$SIMARGS" --nominal "$T/part/nominal.igs" --results "$T/res"
+start a --sim --sim-args="$SIMARGS" --nominal "$T/part/nominal.igs" --results "$T/res"
 [ -n "$simport" ] && kill -0 "$simpid" 2>/dev/null && ok "cellsim pid $simpid started by serve, port $simport" ||
     no "no cellsim child in the log"
 py cycle "$port" "$simport" "$T/res" "$(command -v mbpoll)" "$T/cycle.out"
@@ -70,6 +71,34 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
 else
     no "no journal from the cycle ($jnl)"
 fi
+# SCAN_FIT to a tolerance, robustly, on a cell configured so (fit_to_tol,
+# within, robust): a coarse nominal (8 x 6) under cellsim's dented part, so
+# the loop must insert knots. The cell's fit = the shell's `cellfit fit
+# --tol --within --robust` on the journal's points (float32 registers:
+# equal to 1e-6 mm).
+a_port=$port; a_pid=$pid; a_simport=$simport; a_simpid=$simpid
+"$CF" gen --dir "$T/coarse" --nu 8 --nv 6 --count 1000 >/dev/null
+mkdir -p "$T/tres"
+start t --sim --sim-args="--speed 5000 --seed 3 --part $T/coarse/nominal.igs" \
+    --nominal "$T/coarse/nominal.igs" --results "$T/tres" --fit-to-tol --robust --within 99
+py tolfit "$port" "$simport" "$T/tres" 48 "$T/tol.out"
+d=$(sed -n 1p "$T/tol.out"); jnl=$(sed -n 2p "$T/tol.out")
+if [ -f "$jnl" ] && "$CF" journal export "$jnl" --out "$T/tol.xyz" &&
+    "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/tol.xyz" --tol 0.01 --within 99 --robust \
+        --out "$T/tol_shell.igs" >/dev/null; then
+    "$CF" eval "$d/fitted.igs" "$T/coarse/check.uv" >"$T/e1"
+    "$CF" eval "$T/tol_shell.igs" "$T/coarse/check.uv" >"$T/e2"
+    paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
+        END { exit !(NR > 0 && m < 1e-6) }' && ok "SCAN_FIT to tolerance = cellfit fit --tol --robust on the journal" ||
+        no "the cell's fit to tolerance differs from the shell's"
+else
+    no "no journal or shell fit from the tolerance SCAN_FIT ($jnl)"
+fi
+grep -q "fit: 861 points, [0-9]* x [0-9]* net, [0-9]* rounds, fit_status met" "$T/t.log" &&
+    ok "log: the fit's rounds and fit_status" || no "log lacks the fit's rounds"
+kill -TERM "$pid"; wait "$pid"
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+port=$a_port; pid=$a_pid; simport=$a_simport; simpid=$a_simpid
 py abort "$port" "$simport" "$T/res" "$T/abort.out"
 jnl=$(cat "$T/abort.out")
 if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
@@ -97,7 +126,7 @@ pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 [ $rc -eq 0 ] && ok "SIGTERM: serve a exits 0" || no "SIGTERM: serve a exit $rc"
 
 # SIGTERM to serve stops its cellsim.
-start b --sim --sim-args "--speed 5000"
+start b --sim --sim-args="--speed 5000"
 spid=$simpid
 [ -n "$spid" ] && kill -0 "$spid" 2>/dev/null && ok "serve b: cellsim pid $spid running" || no "serve b: no cellsim"
 kill -TERM "$pid"; wait "$pid"; rc=$?
@@ -122,7 +151,7 @@ py allow "$port" 0 served
 
 # The soak: transactions from several clients while scan jobs run.
 PYS=plc_soak.py
-start s --sim --sim-args "--speed 5000 --seed 2 --part $T/part/nominal.igs" --nominal "$T/part/nominal.igs" \
+start s --sim --sim-args="--speed 5000 --seed 2 --part $T/part/nominal.igs" --nominal "$T/part/nominal.igs" \
     --results "$T/res" --max-rate 0
 py soak "$port" "$simport" "$pid" "${PLC_SOAK_TX:-20000}" "${PLC_SOAK_MAX_GAP_MS:-1000}"
 kill -TERM "$pid"; wait "$pid"; rc=$?

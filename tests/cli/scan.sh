@@ -58,6 +58,8 @@ cp "$T/out" "$T/a.out"
 [ "$(json "$T/a.out" planned)" = 66 ] && [ "$(json "$T/a.out" points)" = 66 ] && [ "$(json "$T/a.out" flagged)" = 0 ] &&
     ok "66 points planned and measured" || no "scan counts: $(cat "$T/a.out")"
 cmp -s "$T/a.out" "$T/a.json" && ok "--report holds the --json summary" || no "--report differs from --json"
+expect 0 "scan --help: exit 0" "$CF" scan --help
+grep -q -- "--region x0:x1:y0:y1" "$T/out" && ok "  ... lists --region" || no "scan --help: $(head -3 "$T/out")"
 expect 0 "journal info" "$CF" journal info "$T/a.jnl" --json
 [ "$(json "$T/out" records)" = 67 ] && [ "$(json "$T/out" ended)" = 1 ] && [ "$(json "$T/out" end_code)" = 0 ] &&
     [ "$(json "$T/out" z0)" = 50 ] && [ "$(json "$T/out" cx)" = 1.5 ] && ok "journal: 66 points + end record, kinematics in the header" ||

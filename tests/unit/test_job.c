@@ -4,10 +4,14 @@
  * refined to a size asked for (the refined nominal is the same surface:
  * checked against the nominal at random parameters); the checks refuse
  * nets below the nominal's and beyond the board; stop, progress, empty and
- * missing files; export read back. */
+ * missing files; export read back. The fit job itself (cf_fitjob): its
+ * tolerance loop reproduces a surface with more knots than the base
+ * exactly, stops at max_cp and max_rounds with the status saying so, and
+ * a live first pass (a scan's) reproduces the nominal. */
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_job.h"
+#include "cf_points.h"
 #include "cf_surf.h"
 #include "cf_test.h"
 #include "nf_err.h"
@@ -83,7 +87,11 @@ static int teardown(void **state)
 
 static cf_job_fit_opts_t opts(const char *points, int nu, int nv)
 {
-    cf_job_fit_opts_t o = {nominal, points, 0.0, 0.001, 1e-6, nu, nv};
+    cf_job_fit_opts_t o;
+    o.nominal = nominal, o.points = points;
+    cf_fitjob_defaults(&o.fit);
+    o.fit.alpha = 0.0, o.fit.beta = 0.001, o.fit.tol = 1e-6;
+    o.fit.net_u = nu, o.fit.net_v = nv;
     return o;
 }
 
@@ -133,12 +141,12 @@ static void check_exact(const char *points, int nu, int nv)
     if (rc)
         fail_msg("cf_job_fit: %d %s", rc, msg);
     assert_int_equal(res.points, 3000);
-    assert_int_equal(res.fitted.nu, nu ? nu : 7);
-    assert_int_equal(res.fitted.nv, nv ? nv : 6);
-    assert_true(res.st->n == 3000);
-    assert_true(res.st->max_abs < 1e-8);          /* deviations: rounding */
-    assert_true(res.st->within == 3000);          /* tol 1e-6 */
-    assert_true(surface_gap(&res.fitted) < 1e-8); /* the nominal itself */
+    assert_int_equal(res.surf.nu, nu ? nu : 7);
+    assert_int_equal(res.surf.nv, nv ? nv : 6);
+    assert_true(res.stats->n == 3000);
+    assert_true(res.stats->max_abs < 1e-8);     /* deviations: rounding */
+    assert_true(res.stats->within == 3000);     /* tol 1e-6 */
+    assert_true(surface_gap(&res.surf) < 1e-8); /* the nominal itself */
     assert_int_equal(pct_backwards, 0);
     assert_int_equal(last_pct, 100);
     cf_job_result_free(&res);
@@ -158,10 +166,10 @@ static void test_refined_net(void **state)
     check_exact(uvfile, 7, 10); /* only v refined */
     cf_job_fit_opts_t o = opts(uvfile, 12, 9);
     assert_int_equal(cf_job_check(&o, msg, sizeof msg), CF_OK);
-    o.net_u = 6; /* below the nominal's 7 */
+    o.fit.net_u = 6; /* below the nominal's 7 */
     assert_int_equal(cf_job_check(&o, msg, sizeof msg), CF_EARG);
     assert_non_null(strstr(msg, "smaller"));
-    o.net_u = o.net_v = 2000; /* beyond the sim board */
+    o.fit.net_u = o.fit.net_v = 2000; /* beyond the sim board */
     assert_int_equal(cf_job_check(&o, msg, sizeof msg), NF_EBUDGET);
 }
 
@@ -173,8 +181,8 @@ static void test_stop_and_bad_files(void **state)
     last_pct = pct_calls = 0;
     stop_after = 1; /* during accumulation */
     assert_int_equal(cf_job_fit(&o, &ctl, &res, msg, sizeof msg), RIG_EABORTED);
-    assert_null(res.st);
-    assert_null(res.fitted.cp);
+    assert_null(res.stats);
+    assert_null(res.surf.cp);
     stop_after = -1;
     o.points = empty;
     assert_int_equal(cf_job_fit(&o, &ctl, &res, msg, sizeof msg), CF_EEMPTY);
@@ -204,7 +212,7 @@ static void test_export(void **state)
     snprintf(path, sizeof path, "%s/fitted.igs", dir);
     nf_surf_t back;
     assert_int_equal(cf_iges_read(path, 0, &back, msg, sizeof msg), CF_OK);
-    assert_memory_equal(back.cp, res.fitted.cp, sizeof(double) * 3 * 42);
+    assert_memory_equal(back.cp, res.surf.cp, sizeof(double) * 3 * 42);
     cf_surf_free(&back);
     remove(path);
     snprintf(path, sizeof path, "%s/report.json", dir);
@@ -226,6 +234,162 @@ static void test_export(void **state)
     cf_job_result_free(&res);
 }
 
+/* The fit job's loop by exact reproduction: points on a bicubic S* with
+ * the interior knot 0.5 in u and v (5 x 5), fitted from a Bezier base
+ * (4 x 4, a plane) with alpha = beta = 0. Round 0 cannot represent S*;
+ * one uniform (or residual: the only span's midpoint) refinement inserts
+ * 0.5 both ways, and S* comes back exactly: status met after 2 rounds. */
+static nf_surf_t star, bez;
+static char starfile[600];
+
+static int loop_setup(void)
+{
+    if (cf_surf_alloc(&star, 3, 3, 5, 5) || cf_surf_alloc(&bez, 3, 3, 4, 4))
+        return -1;
+    static const double K5[] = {0, 0, 0, 0, 0.5, 1, 1, 1, 1}, K4[] = {0, 0, 0, 0, 1, 1, 1, 1};
+    memcpy(star.U, K5, sizeof K5), memcpy(star.V, K5, sizeof K5);
+    memcpy(bez.U, K4, sizeof K4), memcpy(bez.V, K4, sizeof K4);
+    for (int j = 0; j < 5; j++)
+        for (int i = 0; i < 5; i++) {
+            double *P = star.cp + 3 * (i + 5 * j);
+            P[0] = 10.0 * i, P[1] = 10.0 * j, P[2] = 2.0 * sin(1.3 * i + 0.4 * j);
+        }
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            double *P = bez.cp + 3 * (i + 4 * j);
+            P[0] = 40.0 * i / 3.0, P[1] = 40.0 * j / 3.0, P[2] = 0.0;
+        }
+    tmp_path(starfile, sizeof starfile, "star.uvxyz");
+    FILE *f = fopen(starfile, "w");
+    if (!f)
+        return -1;
+    for (int j = 0; j < 40; j++)
+        for (int i = 0; i < 40; i++) {
+            double u = (i + 0.5) / 40.0, v = (j + 0.5) / 40.0, P[3];
+            nf_surf_eval(&star, u, v, P);
+            fprintf(f, "%.17g %.17g %.17g %.17g %.17g\n", u, v, P[0], P[1], P[2]);
+        }
+    return fclose(f);
+}
+
+/* Run the job on starfile from bez with the loop's limits. */
+static int run_loop(cf_refine_t how, long max_cp, long max_rounds, cf_fitjob_result_t *r)
+{
+    cf_fitjob_opts_t o;
+    cf_fitjob_defaults(&o);
+    o.alpha = o.beta = 0.0;
+    o.solver = NF_SOLVER_CHOL;
+    o.tol = 1e-6;
+    o.loop = 1;
+    o.refine = how;
+    o.max_cp = max_cp;
+    o.max_rounds = max_rounds;
+    cf_fitjob_t *j;
+    int rc = cf_fitjob_open(&j, &bez, &o, msg, sizeof msg);
+    if (rc)
+        return rc;
+    cf_points_t *pr = NULL;
+    rc = cf_points_open(&pr, starfile, 5, msg, sizeof msg);
+    if (!rc) {
+        cf_fitsrc_t src;
+        cf_fitsrc_points_t pc;
+        cf_fitsrc_points(&src, &pc, pr, starfile);
+        rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, msg, sizeof msg);
+    }
+    cf_points_close(pr);
+    cf_fitjob_close(j);
+    return rc;
+}
+
+/* max |a - b| at a grid of parameters. */
+static double gap(const nf_surf_t *a, const nf_surf_t *b)
+{
+    double worst = 0;
+    for (int j = 0; j <= 20; j++)
+        for (int i = 0; i <= 20; i++) {
+            double A[3], B[3];
+            nf_surf_eval(a, i / 20.0, j / 20.0, A);
+            nf_surf_eval(b, i / 20.0, j / 20.0, B);
+            for (int c = 0; c < 3; c++)
+                worst = fmax(worst, fabs(A[c] - B[c]));
+        }
+    return worst;
+}
+
+static void test_fitjob_loop(void **state)
+{
+    (void)state;
+    assert_int_equal(loop_setup(), 0);
+    for (int how = 0; how < 2; how++) {
+        cf_fitjob_result_t r;
+        int rc = run_loop((cf_refine_t)how, 1000, 12, &r);
+        if (rc)
+            fail_msg("%s", msg);
+        assert_int_equal(r.status, CF_FITJOB_MET);
+        assert_int_equal(r.nrounds, 2);
+        assert_true(r.rounds[0].within_pct < 50.0); /* the plane misses S* */
+        assert_int_equal(r.surf.nu, 5);
+        assert_int_equal(r.surf.nv, 5);
+        assert_true(r.max_abs < 1e-8);
+        assert_true(gap(&r.surf, &star) < 1e-8);
+        assert_int_equal(r.points, 1600);
+        assert_string_equal(cf_fitjob_status_name(r.status), "met");
+        cf_fitjob_result_free(&r);
+    }
+    /* Limits: 25 control points refused by max_cp 20; one round only. */
+    cf_fitjob_result_t r;
+    assert_int_equal(run_loop(CF_REFINE_UNIFORM, 20, 12, &r), 0);
+    assert_int_equal(r.status, CF_FITJOB_NOT_MET_MAX_CP);
+    assert_int_equal(r.surf.nu * r.surf.nv, 16);
+    assert_non_null(strstr(r.why, "--max-cp"));
+    cf_fitjob_result_free(&r);
+    assert_int_equal(run_loop(CF_REFINE_UNIFORM, 1000, 1, &r), 0);
+    assert_int_equal(r.status, CF_FITJOB_NOT_MET_NO_PROGRESS);
+    assert_int_equal(r.nrounds, 1);
+    cf_fitjob_result_free(&r);
+    /* A base net above max_cp is refused before any point. */
+    assert_int_equal(run_loop(CF_REFINE_UNIFORM, 10, 12, &r), CF_EARG);
+    remove(starfile);
+    cf_surf_free(&star);
+    cf_surf_free(&bez);
+}
+
+/* Live points (a scan's first pass): the nominal's x y z points added one
+ * at a time, the rest of the job from the file: the nominal comes back. */
+static void test_fitjob_live(void **state)
+{
+    (void)state;
+    cf_fitjob_opts_t o;
+    cf_fitjob_defaults(&o);
+    o.alpha = 0.0;
+    o.beta = 0.001;
+    o.reparam = 1;
+    cf_fitjob_t *j;
+    assert_int_equal(cf_fitjob_open(&j, &nom, &o, msg, sizeof msg), 0);
+    cf_points_t *pr = NULL;
+    assert_int_equal(cf_points_open(&pr, xyzfile, 3, msg, sizeof msg), 0);
+    double q[3];
+    long n = 0;
+    while (cf_points_read(pr, q, 1, msg, sizeof msg) == 1) {
+        assert_int_equal(cf_fitjob_add(j, q, msg, sizeof msg), 0);
+        n++;
+    }
+    assert_int_equal(n, 3000);
+    cf_fitsrc_t src;
+    cf_fitsrc_points_t pc;
+    cf_fitsrc_points(&src, &pc, pr, xyzfile);
+    cf_fitjob_result_t r;
+    assert_int_equal(cf_fitjob_run(j, &src, NULL, 0, 100, &r, msg, sizeof msg), 0);
+    assert_int_equal(r.points, 3000);
+    assert_int_equal(r.status, CF_FITJOB_PLAIN);
+    assert_true(r.nominal_max < 1e-8); /* the points are on the nominal */
+    assert_true(surface_gap(&r.surf) < 1e-8);
+    assert_true(r.max_abs < 1e-8);
+    cf_fitjob_result_free(&r);
+    cf_points_close(pr);
+    cf_fitjob_close(j);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -233,6 +397,8 @@ int main(void)
         cmocka_unit_test(test_refined_net),
         cmocka_unit_test(test_stop_and_bad_files),
         cmocka_unit_test(test_export),
+        cmocka_unit_test(test_fitjob_loop),
+        cmocka_unit_test(test_fitjob_live),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

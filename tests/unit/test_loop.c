@@ -384,6 +384,27 @@ static void test_tukey(void **state)
     assert_true(nf_tukey(NAN, 2.0) == 0.0);
 }
 
+/* nf_refine_widest by hand: the widest span halved, the first of equal
+ * ones, counting the knots already chosen. */
+static void test_refine_widest(void **state)
+{
+    (void)state;
+    static const double B[] = {0, 0, 0, 1, 1, 1}; /* p = 2, n = 3: one span */
+    double X[4];
+    assert_int_equal(nf_refine_widest(B, 3, 2, 3, X), NF_OK);
+    assert_true(X[0] == 0.25 && X[1] == 0.5 && X[2] == 0.75);
+    static const double U[] = {0, 0, 0, 0.1, 1, 1, 1}; /* spans 0.1 and 0.9 */
+    assert_int_equal(nf_refine_widest(U, 4, 2, 2, X), NF_OK);
+    /* 0.55 splits [0.1, 1]; then [0.1, 0.55] and [0.55, 1] tie at 0.45:
+     * the first, 0.325. */
+    assert_true(X[0] == 0.325 && X[1] == 0.55);
+    static const double R[] = {0, 0, 0, 0.5, 0.5, 1, 1, 1}; /* a double knot: spans 0.5, 0.5 */
+    assert_int_equal(nf_refine_widest(R, 5, 2, 1, X), NF_OK);
+    assert_true(X[0] == 0.25);
+    assert_int_equal(nf_refine_widest(U, 4, 2, 0, NULL), NF_OK);
+    assert_int_equal(nf_refine_widest(U, 4, 2, -1, X), NF_EARG);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -391,6 +412,7 @@ int main(void)
         cmocka_unit_test(test_pick_location),  cmocka_unit_test(test_choose_ridge),
         cmocka_unit_test(test_fold),           cmocka_unit_test(test_rhist_quantile),
         cmocka_unit_test(test_sigma_outliers), cmocka_unit_test(test_tukey),
+        cmocka_unit_test(test_refine_widest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,128 @@
+/* cf_fitjob.h: the fit job: every fit of measured points onto a nominal
+ * runs here, whoever asks (`cellfit fit`, `journal fit`, `scan --fit`, the
+ * cell's FIT and SCAN_FIT). Brujic et al. 2010: Eq. 7 accumulated one
+ * point at a time into the stripes and solved; parameters given or by
+ * projection onto the base, then reprojected onto the fit K times
+ * (Section 2.2); optionally robust (Tukey weights, scale from the MAD of
+ * the residuals); optionally to a tolerance: rounds of fit, check, knot
+ * insertion (uniform or where the residuals are, cf_loop) until the share
+ * of points within tol is reached or a limit says no. The best round is
+ * the result: surface, statistics, rounds, timings, warnings, status.
+ *
+ * Points come from a source (cf_fitsrc: points file or journal) read again
+ * per pass; a live scan adds its points as they arrive (cf_fitjob_add), the
+ * first pass, and hands its journal for the rest. Memory: the fitter's byte
+ * formula for the largest net plus buffers of the net's size and a fixed
+ * batch, never a function of the number of points. Progress and a stop
+ * check between batches (the cell's ABORT and watchdog). */
+#ifndef CF_FITJOB_H
+#define CF_FITJOB_H
+
+#include "cf_fitsrc.h"
+#include "cf_loop.h"
+#include "cf_stats.h"
+#include "nf_fit.h"
+#include <stddef.h>
+
+/* Progress (0..100) and a cooperative stop check, both optional. */
+typedef struct cf_job_ctl {
+    void (*progress)(void *ctx, int pct);
+    int (*should_stop)(void *ctx); /* non-zero: stop at the next batch */
+    void *ctx;
+} cf_job_ctl_t;
+
+#define CF_FITJOB_MAX_ROUNDS 64
+#define CF_FITJOB_MAX_WARN 4
+
+/* How a job ended (the cell's fit_status register, report.json). */
+typedef enum cf_fitjob_status {
+    CF_FITJOB_PLAIN = 0,              /* no tolerance loop asked */
+    CF_FITJOB_MET = 1,                /* the share of points within tol reached */
+    CF_FITJOB_NOT_MET_DATA_LIMIT = 2, /* no span with data on both sides left to split */
+    CF_FITJOB_NOT_MET_MAX_CP = 3,     /* the next net exceeds max_cp, the board's points or bytes */
+    CF_FITJOB_NOT_MET_NO_PROGRESS = 4 /* max_rounds used up */
+} cf_fitjob_status_t;
+
+typedef struct cf_fitjob_opts {
+    double alpha, beta; /* Eq. 7's weights */
+    nf_solver_t solver;
+    double solve_tol; /* relative residual of the iterative solvers */
+    long max_iter;
+    int net_u, net_v; /* 0: the base's net; else the base refined to it first */
+    long reparam;     /* reprojection passes per round (Section 2.2) */
+    double far;       /* projected points farther than this are counted (mm; 0: 5 % of the net) */
+    int drop_far;     /* 1: and left out of the fit */
+    double tol;       /* deviation tolerance, mm (0: none): the within count, the loop's goal */
+    int loop;         /* 1: rounds of knot insertion until `within` % are within tol */
+    double within;    /* percent */
+    long max_cp, max_rounds;
+    cf_refine_t refine;
+    int robust; /* Tukey reweighting passes after each fit */
+    long robust_iters;
+    int stats; /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
+} cf_fitjob_opts_t;
+
+/* The shell's defaults: alpha, beta of the paper, solver auto, 1e-12 and
+ * 20000 iterations, within 100 %, max_cp the board's, 12 rounds, residual
+ * refinement, 3 robust passes; everything else off. */
+void cf_fitjob_defaults(cf_fitjob_opts_t *o);
+
+typedef struct cf_fitjob_result {
+    nf_surf_t surf; /* the best fit (heap, cf_surf) */
+    cf_fitjob_status_t status;
+    char why[256];              /* why the loop stopped short (status 2..4) */
+    long points;                /* points read in a pass */
+    long clamped, far, dropped; /* projection: feet on the boundary, beyond far, left out */
+    double far_limit;
+    double rms, max_abs;             /* distances of the points to the best fit */
+    double within_pct;               /* of the points within tol (tol > 0) */
+    double nominal_rms, nominal_max; /* the first pass's distances to the base */
+    double sigma;                    /* robust scale of the best round (0: none) */
+    long outliers;                   /* robust: points of weight 0 in its last pass */
+    nf_solve_stats_t solve;
+    long bytes; /* fitter memory of the best round */
+    cf_round_t rounds[CF_FITJOB_MAX_ROUNDS];
+    int nrounds;
+    double seconds, t_acc, t_solve;
+    cf_stats_t *stats; /* heap, with opts.stats: deviations to the best fit */
+    int nwarn;
+    char warn[CF_FITJOB_MAX_WARN][160];
+} cf_fitjob_result_t;
+
+typedef struct cf_fitjob cf_fitjob_t; /* opaque */
+
+/* A job on the nominal's space (copied; refined to net_u x net_v if asked),
+ * checked against the board before any point: 0, or NF_EBUDGET (msg says
+ * the bytes), CF_EARG (options, a net smaller than the nominal's, max_cp
+ * below it), CF_ENOMEM. */
+int cf_fitjob_open(cf_fitjob_t **j, const nf_surf_t *nominal, const cf_fitjob_opts_t *o, char *msg,
+                   size_t ml);
+
+/* The base the job fits in (the nominal refined), and its fitter bytes. */
+const nf_surf_t *cf_fitjob_base(const cf_fitjob_t *j);
+long cf_fitjob_bytes(const cf_fitjob_t *j);
+
+/* A live point (x y z), the first pass of the first round: projected onto
+ * the base and added as it arrives. 0, or an nf_err_t (msg). */
+int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml);
+
+/* Run the job: the first pass from the live points if any, else from src;
+ * every later pass from src. Progress over pct0..pct1 of ctl. 0 with *r
+ * filled (cf_fitjob_result_free), also when the tolerance was not met
+ * (r->status says so); RIG_EABORTED when ctl asked to stop; otherwise a
+ * CF_E* / NF_E* / RIG_E* code with msg naming file and line or record. On
+ * failure *r owns nothing. */
+int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ctl, int pct0,
+                  int pct1, cf_fitjob_result_t *r, char *msg, size_t ml);
+
+void cf_fitjob_close(cf_fitjob_t *j);
+void cf_fitjob_result_free(cf_fitjob_result_t *r);
+
+/* "plain", "met", "not_met_data_limit", "not_met_max_cp", "not_met_no_progress". */
+const char *cf_fitjob_status_name(cf_fitjob_status_t s);
+
+/* 1 when rc blames the input (points, nominal, options: exit 2), 0 when the
+ * work failed (exit 1). */
+int cf_fitjob_input_error(int rc);
+
+#endif

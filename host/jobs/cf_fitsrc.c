@@ -1,0 +1,119 @@
+/* cf_fitsrc.c: point sources of the fit job: points file, journal (cf_fitsrc.h). */
+#include "cf_fitsrc.h"
+#include "cf_err.h"
+#include "rig_err.h"
+#include <stdio.h>
+#include <string.h>
+
+static int pts_rewind(void *ctx, char *msg, size_t ml)
+{
+    cf_fitsrc_points_t *p = ctx;
+    int rc = cf_points_rewind(p->r);
+    return rc ? cf_fail(msg, ml, rc, "%s: cannot read the points again", p->path) : 0;
+}
+
+static long pts_read(void *ctx, double *rows, long max, char *msg, size_t ml)
+{
+    cf_fitsrc_points_t *p = ctx;
+    return cf_points_read(p->r, rows, max, msg, ml);
+}
+
+/* The line of point k, read again one point at a time (error path only). */
+static void pts_where(void *ctx, long k, char *buf, size_t n)
+{
+    cf_fitsrc_points_t *p = ctx;
+    double row[8];
+    char msg[16];
+    long line = -1;
+    if (!cf_points_rewind(p->r)) {
+        long i = 0;
+        while (i <= k && cf_points_read(p->r, row, 1, msg, sizeof msg) == 1)
+            i++;
+        if (i > k)
+            line = cf_points_line(p->r);
+    }
+    snprintf(buf, n, "%s:%ld", p->path, line);
+}
+
+void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, const char *path)
+{
+    ctx->r = r;
+    ctx->path = path;
+    *s = (cf_fitsrc_t){
+        cf_points_cols(r) == 5 ? 5 : 3, -1, path, pts_rewind, pts_read, pts_where, ctx};
+}
+
+int cf_fitsrc_jnl_valid(const jnl_rec_t *r)
+{
+    return r->type == JNL_T_POINT && !(r->flags & JNL_F_NOSURF);
+}
+
+static int jnl_rewind_(void *ctx, char *msg, size_t ml)
+{
+    (void)msg, (void)ml;
+    jnl_reader_rewind(((cf_fitsrc_jnl_t *)ctx)->rd);
+    return 0;
+}
+
+static long jnl_read_(void *ctx, double *rows, long max, char *msg, size_t ml)
+{
+    cf_fitsrc_jnl_t *j = ctx;
+    jnl_rec_t r;
+    long n = 0;
+    int rc = 1;
+    while (n < max && (rc = jnl_reader_next(j->rd, &r)) == 1)
+        if (cf_fitsrc_jnl_valid(&r))
+            memcpy(rows + 3 * n++, r.xyz, sizeof r.xyz);
+    if (rc < 0) {
+        if (rc == RIG_ECORRUPT)
+            return cf_fail(msg, ml, rc, "%s: record %llu changed while being read: journal corrupt",
+                           j->path, (unsigned long long)j->rd->next);
+        return cf_fail(msg, ml, rc, "%s: %s", j->path, rig_strerror(rc));
+    }
+    return n;
+}
+
+/* The sequence number of the k-th valid point (error path only). */
+static void jnl_where_(void *ctx, long k, char *buf, size_t n)
+{
+    cf_fitsrc_jnl_t *j = ctx;
+    jnl_rec_t r;
+    long i = 0, seq = -1;
+    jnl_reader_rewind(j->rd);
+    while (jnl_reader_next(j->rd, &r) == 1)
+        if (cf_fitsrc_jnl_valid(&r) && i++ == k) {
+            seq = (long)r.seq;
+            break;
+        }
+    snprintf(buf, n, "%s: record %ld", j->path, seq);
+}
+
+void cf_fitsrc_journal(cf_fitsrc_t *s, cf_fitsrc_jnl_t *ctx, jnl_reader_t *rd, const char *path,
+                       long points)
+{
+    ctx->rd = rd;
+    ctx->path = path;
+    *s = (cf_fitsrc_t){3, points, path, jnl_rewind_, jnl_read_, jnl_where_, ctx};
+}
+
+int cf_fitsrc_nominal_id(const char *path, uint64_t *hash, char name[JNL_NAME_LEN])
+{
+    FILE *f = path ? fopen(path, "rb") : NULL;
+    if (!f)
+        return CF_EIO;
+    uint64_t h = 0xcbf29ce484222325ULL;
+    unsigned char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0)
+        for (size_t i = 0; i < n; i++)
+            h = (h ^ buf[i]) * 0x100000001b3ULL;
+    int bad = ferror(f);
+    fclose(f);
+    if (bad)
+        return CF_EIO;
+    *hash = h;
+    const char *b = strrchr(path, '/');
+    memset(name, 0, JNL_NAME_LEN);
+    snprintf(name, JNL_NAME_LEN, "%s", b ? b + 1 : path);
+    return CF_OK;
+}

@@ -1,0 +1,51 @@
+/* cf_fitsrc.h: where the fit job's points come from, behind one small
+ * interface it can rewind and read in batches: a points file (x y z, or
+ * u v x y z with the parameters given) or a journal of measured points
+ * (its valid point records, x y z). A live scan adds its points to the job
+ * as they arrive (cf_fitjob_add) and hands the journal as the source of
+ * every later pass. Nothing is kept per point. */
+#ifndef CF_FITSRC_H
+#define CF_FITSRC_H
+
+#include "cf_points.h"
+#include "jnl.h"
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct cf_fitsrc {
+    int cols;         /* 3: x y z (parameters by projection), 5: u v x y z (given) */
+    long total;       /* points, when known before reading (journal); -1 otherwise */
+    const char *name; /* the file, for messages */
+    /* Back to the first point: 0, or a negative error with msg. */
+    int (*rewind)(void *ctx, char *msg, size_t ml);
+    /* Up to max points (cols doubles each) into rows: the count, 0 at the
+     * end, or a negative error with msg naming file and line or record. */
+    long (*read)(void *ctx, double *rows, long max, char *msg, size_t ml);
+    /* "FILE:LINE" or "FILE: record N" of point k (0-based), for messages. */
+    void (*where)(void *ctx, long k, char *buf, size_t n);
+    void *ctx;
+} cf_fitsrc_t;
+
+/* An open points file (cf_points_open; its column count decides cols). */
+typedef struct cf_fitsrc_points {
+    cf_points_t *r;
+    const char *path;
+} cf_fitsrc_points_t;
+void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, const char *path);
+
+/* An open journal reader: its point records without JNL_F_NOSURF. */
+typedef struct cf_fitsrc_jnl {
+    jnl_reader_t *rd;
+    const char *path;
+} cf_fitsrc_jnl_t;
+void cf_fitsrc_journal(cf_fitsrc_t *s, cf_fitsrc_jnl_t *ctx, jnl_reader_t *rd, const char *path,
+                       long points);
+
+/* 1 for a journal record that holds a measured point. */
+int cf_fitsrc_jnl_valid(const jnl_rec_t *r);
+
+/* FNV-1a 64 of a file's bytes and its base name: the nominal's identity in
+ * a journal header, checked before a journal is fitted. CF_EIO. */
+int cf_fitsrc_nominal_id(const char *path, uint64_t *hash, char name[JNL_NAME_LEN]);
+
+#endif
