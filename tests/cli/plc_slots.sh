@@ -24,7 +24,7 @@ stop_all() { # TERM, wait, then KILL, each by its PID
     done
     pids=""
 }
-trap 'stop_all; cp "$T"/*.log /tmp/plc15-logs/ 2>/dev/null; rm -rf "$T"' EXIT
+trap 'stop_all; rm -rf "$T"' EXIT
 py() { py_step plc_slots.py 120 "$@"; } # py STEP ARGS...
 
 # A FIT of 200,000 projected points: a job of a few tenths of a second.
