@@ -99,8 +99,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         unsigned op = data[at++];
         if (op >= 0xF0) { /* between reads: time passes, or the job ends a phase */
             if (op & 8) {
-                plc_results_t res = {0.01f, 0.02f, -0.02f, 99.0f, PLC_VERDICT_PASS, 100, 64, 1000,
-                                     PLC_FIT_MET};
+                plc_results_t res = {0.01f, 0.02f, -0.02f, 99.0f,      PLC_VERDICT_PASS,
+                                     100,   64,    1000,   PLC_FIT_MET};
                 plc_fsm_event(&f, (plc_event_t)(op % PLC_EV_COUNT), 300 + (int)(op & 7),
                               (op & 4) ? &res : NULL);
             } else {

@@ -91,8 +91,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             now += take16(&in);
             plc_fsm_tick(&f, now);
         } else if (op == 4) { /* the job ends a phase */
-            plc_results_t res = {0.01f, 0.02f, -0.02f, 99.0f, PLC_VERDICT_PASS, 100, 64, 1000,
-                                 PLC_FIT_NOT_MET_DATA};
+            plc_results_t res = {
+                0.01f, 0.02f, -0.02f, 99.0f, PLC_VERDICT_PASS, 100, 64, 1000, PLC_FIT_NOT_MET_DATA};
             unsigned e = take(&in);
             plc_fsm_event(&f, (plc_event_t)(e % PLC_EV_COUNT), 300 + (int)(e >> 2) % 8,
                           (e & 0x80) ? &res : NULL);
