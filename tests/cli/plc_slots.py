@@ -12,6 +12,8 @@
 #                         another command 113, a retransmission ignored
 #   spam PORT N           N refused commands as fast as possible (the log
 #                         is counted by the script)
+#   keepalive PORT        the server's end of a connection runs the kernel's
+#                         keepalive timer (/proc/net/tcp, timer 2), 10 s
 #   v2 PORT               map version 2: PART_ID, fit settings, JOB_TIME,
 #                         counters, input registers
 # Run with /usr/bin/python3 (Debian's python3-pymodbus).
@@ -131,6 +133,22 @@ def slots(port, nslots):
     check(ev >= 10, "slots: CONN_EVICTED counts the evictions (%d)" % ev)
     for s in hold:
         s.close()
+
+
+def keepalive(port):
+    s = silent(port)
+    time.sleep(0.3)
+    timers = []
+    for line in open("/proc/net/tcp").read().splitlines()[1:]:
+        f = line.split()
+        local, state, timer = f[1], f[3], f[5]
+        if state == "01" and int(local.split(":")[1], 16) == port:
+            tr, when = timer.split(":")
+            timers.append((int(tr, 16), int(when, 16)))
+    # tr 2: the keepalive timer; "when" in jiffies (USER_HZ 100), under 10 s
+    check(len(timers) >= 1 and all(tr == 2 and 0 < w <= 1000 for tr, w in timers),
+          "keepalive: the server's socket runs the keepalive timer, due within 10 s (%s)" % timers)
+    s.close()
 
 
 def wait_ack(c, seq):
@@ -256,6 +274,8 @@ if __name__ == "__main__":
             abortblock(port)
         elif step == "seq":
             seq(port)
+        elif step == "keepalive":
+            keepalive(port)
         elif step == "spam":
             spam(port, int(sys.argv[3]))
         elif step == "v2":

@@ -2,7 +2,8 @@
 # tests/cli/plc_slots.sh CELLFIT: `cellfit serve` against dead connections
 # and PLC programs as they are written (issue 15, tests/cli/plc_slots.py):
 # every slot held by a silent connection plus a slowloris, yet a fresh
-# client is served within 3 s, 10 times of 10; COMMAND + sequence +
+# client is served within 3 s, 10 times of 10; TCP keepalive on the
+# server's sockets; COMMAND + sequence +
 # heartbeat in one request aborts a running job; the sequence rules (0,
 # reuse, retransmission); register map version 2 (PART_ID, fit settings,
 # JOB_TIME, counters, function 04); a client sending 2,000 refused
@@ -35,6 +36,7 @@ mkdir -p "$T/results"
 serve_start a --nominal "$T/nominal.igs" --points "$T/points.xyz" --results "$T/results" \
     --max-clients 8
 py slots "$port" 8
+py keepalive "$port"
 py abortblock "$port"
 py seq "$port"
 py v2 "$port"
