@@ -486,6 +486,10 @@ static void accept_one(srv_t *s, const cf_plcsrv_opts_t *o, int lfd, client_t *c
         close(fd);
         return;
     }
+    if (*nc >= o->max_clients && *nc == 0) { /* no slot at all (max_clients 0) */
+        close(fd);
+        return;
+    }
     if (*nc >= o->max_clients) {
         int v = evict_choice(cl, *nc, t);
         cf_log(CF_LOG_WARN, "%s: all %d slots taken: %s evicted (%s, idle %u ms)", name,
