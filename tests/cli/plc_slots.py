@@ -3,8 +3,9 @@
 # floor and an attacker do to its connections and its handshake (issue 15),
 # seen from raw sockets and pymodbus. Prints "ok ..." / "FAIL ..." lines;
 # tests/cli/plc_slots.sh counts them. Steps:
-#   slots PORT NSLOTS     NSLOTS silent connections (pulled cables) and a
-#                         slowloris trickling a header: a fresh pymodbus
+#   slots PORT NSLOTS     NSLOTS silent connections (half of them after a
+#                         request: pulled cables) and a slowloris
+#                         trickling a header: a fresh pymodbus
 #                         client is served within 3 s, 10 times of 10
 #   abortblock PORT       COMMAND + sequence + heartbeat in one request
 #                         (20-22): ABORT taken while a FIT runs
@@ -79,8 +80,16 @@ def u32(w):  # the default word order (0): low word first
     return w[0] | w[1] << 16
 
 
-def silent(port):
+def silent(port, served=False):
+    """A connection that goes quiet: at once (a port scan, a half-open
+    socket), or after one request (a PLC whose cable was pulled)."""
     s = socket.create_connection(("127.0.0.1", port), timeout=2)
+    if served:
+        try:
+            s.sendall(struct.pack(">HHHBBHH", 1, 0, 6, 1, 3, MAGIC, 1))
+            s.recv(64)
+        except OSError:  # a server without a free slot (the old code) closed it
+            pass
     return s
 
 
@@ -102,14 +111,14 @@ def slowloris(port, stop):
 
 
 def slots(port, nslots):
-    hold = [silent(port) for _ in range(nslots)]
+    hold = [silent(port, k % 2 == 0) for k in range(nslots)]
     stop = threading.Event()
     th = threading.Thread(target=slowloris, args=(port, stop))
     th.start()
     time.sleep(0.5)
     served, worst = 0, 0.0
     for k in range(10):
-        hold.append(silent(port))  # the slots full again before each try
+        hold.append(silent(port, k % 2 == 0))  # the slots full again before each try
         time.sleep(0.1)
         t = time.time()
         ok = False
