@@ -16,6 +16,9 @@ const char *plc_strerror(int code)
     case PLC_E_NO_ERROR: return "no error to reset";
     case PLC_E_TOO_BIG: return "control net exceeds the board's budget";
     case PLC_E_NO_JOB_FILES: return "fit not configured (nominal and points files)";
+    case PLC_E_SEQ_ZERO: return "sequence 0 is not a command: count from 1";
+    case PLC_E_SEQ_REUSED: return "sequence already used by another command: take a new one";
+    case PLC_E_NO_RECIPE: return "recipe not configured (no such nominal)";
     case PLC_E_WATCHDOG: return "watchdog: PLC heartbeat stopped";
     case PLC_E_RIG_LINK: return "rig line failed (stage or probe not answering)";
     case PLC_E_RIG_GONE: return "rig process ended";

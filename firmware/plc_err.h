@@ -21,6 +21,9 @@ typedef enum plc_err {
     PLC_E_NO_ERROR = 109,        /* reset with no error to reset */
     PLC_E_TOO_BIG = 110,         /* control net beyond the board's budget */
     PLC_E_NO_JOB_FILES = 111,    /* fit: no nominal / points configured */
+    PLC_E_SEQ_ZERO = 112,        /* sequence 0: never a command */
+    PLC_E_SEQ_REUSED = 113,      /* the sequence of the last command with another code */
+    PLC_E_NO_RECIPE = 114,       /* RECIPE names no configured nominal */
     /* 2xx: communication */
     PLC_E_WATCHDOG = 201, /* PLC heartbeat unchanged for WATCHDOG_MS */
     PLC_E_RIG_LINK = 202, /* the line to the stage or probe failed (timeout, lost) */

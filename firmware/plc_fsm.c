@@ -120,7 +120,7 @@ static void publish(plc_fsm_t *f)
 
 static void clear_results(plc_map_t *m)
 {
-    memset(&m->reg[PLC_R_RMS], 0, (PLC_NREGS - PLC_R_RMS) * sizeof m->reg[0]);
+    memset(&m->reg[PLC_R_RMS], 0, (PLC_R_RESULTS_END - PLC_R_RMS) * sizeof m->reg[0]);
 }
 
 static void latch_results(plc_fsm_t *f, const plc_results_t *r)
@@ -136,6 +136,8 @@ static void latch_results(plc_fsm_t *f, const plc_results_t *r)
     plc_map_put_u32(m, PLC_R_CONTROL_POINTS, r->control_points);
     plc_map_put_u32(m, PLC_R_DURATION_MS, r->duration_ms);
     plc_map_put_u32(m, PLC_R_RESULT_PART, f->job_params.part);
+    plc_map_put_u32(m, PLC_R_JOB_TIME, f->job_params.utc);
+    plc_map_put_u16(m, PLC_R_FIT_STATUS, r->fit_status);
     f->results_valid = 1;
 }
 
@@ -156,6 +158,15 @@ static void params_from_map(const plc_map_t *m, plc_params_t *p, uint16_t seq)
     p->x1 = plc_map_f32(m, PLC_R_SCAN_X1);
     p->y1 = plc_map_f32(m, PLC_R_SCAN_Y1);
     p->step = plc_map_f32(m, PLC_R_SCAN_STEP);
+    p->fit_tol = plc_map_f32(m, PLC_R_FIT_TOL);
+    p->fit_within = plc_map_f32(m, PLC_R_FIT_WITHIN);
+    p->fit_max_cp = plc_map_u32(m, PLC_R_FIT_MAX_CP);
+    p->fit_refine = plc_map_u16(m, PLC_R_FIT_REFINE);
+    p->fit_robust = plc_map_u16(m, PLC_R_FIT_ROBUST);
+    p->fit_reparam = plc_map_u16(m, PLC_R_FIT_REPARAM);
+    p->recipe = plc_map_u16(m, PLC_R_RECIPE);
+    p->utc = 0;
+    plc_map_get_str(m, PLC_R_PART_ID, p->part_id, sizeof p->part_id);
 }
 
 void plc_fsm_init(plc_fsm_t *f, plc_map_t *m, int rig, uint16_t watchdog_ms, plc_check_fn check,
@@ -174,6 +185,9 @@ void plc_fsm_init(plc_fsm_t *f, plc_map_t *m, int rig, uint16_t watchdog_ms, plc
     plc_map_put_f32(m, PLC_R_ALPHA, 0.1f);
     plc_map_put_f32(m, PLC_R_BETA, 0.001f);
     plc_map_put_f32(m, PLC_R_SCAN_STEP, 1.0f);
+    /* The fit loop as `cellfit fit --tol` runs it, off until FIT_TOL > 0. */
+    plc_map_put_f32(m, PLC_R_FIT_WITHIN, 100.0f);
+    plc_map_put_u16(m, PLC_R_FIT_REFINE, PLC_REFINE_RESIDUAL);
     publish(f);
 }
 
@@ -212,9 +226,12 @@ plc_action_t plc_fsm_command(plc_fsm_t *f, int cmd, uint16_t seq, uint32_t now_m
         code = guard(f, cmd, &p);
     }
     f->ack_seq = seq;
+    f->ack_cmd = f->last_cmd = (uint16_t)cmd;
     f->cmd_result = code;
     f->rejected = code != 0;
+    f->ncmd++;
     if (code) {
+        plc_map_inc_u32(f->map, PLC_R_CMD_REFUSED);
         publish(f);
         return PLC_ACT_NONE; /* refused: nothing else changes */
     }
@@ -253,6 +270,11 @@ plc_action_t plc_fsm_command(plc_fsm_t *f, int cmd, uint16_t seq, uint32_t now_m
 /* The job ended (done, failed or aborted). */
 static void job_end(plc_fsm_t *f, int state, uint16_t error, int aborted)
 {
+    plc_map_inc_u32(f->map, aborted                ? PLC_R_JOBS_ABORTED
+                            : state == PLC_S_ERROR ? PLC_R_JOBS_FAILED
+                                                   : PLC_R_JOBS_OK);
+    if (error)
+        plc_map_put_u16(f->map, PLC_R_LAST_ERROR, error);
     f->state = state;
     f->error = error;
     f->aborted = aborted;
@@ -315,6 +337,7 @@ static plc_action_t raise_error(plc_fsm_t *f, uint16_t code)
     if (f->state != PLC_S_ERROR) { /* an earlier error stays the one shown */
         f->state = PLC_S_ERROR;
         f->error = code;
+        plc_map_put_u16(f->map, PLC_R_LAST_ERROR, code);
         return PLC_ACT_ABORT;
     }
     return PLC_ACT_NONE;
@@ -349,6 +372,26 @@ plc_action_t plc_fsm_tick(plc_fsm_t *f, uint32_t now_ms)
     return act;
 }
 
+int plc_fsm_writable(int s, const plc_reg_t *r)
+{
+    if (!r || r->access != PLC_RW)
+        return 0;
+    return !plc_state_busy(s) || r->addr == PLC_R_COMMAND || r->addr == PLC_R_PLC_HEARTBEAT;
+}
+
+/* A command refused by the sequence rules: like a refusal of the table,
+ * only ACK_SEQ, CMD_RESULT and REJECTED change (ACK_SEQ echoes what was
+ * written, so the PLC's wait for its sequence ends). */
+static void refuse_seq(plc_fsm_t *f, uint16_t cmd, uint16_t seq, uint16_t code)
+{
+    f->last_cmd = cmd; /* ack_cmd stays: the command the sequence was taken with */
+    f->ack_seq = seq;
+    f->cmd_result = code;
+    f->rejected = 1;
+    f->ncmd++;
+    plc_map_inc_u32(f->map, PLC_R_CMD_REFUSED);
+}
+
 int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint32_t now_ms,
                   plc_action_t *act)
 {
@@ -357,11 +400,14 @@ int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint3
     if (ex)
         return ex;
     /* A running job's parameters and the cell's settings stay as they were:
-     * only the command (ABORT) and the heartbeat get through. */
-    if (plc_state_busy(f->state)) {
-        int cmd = a == PLC_R_COMMAND && n == 2, hb = a == PLC_R_PLC_HEARTBEAT && n == 1;
-        if (!cmd && !hb)
+     * only the command (ABORT) and the heartbeat get through, alone or in
+     * one block (20-22, as PLC programs write them). plc_map_check_write has
+     * proved every entry is covered whole. */
+    for (unsigned k = a; k < a + n;) {
+        const plc_reg_t *r = plc_map_entry(k);
+        if (!plc_fsm_writable(f->state, r))
             return PLC_EX_BUSY;
+        k = r->addr + (unsigned)plc_type_words(r->type);
     }
     plc_map_t *m = f->map;
     uint16_t old_order = m->reg[PLC_R_WORD_ORDER];
@@ -384,8 +430,13 @@ int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint3
     }
     if (a <= PLC_R_COMMAND && PLC_R_COMMAND_SEQ < a + n) {
         uint16_t cmd = v[PLC_R_COMMAND - a], seq = v[PLC_R_COMMAND_SEQ - a];
-        if (seq != f->ack_seq) /* the same sequence again is a repeat: ignored */
+        if (seq == 0) /* a PLC's zeroed block or a counter not started: never a command */
+            refuse_seq(f, cmd, seq, PLC_E_SEQ_ZERO);
+        else if (seq != f->ack_seq)
             *act = plc_fsm_command(f, cmd, seq, now_ms);
+        else if (cmd != f->ack_cmd) /* a PLC bug: would be lost if ignored */
+            refuse_seq(f, cmd, seq, PLC_E_SEQ_REUSED);
+        /* else the same command and sequence again: a retransmission, ignored */
     }
     publish(f);
     return 0;

@@ -6,10 +6,13 @@
  *   - the command/acknowledge handshake: a command is taken when COMMAND
  *     and its sequence are written together with a sequence different from
  *     ACK_SEQ; the sequence is echoed in ACK_SEQ at once and in DONE_SEQ
- *     when the job ends;
+ *     when the job ends; the same command and sequence again is a
+ *     retransmission (ignored); sequence 0 (112) and the last sequence
+ *     with another command (113) are refused;
  *   - results latched until the PLC acknowledges them (command ACK_RESULTS);
  *   - the watchdog: the PLC heartbeat register unchanged for WATCHDOG_MS
- *     aborts the job (motion) and raises error 201.
+ *     aborts the job (motion) and raises error 201;
+ *   - the counters of jobs and refused commands (JOBS_OK .. LAST_ERROR).
  * The job itself runs elsewhere (host/cf_plcsrv.c): plc_fsm_write says when
  * to start or abort it, plc_fsm_event takes its outcome. Time is the
  * caller's millisecond clock (wraps safely). No heap, no clock of its own. */
@@ -60,12 +63,32 @@ typedef struct plc_params {
     uint16_t program, folder, net_u, net_v, seq;
     uint16_t cmd; /* the job's command (plc_cmd_t) */
     float tol, alpha, beta, x0, y0, x1, y1, step;
+    /* map version 2 */
+    float fit_tol, fit_within;         /* mm (0: no loop), % */
+    uint32_t fit_max_cp;               /* 0: the board's */
+    uint16_t fit_refine, fit_robust;   /* PLC_REFINE_*, 0/1 */
+    uint16_t fit_reparam, recipe;      /* passes; nominal choice */
+    uint32_t utc;                      /* accepted at (UTC s), set by the server */
+    char part_id[PLC_PART_ID_LEN + 1]; /* PART_ID, 0-terminated */
 } plc_params_t;
+
+/* FIT_REFINE values (cf_refine_t's numbering). */
+enum { PLC_REFINE_UNIFORM = 0, PLC_REFINE_RESIDUAL = 1 };
+
+/* FIT_STATUS values: how the fit loop ended. */
+enum {
+    PLC_FIT_NONE = 0,               /* no loop (FIT_TOL 0) or no fit */
+    PLC_FIT_MET = 1,                /* FIT_WITHIN % of the points within FIT_TOL */
+    PLC_FIT_NOT_MET_DATA = 2,       /* not met: the points cannot support a finer net */
+    PLC_FIT_NOT_MET_MAX_CP = 3,     /* not met: FIT_MAX_CP (or the board's) reached */
+    PLC_FIT_NOT_MET_NO_PROGRESS = 4 /* not met: refining stopped improving */
+};
 
 typedef struct plc_results {
     float rms, max, min, within_pct; /* mm, mm, mm, % */
     uint16_t verdict;                /* 1 pass, 2 fail */
     uint32_t points, control_points, duration_ms;
+    uint16_t fit_status; /* PLC_FIT_* */
 } plc_results_t;
 
 enum { PLC_VERDICT_NONE = 0, PLC_VERDICT_PASS = 1, PLC_VERDICT_FAIL = 2 };
@@ -81,6 +104,9 @@ typedef struct plc_fsm {
     int state, job, phase; /* job: the plc_cmd_t running or last run */
     int rig, homed, results_valid, done, aborted, rejected;
     uint16_t ack_seq, done_seq, cmd_result, error, progress, pending_error;
+    uint16_t ack_cmd;  /* the command code ack_seq was taken with */
+    uint16_t last_cmd; /* the command code of the last decision */
+    uint32_t ncmd;     /* commands decided (taken or refused), for the server's log */
     plc_params_t job_params;
     /* watchdog and heartbeats */
     int wd_armed;
@@ -98,8 +124,9 @@ void plc_fsm_init(plc_fsm_t *f, plc_map_t *m, int rig, uint16_t watchdog_ms, plc
 /* A Modbus write of n registers at a: 0 and the registers stored (and a
  * command taken, the heartbeat noted), or a Modbus exception code and
  * nothing changed. While a job runs (or aborts) only COMMAND (whose rule
- * refuses all but ABORT with 102) and PLC_HEARTBEAT may be written; any
- * other write is PLC_EX_BUSY (06). *act says what the caller must do. */
+ * refuses all but ABORT with 102) and PLC_HEARTBEAT may be written, alone
+ * or in one request (20-22); a write touching any other register is
+ * PLC_EX_BUSY (06). *act says what the caller must do. */
 int plc_fsm_write(plc_fsm_t *f, unsigned a, unsigned n, const uint16_t *v, uint32_t now_ms,
                   plc_action_t *act);
 
@@ -123,6 +150,10 @@ void plc_fsm_progress(plc_fsm_t *f, int pct);
 /* Call often (every few tens of ms): advances CELL_HEARTBEAT and checks the
  * watchdog. PLC_ACT_ABORT when it tripped with a job running. */
 plc_action_t plc_fsm_tick(plc_fsm_t *f, uint32_t now_ms);
+
+/* 1 when the entry r may be written in state s (while busy: COMMAND and
+ * PLC_HEARTBEAT only; otherwise every read/write register). */
+int plc_fsm_writable(int s, const plc_reg_t *r);
 
 /* 1 for HOMING, SCANNING, FITTING, EXPORTING, ABORTING. */
 int plc_state_busy(int state);

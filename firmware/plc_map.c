@@ -15,6 +15,7 @@ int plc_type_words(int type)
     case PLC_T_F32:
     case PLC_T_CMD: return 2;
     case PLC_T_STR16: return 8;
+    case PLC_T_STR32: return 16;
     default: return 1;
     }
 }
@@ -28,6 +29,7 @@ const char *plc_type_name(int type)
     case PLC_T_F32: return "float32";
     case PLC_T_STR16: return "char[16]";
     case PLC_T_CMD: return "u16 + u16";
+    case PLC_T_STR32: return "char[32]";
     default: return "?";
     }
 }
@@ -103,6 +105,26 @@ float plc_map_f32(const plc_map_t *m, unsigned a)
     return plc_bits_f32(plc_map_u32(m, a));
 }
 
+void plc_map_inc_u32(plc_map_t *m, unsigned a)
+{
+    plc_map_put_u32(m, a, plc_map_u32(m, a) + 1u);
+}
+
+void plc_map_get_str(const plc_map_t *m, unsigned a, char *out, unsigned n)
+{
+    const plc_reg_t *r = plc_map_entry(a);
+    unsigned len = r ? 2u * (unsigned)plc_type_words(r->type) : 0, k = 0;
+    for (; k + 1 < n && k < len; k++) {
+        uint16_t w = m->reg[r->addr + k / 2];
+        char c = (char)(k % 2 ? w & 0xFFu : w >> 8);
+        if (!c)
+            break;
+        out[k] = c;
+    }
+    if (n)
+        out[k] = 0;
+}
+
 void plc_map_init(plc_map_t *m, int order, const char *board)
 {
     memset(m, 0, sizeof *m);
@@ -157,6 +179,18 @@ static int check_value(const plc_map_t *m, const plc_reg_t *r, const uint16_t *w
         /* Compared in float: a PLC writing 0.0001f means the limit 0.0001. */
         if (!(f >= (float)r->lo && f <= (float)r->hi)) /* NaN fails too */
             return PLC_EX_VALUE;
+        return 0;
+    }
+    case PLC_T_STR32: {
+        /* Printable ASCII, then only 0s: what a report and a file name can hold. */
+        int end = 0;
+        for (int k = 0; k < 2 * plc_type_words(r->type); k++) {
+            unsigned c = k % 2 ? w[k / 2] & 0xFFu : (unsigned)w[k / 2] >> 8;
+            if (c == 0)
+                end = 1;
+            else if (end || c < r->lo || c > r->hi)
+                return PLC_EX_VALUE;
+        }
         return 0;
     }
     default: x = w[0]; /* U16; CMD: the code word (any sequence goes) */

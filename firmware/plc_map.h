@@ -11,8 +11,8 @@
 
 #include <stdint.h>
 
-#define PLC_MAGIC 17222u /* 0x4346, "CF" */
-#define PLC_MAP_VERSION 1u
+#define PLC_MAGIC 17222u   /* 0x4346, "CF" */
+#define PLC_MAP_VERSION 2u /* 2: fit settings, recipe, part ID, job time, fit status, counters */
 #define PLC_FW_VERSION 0x0100u   /* major in the high byte, minor in the low */
 #define PLC_TEST_F32 123.456f    /* 0x42F6E979: words 0x42F6, 0xE979 */
 #define PLC_TEST_U32 0x12345678u /* 305419896: words 0x1234, 0x5678 */
@@ -30,7 +30,7 @@ enum {
 enum { PLC_EX_FUNCTION = 1, PLC_EX_ADDRESS = 2, PLC_EX_VALUE = 3, PLC_EX_BUSY = 6 };
 
 /* Register types. CMD is two u16 written together: command code, sequence. */
-enum { PLC_T_U16, PLC_T_BITS, PLC_T_U32, PLC_T_F32, PLC_T_STR16, PLC_T_CMD };
+enum { PLC_T_U16, PLC_T_BITS, PLC_T_U32, PLC_T_F32, PLC_T_STR16, PLC_T_CMD, PLC_T_STR32 };
 enum { PLC_RO, PLC_RW };
 
 /* Status bits (register STATUS). */
@@ -48,10 +48,13 @@ enum {
 };
 
 /* X(name, address, type, access, lo, hi, units, description): the map.
- * Ranges apply to writable registers; a float range is inclusive. */
+ * Ranges apply to writable registers; a float range is inclusive; a
+ * string's range is that of each character (0 pads the end). Version 2
+ * added FIT_TOL .. RECIPE, JOB_TIME, FIT_STATUS, PART_ID and the counters
+ * (JOBS_OK .. LAST_ERROR); every version 1 address is unchanged. */
 #define PLC_REGS(X)                                                                                \
     X(MAGIC, 0, U16, RO, 0, 0, "", "17222 (0x4346, \"CF\"): this is a cellfit cell")               \
-    X(MAP_VERSION, 1, U16, RO, 0, 0, "", "register map version (1)")                               \
+    X(MAP_VERSION, 1, U16, RO, 0, 0, "", "register map version (2)")                               \
     X(TEST_F32, 2, F32, RO, 0, 0, "", "123.456 in the selected word order")                        \
     X(TEST_U32, 4, U32, RO, 0, 0, "", "305419896 (0x12345678) in the selected word order")         \
     X(FW_VERSION, 6, U16, RO, 0, 0, "", "firmware version, major in the high byte")                \
@@ -85,6 +88,18 @@ enum {
     X(SCAN_X1, 76, F32, RW, -10000, 10000, "mm", "scan region, second corner x")                   \
     X(SCAN_Y1, 78, F32, RW, -10000, 10000, "mm", "scan region, second corner y")                   \
     X(SCAN_STEP, 80, F32, RW, 0.001, 1000, "mm", "scan grid step")                                 \
+    X(FIT_TOL, 82, F32, RW, 0, 100, "mm",                                                          \
+      "fit loop: refine until FIT_WITHIN % of the points lie within this; 0 one fit, no loop")     \
+    X(FIT_WITHIN, 84, F32, RW, 0.01, 100, "%",                                                     \
+      "fit loop: share of the points wanted within FIT_TOL")                                       \
+    X(FIT_MAX_CP, 86, U32, RW, 0, 4000000, "", "fit loop: control points at most, 0 the board's")  \
+    X(FIT_REFINE, 88, U16, RW, 0, 1, "",                                                           \
+      "fit loop refinement: 0 uniform (every span halved), 1 residual (worst spans split)")        \
+    X(FIT_ROBUST, 89, U16, RW, 0, 1, "",                                                           \
+      "fit: 1 robust (reweighted passes against outliers), 0 off")                                 \
+    X(FIT_REPARAM, 90, U16, RW, 0, 100, "",                                                        \
+      "fit: reparameterisation passes (points re-projected)")                                      \
+    X(RECIPE, 91, U16, RW, 0, 15, "", "nominal choice (config nominal.N), 0 the nominal setting")  \
     X(RMS, 100, F32, RO, 0, 0, "mm", "RMS of the normal deviations")                               \
     X(MAX_DEV, 102, F32, RO, 0, 0, "mm", "largest signed deviation")                               \
     X(MIN_DEV, 104, F32, RO, 0, 0, "mm", "smallest signed deviation")                              \
@@ -94,7 +109,25 @@ enum {
     X(POINTS, 110, U32, RO, 0, 0, "", "points measured / fitted")                                  \
     X(CONTROL_POINTS, 112, U32, RO, 0, 0, "", "control points of the fitted surface")              \
     X(DURATION_MS, 114, U32, RO, 0, 0, "ms", "job duration")                                       \
-    X(RESULT_PART, 116, U32, RO, 0, 0, "", "part number of the job")
+    X(RESULT_PART, 116, U32, RO, 0, 0, "", "part number of the job")                               \
+    X(JOB_TIME, 118, U32, RO, 0, 0, "s", "UTC time the job was accepted, seconds since 1970")      \
+    X(FIT_STATUS, 120, U16, RO, 0, 0, "",                                                          \
+      "fit loop: 0 none, 1 met, 2 not met (data limit), 3 not met (max control points), 4 not "    \
+      "met "                                                                                       \
+      "(no progress)")                                                                             \
+    X(PART_ID, 124, STR32, RW, 32, 126, "",                                                        \
+      "part ID / serial number, ASCII, 2 chars a register, high byte first, 0 pads the end")       \
+    X(JOBS_OK, 140, U32, RO, 0, 0, "", "jobs ended done since the cell started")                   \
+    X(JOBS_FAILED, 142, U32, RO, 0, 0, "", "jobs ended in ERROR since the cell started")           \
+    X(JOBS_ABORTED, 144, U32, RO, 0, 0, "", "jobs aborted (command, watchdog, fault)")             \
+    X(CONN_ACCEPTED, 146, U32, RO, 0, 0, "", "Modbus connections accepted")                        \
+    X(CONN_EVICTED, 148, U32, RO, 0, 0, "",                                                        \
+      "connections closed to make room for a new one (the longest idle)")                          \
+    X(CONN_TIMED_OUT, 150, U32, RO, 0, 0, "",                                                      \
+      "connections closed idle or with a frame incomplete for 1 s")                                \
+    X(REQ_REFUSED, 152, U32, RO, 0, 0, "", "requests answered with a Modbus exception")            \
+    X(CMD_REFUSED, 154, U32, RO, 0, 0, "", "commands refused (CMD_RESULT not 0)")                  \
+    X(LAST_ERROR, 156, U16, RO, 0, 0, "", "the last ERROR_CODE shown (kept after RESET), 0 none")
 
 /* Addresses: PLC_R_MAGIC == 0 ... */
 enum {
@@ -109,7 +142,10 @@ enum {
 #undef PLC_X_IDX
 };
 
-#define PLC_NREGS 118                         /* registers 0 .. PLC_NREGS - 1 may be read */
+#define PLC_NREGS 157      /* registers 0 .. PLC_NREGS - 1 may be read */
+#define PLC_PART_ID_LEN 32 /* characters of PART_ID */
+/* The results block, cleared by ACK_RESULTS: RMS .. FIT_STATUS. */
+#define PLC_R_RESULTS_END (PLC_R_FIT_STATUS + 1)
 #define PLC_R_COMMAND_SEQ (PLC_R_COMMAND + 1) /* the sequence half of COMMAND */
 
 typedef struct plc_reg {
@@ -150,6 +186,13 @@ void plc_map_put_f32(plc_map_t *m, unsigned a, float v);
 uint16_t plc_map_u16(const plc_map_t *m, unsigned a);
 uint32_t plc_map_u32(const plc_map_t *m, unsigned a);
 float plc_map_f32(const plc_map_t *m, unsigned a);
+
+/* A u32 counter register plus one (wraps). */
+void plc_map_inc_u32(plc_map_t *m, unsigned a);
+
+/* A string entry (PART_ID) into out (n >= 1): its characters up to the
+ * first 0, at most n - 1, then a 0. */
+void plc_map_get_str(const plc_map_t *m, unsigned a, char *out, unsigned n);
 
 /* Change the word order, re-packing every 32-bit register. */
 void plc_map_set_order(plc_map_t *m, int order);

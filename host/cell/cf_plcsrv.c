@@ -1,14 +1,18 @@
 /* cf_plcsrv.c: Modbus TCP server of the cell (cf_plcsrv.h): the select()
- * loop over clients, MBAP framing per client, requests mapped onto plc_map
- * / plc_fsm, the rate limit and the allow-list, the worker thread that runs
- * a job's phases, the watchdog tick. Only this thread touches the sockets;
- * the worker touches the register table only under the mutex. */
+ * loop over clients, each client's frame collected (plc_mbap_need) and
+ * answered (plc_mbap_pdu) under the mutex, the connection slots (eviction,
+ * idle and incomplete-frame timeouts, keepalive), the rate limit, the
+ * allow-list and the log limiter, the worker thread that runs a job's
+ * phases, the watchdog tick. Only this thread touches the sockets; the
+ * worker touches the register table only under the mutex. */
 #include "cf_plcsrv.h"
 #include "cf_log.h"
+#include "plc_mbap.h"
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -21,8 +25,8 @@
 
 #define TICK_MS 20    /* select timeout: watchdog and heartbeat resolution */
 #define FRAME_MS 1000 /* the rest of a frame must follow within this */
-#define MBAP_HDR 7    /* transaction, protocol, length, unit */
-#define MBAP_MAX 260  /* header + the largest PDU (253 bytes) */
+#define MBAP_HDR PLC_MBAP_HDR
+#define MBAP_MAX PLC_MBAP_MAX
 
 typedef struct srv {
     pthread_mutex_t mu;
@@ -134,6 +138,11 @@ static void act(srv_t *s, plc_action_t a)
         s->run->abort(s->run->ctx);
         cf_log(CF_LOG_WARN, "abort: job asked to stop, motion stopped");
     } else if (a == PLC_ACT_START) {
+        /* The job's UTC time (JOB_TIME, the report): the state machine has
+         * no wall clock. Set before the worker copies the parameters. */
+        pthread_mutex_lock(&s->mu);
+        s->fsm.job_params.utc = (uint32_t)time(NULL);
+        pthread_mutex_unlock(&s->mu);
         join_worker(s); /* the previous job's thread has ended its job already */
         atomic_store(&s->stop_job, 0);
         atomic_store(&s->job_ended, 0);
@@ -153,92 +162,116 @@ static void act(srv_t *s, plc_action_t a)
     }
 }
 
-static unsigned be16(const uint8_t *p)
-{
-    return (unsigned)p[0] << 8 | p[1];
-}
-
 static void put16(uint8_t *p, unsigned v)
 {
     p[0] = (uint8_t)(v >> 8);
     p[1] = (uint8_t)v;
 }
 
+/* The log limiter's memory of one kind of line: its key, when it was last
+ * logged, how many more like it were held back since. */
+#define REP_KEYS 4 /* kinds of line per client (they interleave: refusals, rate limit) */
+typedef struct rep {
+    char key[64];
+    uint32_t t;
+    unsigned long n;
+    int level;
+} rep_t;
+
 typedef struct client {
     int fd;
-    size_t have;            /* bytes of the frame being received */
-    uint32_t t_first;       /* when its first byte came (ms) */
-    double tokens;          /* rate limit: requests that may come now */
-    uint32_t t_tok, t_warn; /* last refill; last warning logged */
-    unsigned long limited;  /* requests refused by the limit since the warning */
+    size_t have;      /* bytes of the frame being received */
+    uint32_t t_first; /* when its first byte came (ms) */
+    /* Idle since: the last complete request (or the connection). Bytes of a
+     * frame never completed do not count: a slowloris stays idle. */
+    uint32_t t_active;
+    int served;    /* it has sent a complete request */
+    double tokens; /* rate limit: requests that may come now */
+    uint32_t t_tok;
+    rep_t rep[REP_KEYS]; /* the log limiter */
     uint8_t buf[MBAP_MAX];
     char name[32];
 } client_t;
 
+/* Lines of one kind held back: their count, once. */
+static void rep_flush(const client_t *c, rep_t *r, uint32_t t)
+{
+    if (r->n)
+        cf_log((cf_log_level_t)r->level, "%s: %lu more like \"%s\" in the last %.1f s", c->name,
+               r->n, r->key, (double)(uint32_t)(t - r->t) * 1e-3);
+    r->n = 0;
+    r->t = t;
+}
+
+/* Every count due (all: every count, the client is leaving). */
+static void rep_tick(client_t *c, uint32_t t, int all)
+{
+    for (int i = 0; i < REP_KEYS; i++)
+        if (c->rep[i].n && (all || (uint32_t)(t - c->rep[i].t) >= CF_PLCSRV_LOG_REPEAT_MS))
+            rep_flush(c, &c->rep[i], t);
+}
+
+/* 1 when a line of this key may be logged now: the first of its kind at
+ * once, the same kind again only CF_PLCSRV_LOG_REPEAT_MS later (the count of
+ * those held back logged on its own line). A client sending 1,000 refused
+ * commands a second logs a line every few seconds, not 1,000. */
+static int rep_pass(client_t *c, int level, const char *key, uint32_t t)
+{
+    rep_t *r = NULL;
+    for (int i = 0; i < REP_KEYS && !r; i++)
+        if (c->rep[i].key[0] && !strcmp(c->rep[i].key, key))
+            r = &c->rep[i];
+    if (r) {
+        if ((uint32_t)(t - r->t) < CF_PLCSRV_LOG_REPEAT_MS) {
+            r->n++;
+            return 0;
+        }
+        rep_flush(c, r, t);
+        return 1;
+    }
+    r = &c->rep[0]; /* a new kind: an empty slot, else the one logged longest ago */
+    for (int i = 1; i < REP_KEYS && r->key[0]; i++)
+        if (!c->rep[i].key[0] || (uint32_t)(t - c->rep[i].t) > (uint32_t)(t - r->t))
+            r = &c->rep[i];
+    rep_flush(c, r, t);
+    snprintf(r->key, sizeof r->key, "%s", key);
+    r->level = level;
+    return 1;
+}
+
 /* One request PDU (q, n bytes) into a reply PDU (r); returns its length.
- * Every length is checked against what the function code needs. */
-static size_t handle_pdu(srv_t *s, const client_t *c, const uint8_t *q, size_t n, uint8_t *r,
+ * The PDU itself is plc_mbap_pdu's; here the lock and the log. */
+static size_t handle_pdu(srv_t *s, client_t *c, const uint8_t *q, size_t n, uint8_t *r,
                          plc_action_t *todo)
 {
-    unsigned fc = q[0], a = n >= 3 ? be16(q + 1) : 0, cnt = 0;
-    int ex = 0;
-    uint16_t v[PLC_MAX_WRITE];
     uint32_t t = now_ms();
-    *todo = PLC_ACT_NONE;
-    r[0] = (uint8_t)fc;
-    if (fc == 0x03) {
-        uint16_t w[PLC_MAX_READ];
-        cnt = n == 5 ? be16(q + 3) : 0;
-        if (n != 5)
-            ex = PLC_EX_VALUE;
-        else {
-            pthread_mutex_lock(&s->mu);
-            ex = plc_map_read(&s->map, a, cnt, w);
-            pthread_mutex_unlock(&s->mu);
-        }
-        if (!ex) {
-            r[1] = (uint8_t)(2 * cnt);
-            for (unsigned k = 0; k < cnt; k++)
-                put16(r + 2 + 2 * k, w[k]);
-            return 2 + 2 * cnt;
-        }
-    } else if (fc == 0x06 || fc == 0x10) {
-        if (fc == 0x06 && n == 5) {
-            cnt = 1;
-            v[0] = (uint16_t)be16(q + 3);
-        } else if (fc == 0x10 && n >= 6) {
-            cnt = be16(q + 3);
-            if (cnt < 1 || cnt > PLC_MAX_WRITE || q[5] != 2 * cnt || n != 6 + 2 * (size_t)cnt)
-                ex = PLC_EX_VALUE;
-            for (unsigned k = 0; !ex && k < cnt; k++)
-                v[k] = (uint16_t)be16(q + 6 + 2 * k);
+    plc_req_t rq;
+    pthread_mutex_lock(&s->mu);
+    uint32_t ncmd = s->fsm.ncmd;
+    size_t rn = plc_mbap_pdu(&s->fsm, q, n, r, t, todo, &rq);
+    plc_fsm_t f = s->fsm;
+    pthread_mutex_unlock(&s->mu);
+    if (f.ncmd != ncmd) {
+        char key[64];
+        const char *cn = plc_cmd_name(f.last_cmd);
+        if (f.cmd_result) {
+            /* Refusals repeat (a PLC retrying in a loop): limited per client. */
+            snprintf(key, sizeof key, "command %s refused, %u", cn, f.cmd_result);
+            if (rep_pass(c, CF_LOG_WARN, key, t))
+                cf_log(CF_LOG_WARN, "command %s seq %u: refused, %s (%u), from %s", cn, f.ack_seq,
+                       plc_strerror(f.cmd_result), f.cmd_result, c->name);
         } else
-            ex = PLC_EX_VALUE;
-        if (!ex) {
-            pthread_mutex_lock(&s->mu);
-            uint16_t seq0 = s->fsm.ack_seq;
-            ex = plc_fsm_write(&s->fsm, a, cnt, v, t, todo);
-            plc_fsm_t f = s->fsm;
-            pthread_mutex_unlock(&s->mu);
-            if (!ex && f.ack_seq != seq0)
-                cf_log(f.cmd_result ? CF_LOG_WARN : CF_LOG_INFO, "command %s seq %u: %s%s%s",
-                       plc_cmd_name(v[PLC_R_COMMAND - a]), f.ack_seq,
-                       f.cmd_result ? "refused, " : "accepted",
-                       f.cmd_result ? plc_strerror(f.cmd_result) : "",
-                       f.cmd_result ? "" : (*todo == PLC_ACT_START ? ", job started" : ""));
-        }
-        if (!ex) {
-            memcpy(r, q, 5); /* function 06 echoes, 16 answers address and count */
-            if (fc == 0x10)
-                put16(r + 3, cnt);
-            return 5;
-        }
-    } else
-        ex = PLC_EX_FUNCTION;
-    cf_log(CF_LOG_DEBUG, "%s: function %u at %u x %u: exception %d", c->name, fc, a, cnt, ex);
-    r[0] = (uint8_t)(fc | 0x80);
-    r[1] = (uint8_t)ex;
-    return 2;
+            cf_log(CF_LOG_INFO, "command %s seq %u: accepted%s, from %s", cn, f.ack_seq,
+                   *todo == PLC_ACT_START ? ", job started" : "", c->name);
+    }
+    if (rq.ex) {
+        char key[64];
+        snprintf(key, sizeof key, "function %u: exception %d", rq.fc, rq.ex);
+        if (rep_pass(c, CF_LOG_DEBUG, key, t))
+            cf_log(CF_LOG_DEBUG, "%s: function %u at %u x %u: exception %d", c->name, rq.fc,
+                   rq.addr, rq.cnt, rq.ex);
+    }
+    return rn;
 }
 
 /* Send a whole reply or give up on the client (it does not read). */
@@ -257,7 +290,7 @@ static int send_all(int fd, const uint8_t *b, size_t n)
 }
 
 /* Token bucket: 1 when this request may be served. */
-static int rate_ok(const cf_plcsrv_opts_t *o, client_t *c, uint32_t t)
+static int rate_ok(srv_t *s, const cf_plcsrv_opts_t *o, client_t *c, uint32_t t)
 {
     if (o->max_rate <= 0)
         return 1;
@@ -269,13 +302,11 @@ static int rate_ok(const cf_plcsrv_opts_t *o, client_t *c, uint32_t t)
         c->tokens -= 1;
         return 1;
     }
-    c->limited++;
-    if ((uint32_t)(t - c->t_warn) >= 1000) {
-        cf_log(CF_LOG_WARN, "%s: over %g requests/s: %lu refused (exception 06)", c->name,
-               o->max_rate, c->limited);
-        c->t_warn = t;
-        c->limited = 0;
-    }
+    pthread_mutex_lock(&s->mu);
+    plc_map_inc_u32(&s->map, PLC_R_REQ_REFUSED);
+    pthread_mutex_unlock(&s->mu);
+    if (rep_pass(c, CF_LOG_WARN, "over the rate limit", t))
+        cf_log(CF_LOG_WARN, "%s: over %g requests/s: refused (exception 06)", c->name, o->max_rate);
     return 0;
 }
 
@@ -284,14 +315,14 @@ static int rate_ok(const cf_plcsrv_opts_t *o, client_t *c, uint32_t t)
 static int client_input(srv_t *s, const cf_plcsrv_opts_t *o, client_t *c)
 {
     for (;;) {
-        size_t want = MBAP_HDR;
-        if (c->have >= 6)
-            want = 6 + be16(c->buf + 4);
-        if (c->have >= 6 && (be16(c->buf + 2) != 0 || want < 6 + 2 || want > MBAP_MAX)) {
+        int need = plc_mbap_need(c->buf, c->have);
+        if (need == PLC_MBAP_BAD) {
             cf_log(CF_LOG_WARN, "%s: malformed MBAP header (protocol %u, length %u): closed",
-                   c->name, be16(c->buf + 2), be16(c->buf + 4));
+                   c->name, (unsigned)c->buf[2] << 8 | c->buf[3],
+                   (unsigned)c->buf[4] << 8 | c->buf[5]);
             return -1;
         }
+        size_t want = (size_t)need;
         if (c->have < want) {
             ssize_t k = recv(c->fd, c->buf + c->have, want - c->have, MSG_DONTWAIT);
             if (k < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR))
@@ -309,13 +340,13 @@ static int client_input(srv_t *s, const cf_plcsrv_opts_t *o, client_t *c)
         uint8_t out[MBAP_MAX];
         plc_action_t todo = PLC_ACT_NONE;
         size_t rn;
-        if (rate_ok(o, c, now_ms()))
+        uint32_t t = now_ms();
+        c->t_active = t; /* a request, answered or refused: the client is alive */
+        c->served = 1;
+        if (rate_ok(s, o, c, t))
             rn = handle_pdu(s, c, c->buf + MBAP_HDR, want - MBAP_HDR, out + MBAP_HDR, &todo);
-        else {
-            out[MBAP_HDR] = (uint8_t)(c->buf[MBAP_HDR] | 0x80);
-            out[MBAP_HDR + 1] = PLC_EX_BUSY;
-            rn = 2;
-        }
+        else
+            rn = plc_mbap_exception(c->buf + MBAP_HDR, PLC_EX_BUSY, out + MBAP_HDR);
         memcpy(out, c->buf, 4);
         put16(out + 4, (unsigned)rn + 1);
         out[6] = c->buf[6];
@@ -353,11 +384,50 @@ static int write_port_file(const char *path, int port)
     return 0;
 }
 
-static void set_clients(srv_t *s, int n)
+/* CLIENTS, and one of the connection counters (0: none). */
+static void set_clients(srv_t *s, int n, unsigned counter)
 {
     pthread_mutex_lock(&s->mu);
     plc_map_put_u16(&s->map, PLC_R_CLIENTS, (uint16_t)n);
+    if (counter)
+        plc_map_inc_u32(&s->map, counter);
     pthread_mutex_unlock(&s->mu);
+}
+
+/* Close client i (its last held-back log lines said) and fill its slot. */
+static void drop_client(srv_t *s, client_t *cl, int *nc, int i, unsigned counter)
+{
+    rep_tick(&cl[i], now_ms(), 1);
+    close(cl[i].fd);
+    cl[i] = cl[--*nc];
+    set_clients(s, *nc, counter);
+}
+
+/* The slot to free for a new connection: one that never completed a
+ * request (a slowloris, a port scan, a half-open socket) before one that
+ * did, then the longest idle. A PLC that lost its connection (cable pulled,
+ * rebooted) is served again at once, whatever the slots hold. */
+static int evict_choice(const client_t *cl, int nc, uint32_t t)
+{
+    int best = -1;
+    for (int i = 0; i < nc; i++) {
+        const client_t *c = &cl[i], *b = best < 0 ? NULL : &cl[best];
+        if (!b || c->served < b->served ||
+            (c->served == b->served && (uint32_t)(t - c->t_active) > (uint32_t)(t - b->t_active)))
+            best = i;
+    }
+    return best;
+}
+
+/* Keepalive: a dead peer that sends nothing is found by the kernel. */
+static void keepalive(int fd)
+{
+    int one = 1, idle = CF_PLCSRV_KA_IDLE_S, intvl = CF_PLCSRV_KA_INTVL_S, cnt = CF_PLCSRV_KA_CNT;
+    if (setsockopt(fd, SOL_SOCKET, SO_KEEPALIVE, &one, sizeof one) ||
+        setsockopt(fd, IPPROTO_TCP, TCP_KEEPIDLE, &idle, sizeof idle) ||
+        setsockopt(fd, IPPROTO_TCP, TCP_KEEPINTVL, &intvl, sizeof intvl) ||
+        setsockopt(fd, IPPROTO_TCP, TCP_KEEPCNT, &cnt, sizeof cnt))
+        cf_log(CF_LOG_WARN, "TCP keepalive not set: %s", strerror(errno));
 }
 
 static int open_listener(const cf_plcsrv_opts_t *o)
@@ -393,7 +463,8 @@ static int allowed(const cf_plcsrv_opts_t *o, uint32_t addr)
     return o->nallow == 0;
 }
 
-/* A new connection: refused (allow-list, too many) or added. */
+/* A new connection: refused (allow-list) or added, the longest idle
+ * evicted when every slot is taken. */
 static void accept_one(srv_t *s, const cf_plcsrv_opts_t *o, int lfd, client_t *cl, int *nc,
                        uint32_t *t_refused)
 {
@@ -406,26 +477,34 @@ static void accept_one(srv_t *s, const cf_plcsrv_opts_t *o, int lfd, client_t *c
     fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
     char name[32];
     snprintf(name, sizeof name, "client %s:%d", inet_ntoa(sa.sin_addr), ntohs(sa.sin_port));
-    const char *why = !allowed(o, ntohl(sa.sin_addr.s_addr)) ? "not in the allow-list"
-                      : *nc >= o->max_clients                ? "too many clients"
-                                                             : NULL;
-    if (why) {
-        uint32_t t = now_ms();
+    uint32_t t = now_ms();
+    if (!allowed(o, ntohl(sa.sin_addr.s_addr))) {
         if ((uint32_t)(t - *t_refused) >= 1000) { /* one line a second at most */
-            cf_log(CF_LOG_WARN, "%s refused: %s (%d connected)", name, why, *nc);
+            cf_log(CF_LOG_WARN, "%s refused: not in the allow-list (%d connected)", name, *nc);
             *t_refused = t;
         }
         close(fd);
         return;
     }
+    if (*nc >= o->max_clients && *nc == 0) { /* no slot at all (max_clients 0) */
+        close(fd);
+        return;
+    }
+    if (*nc >= o->max_clients) {
+        int v = evict_choice(cl, *nc, t);
+        cf_log(CF_LOG_WARN, "%s: all %d slots taken: %s evicted (%s, idle %u ms)", name,
+               o->max_clients, cl[v].name, cl[v].served ? "served before" : "never a request",
+               (unsigned)(t - cl[v].t_active));
+        drop_client(s, cl, nc, v, PLC_R_CONN_EVICTED);
+    }
+    keepalive(fd);
     client_t *c = &cl[(*nc)++];
     memset(c, 0, sizeof *c);
     c->fd = fd;
-    c->t_tok = now_ms();
-    c->t_warn = c->t_tok - 1000; /* the first refusal is logged at once */
+    c->t_tok = c->t_active = t;
     c->tokens = o->max_rate < 1 ? 1 : o->max_rate;
     snprintf(c->name, sizeof c->name, "%s", name);
-    set_clients(s, *nc);
+    set_clients(s, *nc, PLC_R_CONN_ACCEPTED);
     cf_log(CF_LOG_INFO, "%s connected (%d)", name, *nc);
 }
 
@@ -458,11 +537,12 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
         cf_log(CF_LOG_ERROR, "cannot write the port file %s: %s", o->port_file, strerror(errno));
         goto out;
     }
+    unsigned idle_ms = o->idle_ms ? o->idle_ms : CF_PLCSRV_IDLE_MS;
     cf_log(CF_LOG_INFO,
-           "listening on %s:%d (Modbus TCP, %d clients at most, %s, rate limit %g/s, word "
-           "order %s, watchdog %u ms, rig %s)",
-           o->addr, port, o->max_clients, o->nallow ? "allow-list" : "any address", o->max_rate,
-           o->word_order == PLC_ORDER_HI_LO ? "hi-lo" : "lo-hi", o->watchdog_ms,
+           "listening on %s:%d (Modbus TCP, %d clients at most, idle timeout %u ms, %s, rate "
+           "limit %g/s, word order %s, watchdog %u ms, rig %s)",
+           o->addr, port, o->max_clients, idle_ms, o->nallow ? "allow-list" : "any address",
+           o->max_rate, o->word_order == PLC_ORDER_HI_LO ? "hi-lo" : "lo-hi", o->watchdog_ms,
            r->rig ? "configured" : "not configured");
     while (!*stop) {
         fd_set rd;
@@ -494,18 +574,25 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
         for (int i = 0; i < nc; i++) {
             client_t *c = &cl[i];
             int gone = 0;
+            unsigned counter = 0;
             if (k > 0 && FD_ISSET(c->fd, &rd))
                 gone = client_input(&s, o, c) != 0;
+            t = now_ms(); /* after the input: its requests are not in the future */
+            /* A frame must be whole within FRAME_MS of its first byte, however
+             * its bytes trickle in (each byte would restart a per-byte clock). */
             if (!gone && c->have > 0 && (uint32_t)(t - c->t_first) > FRAME_MS) {
                 cf_log(CF_LOG_WARN, "%s: frame incomplete for %d ms (%zu bytes): closed", c->name,
                        FRAME_MS, c->have);
-                gone = 1;
+                gone = 1, counter = PLC_R_CONN_TIMED_OUT;
             }
-            if (gone) {
-                close(c->fd);
-                cl[i--] = cl[--nc];
-                set_clients(&s, nc);
+            if (!gone && (uint32_t)(t - c->t_active) > idle_ms) {
+                cf_log(CF_LOG_WARN, "%s: no request for %u ms: closed", c->name, idle_ms);
+                gone = 1, counter = PLC_R_CONN_TIMED_OUT;
             }
+            if (!gone)
+                rep_tick(c, t, 0);
+            if (gone)
+                drop_client(&s, cl, &nc, i--, counter);
         }
         if (k > 0 && FD_ISSET(lfd, &rd))
             accept_one(&s, o, lfd, cl, &nc, &t_refused);

@@ -8,9 +8,13 @@
  * runs in a worker thread behind a job runner (the table below) and keeps
  * running while clients come and go. Function codes: 03 read, 06 write
  * single, 16 write multiple holding registers; anything else is exception
- * 01. Hardening: at most max_clients connections, an optional allow-list
- * of client addresses, and a request rate limit per client (a token
- * bucket: requests beyond it are answered exception 06, server busy). */
+ * 01 (the PDUs themselves: firmware/plc_mbap.h). Hardening: at most
+ * max_clients connections, a new one evicting the longest idle when all
+ * are taken (dead connections never lock the PLC out); an idle timeout;
+ * TCP keepalive on every connection; an optional allow-list of client
+ * addresses; a request rate limit per client (a token bucket: requests
+ * beyond it are answered exception 06, server busy); a log line repeated
+ * by one client is logged once, then as a count every CF_PLCSRV_LOG_REPEAT_MS. */
 #ifndef CF_PLCSRV_H
 #define CF_PLCSRV_H
 
@@ -19,8 +23,16 @@
 #include <signal.h>
 #include <stdint.h>
 
-#define CF_PLC_ABORTED (-1) /* a phase's return: it stopped on request */
-#define CF_PLC_MAX_ALLOW 16 /* allow-list entries */
+#define CF_PLC_ABORTED (-1)           /* a phase's return: it stopped on request */
+#define CF_PLC_MAX_ALLOW 16           /* allow-list entries */
+#define CF_PLCSRV_IDLE_MS 60000u      /* default idle timeout */
+#define CF_PLCSRV_LOG_REPEAT_MS 5000u /* a repeated log line: its count this often */
+/* TCP keepalive on every accepted socket: a peer gone without a FIN (cable
+ * pulled, PLC powered off) is found within IDLE + CNT x INTVL seconds even
+ * when the idle timeout is long. */
+#define CF_PLCSRV_KA_IDLE_S 10
+#define CF_PLCSRV_KA_INTVL_S 5
+#define CF_PLCSRV_KA_CNT 3
 
 /* What runs the jobs. Phases run in the worker thread and return 0, a 3xx
  * PLC code (plc_err.h), or CF_PLC_ABORTED; ctl gives progress and the stop
@@ -54,6 +66,9 @@ typedef struct cf_plcsrv_opts {
     int nallow;
     uint32_t allow_net[CF_PLC_MAX_ALLOW], allow_mask[CF_PLC_MAX_ALLOW];
     double max_rate; /* requests a second per client (burst the same), 0: no limit */
+    /* A connection without a complete request for this long is closed (a
+     * PLC's heartbeat writes keep its own open); 0: CF_PLCSRV_IDLE_MS. */
+    unsigned idle_ms;
 } cf_plcsrv_opts_t;
 
 /* Serve until *stop becomes non-zero (SIGTERM). Returns 0 after a clean

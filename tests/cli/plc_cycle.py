@@ -122,7 +122,7 @@ def identity(port):
     c = Cell(port)
     r = c.read(0, 16)
     check(r[MAGIC] == 17222, "identity: magic 17222 (%d)" % r[MAGIC])
-    check(r[VERSION] == 1, "identity: map version 1")
+    check(r[VERSION] == 2, "identity: map version 2")
     name = b"".join(struct.pack(">H", w) for w in r[8:16]).rstrip(b"\0").decode()
     check(len(name) > 0, "identity: board name '%s'" % name)
     for order in (1 - c.order, c.order):
@@ -234,9 +234,12 @@ def invalid(port):
     # A request with one bad value changes none of the others.
     check(c.write(TOL, c.fwords(0.5) + [0, 0, 0, 0, 0xFFFF]) == 3 and c.read(TOL, 2) == tol,
           "invalid: a request with one bad value stores nothing")
-    check(c.exc_read(117, 2) == 2, "invalid: read past the map: exception 02")
-    r = c.c.read_input_registers(0, 1, slave=1)
-    check(r.isError() and r.exception_code == 1, "invalid: input registers: exception 01")
+    check(c.exc_read(156, 2) == 2, "invalid: read past the map (157 registers): exception 02")
+    r = c.c.read_input_registers(0, 16, slave=1)
+    check(not r.isError() and r.registers == c.read(0, 16),
+          "invalid: input registers (function 04) read as the holding registers")
+    r = c.c.write_coil(0, True, slave=1)
+    check(r.isError() and r.exception_code == 1, "invalid: write coil (function 05): exception 01")
     check(c.status()["state"] == IDLE, "invalid: still IDLE after all that")
     # Busy: every command but ABORT refused with 102.
     s = c.command(FIT)
@@ -337,18 +340,26 @@ def errors(port, missing_folder, code):
 
 
 def limit(port, nmax, mbpoll):
-    """nmax clients connected: one more is turned away, the others served."""
+    """nmax clients connected: one more is served, the longest idle evicted."""
     cells = [Cell(port) for _ in range(nmax)]
     check(cells[0].read(49, 1)[0] == nmax, "limit: CLIENTS reads %d" % nmax)
+    ev0 = cells[0].u32(cells[0].read(148, 2))
+    for c in cells:  # cells[0] is now the longest idle
+        c.read(MAGIC, 1)
+        time.sleep(0.05)
     mb = ["timeout", "10", mbpoll, "-m", "tcp", "-p", str(port), "-0", "-r", "0", "-1", "127.0.0.1"]
     out = subprocess.run(mb, capture_output=True, text=True).stdout
-    check("[0]: \t17222" not in out, "limit: client %d turned away" % (nmax + 1))
-    check(all(c.read(MAGIC, 1)[0] == 17222 for c in cells), "limit: the %d clients still served"
-          % nmax)
-    cells[-1].c.close()
-    time.sleep(0.2)
-    out = subprocess.run(mb, capture_output=True, text=True).stdout
-    check("[0]: \t17222" in out, "limit: a client served again once one left")
+    check("[0]: \t17222" in out, "limit: client %d served" % (nmax + 1))
+    sk = cells[0].c.socket  # the socket itself: pymodbus would reconnect
+    sk.settimeout(2)
+    try:
+        gone = sk.recv(1) == b""
+    except OSError:
+        gone = False
+    check(gone, "limit: the longest idle client was evicted")
+    check(all(c.read(MAGIC, 1)[0] == 17222 for c in cells[1:]),
+          "limit: the %d others still served" % (nmax - 1))
+    check(cells[1].u32(cells[1].read(148, 2)) == ev0 + 1, "limit: CONN_EVICTED counts it")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,10 @@
  * register map's write validation and the job state machine (plc_map.c,
  * plc_fsm.c), driven by a sequence of Modbus writes and reads, clock
  * ticks, job events and progress reports decoded from the input. A write
- * refused with an exception must change nothing; the state stays a known
- * one; the status registers follow it. */
+ * refused with an exception must change nothing, and its exception is 02 or
+ * 03, or 06 (server busy) while a job runs and the write reaches a register
+ * other than COMMAND and PLC_HEARTBEAT; a write taken while busy reached
+ * only those; the state stays a known one; the status registers follow it. */
 #include "fuzz.h"
 #include "plc_fsm.h"
 #include "plc_map.h"
@@ -64,11 +66,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             plc_map_t m0 = m;
             plc_fsm_t f0 = f;
             plc_action_t act = PLC_ACT_NONE;
+            int busy = plc_state_busy(f.state), busy_only = 1;
+            for (unsigned k = a; k < a + n; k++)
+                busy_only &= plc_fsm_writable(PLC_S_HOMING, plc_map_entry(k));
             int ex = plc_fsm_write(&f, a, n, v, now, &act);
             if (ex && (memcmp(&m0, &m, sizeof m) || memcmp(&f0, &f, sizeof f)))
                 fail("a refused write changed the registers or the state");
-            if (ex && ex != PLC_EX_ADDRESS && ex != PLC_EX_VALUE)
-                fail("write: exception code not 2 or 3");
+            /* 06 is the answer while a job runs (issue 15: the harness predated it). */
+            if (ex == PLC_EX_BUSY && (!busy || busy_only))
+                fail("write: exception 06 when no job runs or for COMMAND / heartbeat");
+            if (ex && ex != PLC_EX_ADDRESS && ex != PLC_EX_VALUE && ex != PLC_EX_BUSY)
+                fail("write: exception code not 2, 3 or 6");
+            if (!ex && busy && !busy_only)
+                fail("write taken while busy beyond COMMAND and the heartbeat");
             if (!ex && a + n > PLC_NREGS)
                 fail("write beyond the map accepted");
         } else if (op == 2) { /* read */
@@ -81,7 +91,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             now += take16(&in);
             plc_fsm_tick(&f, now);
         } else if (op == 4) { /* the job ends a phase */
-            plc_results_t res = {0.01f, 0.02f, -0.02f, 99.0f, PLC_VERDICT_PASS, 100, 64, 1000};
+            plc_results_t res = {
+                0.01f, 0.02f, -0.02f, 99.0f, PLC_VERDICT_PASS, 100, 64, 1000, PLC_FIT_NOT_MET_DATA};
             unsigned e = take(&in);
             plc_fsm_event(&f, (plc_event_t)(e % PLC_EV_COUNT), 300 + (int)(e >> 2) % 8,
                           (e & 0x80) ? &res : NULL);

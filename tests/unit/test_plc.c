@@ -36,7 +36,18 @@ static void test_table_layout(void **state)
         for (int j = 0; j < i; j++)
             assert_string_not_equal(plc_regs[j].name, r->name);
     }
-    assert_int_equal(end, PLC_NREGS); /* the results block ends the map */
+    assert_int_equal(end, PLC_NREGS); /* the counters end the map */
+    /* Map version 2 kept every version 1 address and added these. */
+    assert_int_equal(PLC_MAP_VERSION, 2);
+    assert_int_equal(PLC_R_RESULT_PART, 116);
+    assert_int_equal(PLC_R_FIT_TOL, 82);
+    assert_int_equal(PLC_R_RECIPE, 91);
+    assert_int_equal(PLC_R_JOB_TIME, 118);
+    assert_int_equal(PLC_R_FIT_STATUS, 120);
+    assert_int_equal(PLC_R_PART_ID, 124);
+    assert_int_equal(plc_type_words(PLC_T_STR32), PLC_PART_ID_LEN / 2);
+    assert_int_equal(PLC_R_JOBS_OK, 140);
+    assert_int_equal(PLC_R_LAST_ERROR, 156);
     /* The numbers the docs and PLC programs use. */
     assert_int_equal(PLC_R_MAGIC, 0);
     assert_int_equal(PLC_R_COMMAND, 20);
@@ -87,8 +98,9 @@ static void test_docs_match(void **state)
         if (!strstr(doc, line))
             fail_msg("docs/plc-register-map.md lacks the state row\n%s", row);
     }
-    static const int codes[] = {101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 111, 201, 202,
-                                203, 301, 302, 303, 304, 305, 306, 307, 308, 309, 310, 311};
+    static const int codes[] = {101, 102, 103, 104, 105, 106, 107, 108, 109, 110,
+                                111, 112, 113, 114, 201, 202, 203, 301, 302, 303,
+                                304, 305, 306, 307, 308, 309, 310, 311};
     for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++) {
         snprintf(line, sizeof line, "\n| %d | ", codes[i]);
         if (!strstr(doc, line))
@@ -180,6 +192,20 @@ static void test_write_validation(void **state)
             assert_int_equal(plc_map_check_write(&m, r->addr, 2, v), PLC_EX_VALUE);
             plc_pack_u32((uint32_t)r->hi, m.order, v);
             assert_int_equal(plc_map_check_write(&m, r->addr, 2, v), 0);
+        } else if (r->type == PLC_T_STR32) {
+            /* Printable ASCII, 0s only at the end, one bad byte refuses it all. */
+            uint16_t str[16] = {('S' << 8) | 'N', ('-' << 8) | '4', ('2' << 8) | ' ', '~' << 8};
+            assert_int_equal(plc_map_check_write(&m, r->addr, 16, str), 0);
+            str[3] = ('~' << 8) | 0x7F;
+            assert_int_equal(plc_map_check_write(&m, r->addr, 16, str), PLC_EX_VALUE);
+            str[3] = 0x1F << 8;
+            assert_int_equal(plc_map_check_write(&m, r->addr, 16, str), PLC_EX_VALUE);
+            str[3] = 'x'; /* a character after the terminating 0 */
+            assert_int_equal(plc_map_check_write(&m, r->addr, 16, str), PLC_EX_VALUE);
+            str[3] = 0;
+            str[15] = 'x';
+            assert_int_equal(plc_map_check_write(&m, r->addr, 16, str), PLC_EX_VALUE);
+            assert_int_equal(plc_map_check_write(&m, r->addr, 15, str), PLC_EX_ADDRESS);
         } else { /* U16 and the command code */
             v[1] = 7;
             if (r->hi < 65535) {
@@ -200,8 +226,10 @@ static void test_write_validation(void **state)
     assert_int_equal(plc_map_check_write(&m, 60, 0, v), PLC_EX_VALUE);
     assert_int_equal(plc_map_check_write(&m, 60, PLC_MAX_WRITE + 1, v), PLC_EX_VALUE);
     uint16_t rd[PLC_MAX_READ];
-    assert_int_equal(plc_map_read(&m, 0, PLC_NREGS, rd), 0);
-    assert_int_equal(plc_map_read(&m, 1, PLC_NREGS, rd), PLC_EX_ADDRESS);
+    assert_int_equal(plc_map_read(&m, 0, PLC_MAX_READ, rd), 0);
+    assert_int_equal(plc_map_read(&m, PLC_NREGS - PLC_MAX_READ, PLC_MAX_READ, rd), 0);
+    assert_int_equal(plc_map_read(&m, PLC_NREGS - 1, 2, rd), PLC_EX_ADDRESS);
+    assert_int_equal(plc_map_read(&m, 0, PLC_MAX_READ + 1, rd), PLC_EX_VALUE);
     assert_int_equal(plc_map_read(&m, 0, 0, rd), PLC_EX_VALUE);
     assert_int_equal(plc_map_read(&m, 16, 4, rd), 0); /* gaps read as 0 */
     assert_int_equal(rd[0], 0);
@@ -254,7 +282,8 @@ static plc_action_t cmd(int code)
     return act;
 }
 
-static const plc_results_t RES = {0.5f, 1.25f, -0.75f, 87.5f, PLC_VERDICT_FAIL, 1000, 192, 1234};
+static const plc_results_t RES = {
+    0.5f, 1.25f, -0.75f, 87.5f, PLC_VERDICT_FAIL, 1000, 192, 1234, PLC_FIT_NOT_MET_MAX_CP};
 
 static void fresh(int rig)
 {
@@ -357,7 +386,13 @@ static void test_every_command_every_state(void **state)
                 assert_int_equal(M.reg[PLC_R_CMD_RESULT], want);
                 assert_true(M.reg[PLC_R_STATUS] & PLC_ST_REJECTED);
                 f0.ack_seq = F.ack_seq, f0.cmd_result = F.cmd_result, f0.rejected = 1;
+                f0.ack_cmd = f0.last_cmd = (uint16_t)c;
+                f0.ncmd++;
                 assert_memory_equal(&F, &f0, sizeof F);
+                /* ... but the refusal counter */
+                assert_int_equal(plc_map_u32(&M, PLC_R_CMD_REFUSED),
+                                 plc_map_u32(&m0, PLC_R_CMD_REFUSED) + 1);
+                memcpy(&m0.reg[PLC_R_CMD_REFUSED], &M.reg[PLC_R_CMD_REFUSED], 4);
                 m0.reg[PLC_R_ACK_SEQ] = M.reg[PLC_R_ACK_SEQ];
                 m0.reg[PLC_R_CMD_RESULT] = M.reg[PLC_R_CMD_RESULT];
                 m0.reg[PLC_R_STATUS] |= PLC_ST_REJECTED;
@@ -390,12 +425,14 @@ static void test_handshake(void **state)
 {
     (void)state;
     fresh(1);
-    /* Writing the command without a new sequence does nothing. */
+    /* Sequence 0 (a zeroed block, a counter not started) is refused. */
     uint16_t v[2] = {PLC_C_HOME, 0};
     plc_action_t act;
     assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 2, v, 0, &act), 0);
     assert_int_equal(act, PLC_ACT_NONE);
     assert_int_equal(F.state, PLC_S_IDLE);
+    assert_int_equal(M.reg[PLC_R_CMD_RESULT], PLC_E_SEQ_ZERO);
+    assert_true(M.reg[PLC_R_STATUS] & PLC_ST_REJECTED);
     /* HOME, then the same request again (a PLC retransmission): one job. */
     assert_int_equal(cmd(PLC_C_HOME), PLC_ACT_START);
     v[1] = SEQ;
@@ -439,8 +476,9 @@ static void test_handshake(void **state)
     cmd(PLC_C_ACK_RESULTS);
     assert_int_equal(F.cmd_result, 0);
     assert_false(M.reg[PLC_R_STATUS] & PLC_ST_RESULTS);
-    for (unsigned a = PLC_R_RMS; a < PLC_NREGS; a++)
+    for (unsigned a = PLC_R_RMS; a < PLC_R_RESULTS_END; a++)
         assert_int_equal(M.reg[a], 0);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_OK), 2); /* the counters are not results */
     /* A failed job: DONE and ERROR, code kept until reset. */
     assert_int_equal(cmd(PLC_C_FIT), PLC_ACT_START);
     job = SEQ;
@@ -492,9 +530,14 @@ static void test_busy_writes(void **state)
     assert_int_equal(plc_fsm_write(&F, PLC_R_PART_NUMBER, 2, part, 0, &act), PLC_EX_BUSY);
     assert_int_equal(plc_fsm_write(&F, PLC_R_WATCHDOG_MS, 1, &wd, 0, &act), PLC_EX_BUSY);
     assert_int_equal(plc_fsm_write(&F, PLC_R_WORD_ORDER, 1, &order, 0, &act), PLC_EX_BUSY);
-    /* heartbeat and command together: refused whole too */
-    uint16_t three[3] = {PLC_C_ABORT, (uint16_t)(SEQ + 1), 9};
-    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 3, three, 0, &act), PLC_EX_BUSY);
+    /* command, sequence, heartbeat and watchdog: WATCHDOG_MS is not
+     * writable while busy, so the whole request is refused */
+    uint16_t four[4] = {PLC_C_ABORT, (uint16_t)(SEQ + 1), 9, 100};
+    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 4, four, 0, &act), PLC_EX_BUSY);
+    assert_memory_equal(&M, &m0, sizeof M);
+    /* the parameter block with PART_ID: refused */
+    uint16_t id[16] = {'A' << 8};
+    assert_int_equal(plc_fsm_write(&F, PLC_R_PART_ID, 16, id, 0, &act), PLC_EX_BUSY);
     assert_memory_equal(&M, &m0, sizeof M);
     /* Read-only and range errors keep their own exceptions. */
     assert_int_equal(plc_fsm_write(&F, PLC_R_MAGIC, 1, &hb, 0, &act), PLC_EX_ADDRESS);
@@ -502,11 +545,130 @@ static void test_busy_writes(void **state)
     assert_true(M.reg[PLC_R_STATUS] & PLC_ST_WD_ARMED);
     assert_int_equal(cmd(PLC_C_FIT), PLC_ACT_NONE); /* the 1xx refusal, not an exception */
     assert_int_equal(F.cmd_result, PLC_E_BUSY);
-    assert_int_equal(cmd(PLC_C_ABORT), PLC_ACT_ABORT);
+    /* COMMAND + sequence + heartbeat in one request, as PLC programs write
+     * them: each register is writable while busy, so the ABORT is taken. */
+    uint16_t three[3] = {PLC_C_ABORT, ++SEQ, 10};
+    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 3, three, 0, &act), 0);
+    assert_int_equal(act, PLC_ACT_ABORT);
+    assert_int_equal(F.state, PLC_S_ABORTING);
+    assert_int_equal(M.reg[PLC_R_ACK_SEQ], SEQ);
+    assert_int_equal(M.reg[PLC_R_PLC_HEARTBEAT], 10);
     assert_int_equal(plc_fsm_write(&F, PLC_R_TOLERANCE, 2, tol, 0, &act), PLC_EX_BUSY);
     plc_fsm_event(&F, PLC_EV_ABORTED, 0, NULL);
     assert_int_equal(plc_fsm_write(&F, PLC_R_TOLERANCE, 2, tol, 0, &act), 0); /* idle again */
     assert_true(plc_map_f32(&M, PLC_R_TOLERANCE) == 0.5f);
+}
+
+/* The sequence rules a PLC programmer is given (docs: the handshake). */
+static void test_sequence_rules(void **state)
+{
+    (void)state;
+    fresh(1);
+    plc_action_t act;
+    uint16_t v[2] = {PLC_C_RESET, 0};
+    /* 0: refused 112 whatever the command, again and again. */
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 2, v, 0, &act), 0);
+        assert_int_equal(M.reg[PLC_R_CMD_RESULT], PLC_E_SEQ_ZERO);
+        assert_int_equal(M.reg[PLC_R_ACK_SEQ], 0);
+        assert_int_equal(plc_map_u32(&M, PLC_R_CMD_REFUSED), (uint32_t)k + 1);
+    }
+    /* HOME 1 taken; HOME 1 again is a retransmission (nothing at all). */
+    assert_int_equal(cmd(PLC_C_HOME), PLC_ACT_START);
+    plc_fsm_t f0 = F;
+    plc_map_t m0 = M;
+    v[0] = PLC_C_HOME, v[1] = SEQ;
+    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 2, v, 0, &act), 0);
+    assert_int_equal(act, PLC_ACT_NONE);
+    assert_memory_equal(&F, &f0, sizeof F);
+    assert_memory_equal(&M, &m0, sizeof M);
+    /* ABORT with sequence 1: refused 113, the job runs on. */
+    v[0] = PLC_C_ABORT;
+    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 2, v, 0, &act), 0);
+    assert_int_equal(act, PLC_ACT_NONE);
+    assert_int_equal(F.state, PLC_S_HOMING);
+    assert_int_equal(M.reg[PLC_R_CMD_RESULT], PLC_E_SEQ_REUSED);
+    assert_int_equal(M.reg[PLC_R_ACK_SEQ], SEQ);
+    assert_true(M.reg[PLC_R_STATUS] & PLC_ST_REJECTED);
+    assert_int_equal(F.last_cmd, PLC_C_ABORT);
+    assert_int_equal(F.ack_cmd, PLC_C_HOME);
+    /* The next sequence works as ever. */
+    assert_int_equal(cmd(PLC_C_ABORT), PLC_ACT_ABORT);
+    assert_int_equal(M.reg[PLC_R_CMD_RESULT], 0);
+    /* Wrapping from 65535 to 1 (0 skipped) is a new sequence each time. */
+    SEQ = 65534;
+    plc_fsm_event(&F, PLC_EV_ABORTED, 0, NULL);
+    cmd(PLC_C_ACK_RESULTS); /* 65535: refused 105, but taken as a command */
+    assert_int_equal(M.reg[PLC_R_CMD_RESULT], PLC_E_NO_RESULTS);
+    v[0] = PLC_C_HOME, v[1] = 1;
+    assert_int_equal(plc_fsm_write(&F, PLC_R_COMMAND, 2, v, 0, &act), 0);
+    assert_int_equal(act, PLC_ACT_START);
+}
+
+/* Version 2: the job's new parameters, JOB_TIME and FIT_STATUS, the
+ * counters. */
+static void test_map_v2(void **state)
+{
+    (void)state;
+    fresh(1);
+    plc_action_t act;
+    /* Defaults: no loop, 100 %, residual refinement. */
+    assert_true(plc_map_f32(&M, PLC_R_FIT_TOL) == 0.0f);
+    assert_true(plc_map_f32(&M, PLC_R_FIT_WITHIN) == 100.0f);
+    assert_int_equal(M.reg[PLC_R_FIT_REFINE], PLC_REFINE_RESIDUAL);
+    /* The block 82-91 and PART_ID in two requests; a FIT copies them. */
+    uint16_t blk[10];
+    plc_pack_u32(plc_f32_bits(0.01f), M.order, blk);
+    plc_pack_u32(plc_f32_bits(99.5f), M.order, blk + 2);
+    plc_pack_u32(2500, M.order, blk + 4);
+    blk[6] = PLC_REFINE_UNIFORM, blk[7] = 1, blk[8] = 2, blk[9] = 3;
+    assert_int_equal(plc_fsm_write(&F, PLC_R_FIT_TOL, 10, blk, 0, &act), 0);
+    uint16_t id[16] = {('S' << 8) | 'N', ('-' << 8) | '7', '7' << 8};
+    assert_int_equal(plc_fsm_write(&F, PLC_R_PART_ID, 16, id, 0, &act), 0);
+    assert_int_equal(cmd(PLC_C_FIT), PLC_ACT_START);
+    const plc_params_t *p = &F.job_params;
+    assert_true(p->fit_tol == 0.01f && p->fit_within == 99.5f);
+    assert_int_equal(p->fit_max_cp, 2500);
+    assert_int_equal(p->fit_refine, PLC_REFINE_UNIFORM);
+    assert_int_equal(p->fit_robust, 1);
+    assert_int_equal(p->fit_reparam, 2);
+    assert_int_equal(p->recipe, 3);
+    assert_string_equal(p->part_id, "SN-77");
+    /* The server stamps the job; the results carry it and the fit status. */
+    F.job_params.utc = 1796000000u;
+    plc_fsm_event(&F, PLC_EV_OK, 0, &RES);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOB_TIME), 1796000000u);
+    assert_int_equal(M.reg[PLC_R_FIT_STATUS], PLC_FIT_NOT_MET_MAX_CP);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_OK), 1);
+    cmd(PLC_C_ACK_RESULTS);
+    for (unsigned a = PLC_R_RMS; a < PLC_R_RESULTS_END; a++)
+        assert_int_equal(M.reg[a], 0);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_OK), 1); /* counters stay */
+    char out[40];
+    plc_map_get_str(&M, PLC_R_PART_ID, out, sizeof out);
+    assert_string_equal(out, "SN-77");
+    plc_map_get_str(&M, PLC_R_PART_ID, out, 4);
+    assert_string_equal(out, "SN-");
+    /* Failed, aborted, refused: each its counter; LAST_ERROR survives RESET. */
+    cmd(PLC_C_FIT);
+    plc_fsm_event(&F, PLC_EV_FAIL, PLC_E_FIT, NULL);
+    cmd(PLC_C_RESET);
+    assert_int_equal(M.reg[PLC_R_ERROR_CODE], 0);
+    assert_int_equal(M.reg[PLC_R_LAST_ERROR], PLC_E_FIT);
+    cmd(PLC_C_FIT);
+    cmd(PLC_C_ABORT);
+    plc_fsm_event(&F, PLC_EV_ABORTED, 0, NULL);
+    cmd(PLC_C_RESET); /* 109 */
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_OK), 1);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_FAILED), 1);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_ABORTED), 1);
+    assert_int_equal(plc_map_u32(&M, PLC_R_CMD_REFUSED), 1);
+    /* Counters re-pack with the word order like every 32-bit value. */
+    uint16_t one = PLC_ORDER_HI_LO;
+    assert_int_equal(plc_fsm_write(&F, PLC_R_WORD_ORDER, 1, &one, 0, &act), 0);
+    assert_int_equal(M.reg[PLC_R_JOBS_OK], 0);
+    assert_int_equal(M.reg[PLC_R_JOBS_OK + 1], 1);
+    assert_int_equal(plc_map_u32(&M, PLC_R_JOBS_FAILED), 1);
 }
 
 /* A fault outside the handshake (the rig's process ended). */
@@ -664,6 +826,8 @@ int main(void)
         cmocka_unit_test(test_watchdog),
         cmocka_unit_test(test_cell_heartbeat),
         cmocka_unit_test(test_busy_writes),
+        cmocka_unit_test(test_sequence_rules),
+        cmocka_unit_test(test_map_v2),
         cmocka_unit_test(test_fault),
         cmocka_unit_test(test_rig_codes),
     };
