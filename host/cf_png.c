@@ -1,7 +1,8 @@
-/* cf_png.c: PNG writer (stored deflate blocks, CRC-32, Adler-32), RGB canvas
- * and 5x7 font. The zlib stream is produced while rows are pushed: bytes
- * gather in one 65535-byte block buffer and each full block goes out as its
- * own IDAT chunk, so memory does not depend on the image size. */
+/* cf_png.c: PNG writer (zlib deflate, per-row adaptive filters, CRC-32),
+ * RGB canvas and bitmap font. The zlib stream is produced while rows are
+ * pushed: deflate's output gathers in one 64 KB buffer and each full buffer
+ * goes out as its own IDAT chunk, so memory does not depend on the image
+ * height (one row under five filters, the buffer and zlib's state). */
 #include "cf_png.h"
 #include "cf_err.h"
 #include <errno.h>
@@ -9,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <zlib.h>
 
 /* ---- canvas -------------------------------------------------------------- */
 
@@ -223,18 +225,16 @@ int cf_image_text(cf_image_t *im, int x, int y, int scale, uint32_t rgb, const c
 
 /* ---- PNG ------------------------------------------------------------------ */
 
-#define PW_BLOCK 65535u  /* largest stored deflate block */
-#define ADLER_MOD 65521u /* largest prime below 2^16 */
-#define ADLER_NMAX 5552  /* bytes before b can overflow 32 bits (zlib's bound) */
+#define PW_OUT 65536u /* compressed bytes per IDAT chunk */
 
 typedef struct pw {
     FILE *f;
     uint32_t tab[256];
-    uint32_t crc;  /* of the chunk being written */
-    uint32_t a, b; /* Adler-32 of the raw (filtered) image bytes */
-    unsigned char *blk;
-    size_t nblk;
-    int started; /* zlib header written */
+    uint32_t crc; /* of the chunk being written */
+    z_stream z;
+    unsigned char *out;  /* PW_OUT bytes: deflate output, one IDAT chunk */
+    unsigned char *cand; /* 5 rows of 1 + 3w bytes: the row under each filter */
+    int zerr;            /* deflate failed */
 } pw_t;
 
 static void be32(unsigned char *p, uint32_t v)
@@ -273,56 +273,72 @@ static void chunk_end(pw_t *w)
     fwrite(b, 1, 4, w->f);
 }
 
-/* One IDAT chunk: the zlib header before the first block, the stored block
- * (BFINAL on the last one), the Adler-32 after the last. */
-static void pw_block(pw_t *w, int final)
+/* What deflate has produced so far as one IDAT chunk. */
+static void pw_idat(pw_t *w)
 {
-    static const unsigned char zhdr[2] = {0x78, 0x01}; /* deflate, 32K window, 0x7801 % 31 == 0 */
-    unsigned char hdr[5], ad[4];
-    size_t n = w->nblk;
-    hdr[0] = final ? 1 : 0; /* BFINAL, BTYPE 00; the rest of the byte is padding */
-    hdr[1] = (unsigned char)n;
-    hdr[2] = (unsigned char)(n >> 8);
-    hdr[3] = (unsigned char)~n;
-    hdr[4] = (unsigned char)(~n >> 8);
-    chunk_begin(w, "IDAT", (uint32_t)((w->started ? 0 : 2) + 5 + n + (final ? 4 : 0)));
-    if (!w->started)
-        pw_out(w, zhdr, 2);
-    w->started = 1;
-    pw_out(w, hdr, 5);
-    pw_out(w, w->blk, n);
-    if (final) {
-        be32(ad, (w->b % ADLER_MOD) << 16 | (w->a % ADLER_MOD));
-        pw_out(w, ad, 4);
+    uint32_t n = (uint32_t)(PW_OUT - w->z.avail_out);
+    if (n) {
+        chunk_begin(w, "IDAT", n);
+        pw_out(w, w->out, n);
+        chunk_end(w);
     }
-    chunk_end(w);
-    w->nblk = 0;
+    w->z.next_out = w->out;
+    w->z.avail_out = PW_OUT;
 }
 
-/* Raw bytes into the stream. A full block is only sent when more data
- * follows, so the last block can carry BFINAL without an empty extra one. */
-static void pw_push(pw_t *w, const unsigned char *p, size_t n)
+/* n bytes into the zlib stream (flush Z_FINISH ends it); a full output
+ * buffer goes out as an IDAT chunk, so memory does not grow with the image. */
+static void pw_deflate(pw_t *w, const unsigned char *p, size_t n, int flush)
 {
-    while (n) {
-        if (w->nblk == PW_BLOCK)
-            pw_block(w, 0);
-        size_t k = PW_BLOCK - w->nblk;
-        if (k > n)
-            k = n;
-        if (k > ADLER_NMAX)
-            k = ADLER_NMAX;
-        uint32_t a = w->a, b = w->b;
-        for (size_t i = 0; i < k; i++) {
-            a += p[i];
-            b += a;
+    w->z.next_in = (unsigned char *)(uintptr_t)p; /* zlib's next_in is not const */
+    w->z.avail_in = (uInt)n;
+    for (;;) {
+        int r = deflate(&w->z, flush);
+        if (r == Z_STREAM_ERROR) {
+            w->zerr = 1;
+            return;
         }
-        w->a = a % ADLER_MOD;
-        w->b = b % ADLER_MOD;
-        memcpy(w->blk + w->nblk, p, k);
-        w->nblk += k;
-        p += k;
-        n -= k;
+        if (w->z.avail_out == 0) {
+            pw_idat(w);
+            continue;
+        }
+        if (flush == Z_FINISH ? r == Z_STREAM_END : w->z.avail_in == 0)
+            break;
     }
+    if (flush == Z_FINISH)
+        pw_idat(w);
+}
+
+static int paeth(int a, int b, int c)
+{
+    int p = a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
+    return pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+}
+
+/* The row under each PNG filter (None, Sub, Up, Average, Paeth; PNG spec
+ * 9.2, 3 bytes per pixel) into w->cand, and the index of the one with the
+ * smallest sum of absolute values taken as signed bytes: the heuristic
+ * libpng and the PNG spec (12.8) suggest, which on a map's flat colour
+ * areas picks runs of zeros that deflate shrinks best. */
+static int pw_filter(pw_t *w, const unsigned char *row, const unsigned char *prev, size_t len)
+{
+    unsigned long sum[5] = {0, 0, 0, 0, 0};
+    int best = 0;
+    for (int f = 0; f < 5; f++) {
+        unsigned char *o = w->cand + (size_t)f * (len + 1);
+        o[0] = (unsigned char)f;
+        for (size_t i = 0; i < len; i++) {
+            int x = row[i], a = i >= 3 ? row[i - 3] : 0, b = prev ? prev[i] : 0;
+            int c = i >= 3 && prev ? prev[i - 3] : 0;
+            int pred = f == 0 ? 0 : f == 1 ? a : f == 2 ? b : f == 3 ? (a + b) / 2 : paeth(a, b, c);
+            unsigned char v = (unsigned char)(x - pred);
+            o[i + 1] = v;
+            sum[f] += v < 128 ? v : 256u - v;
+        }
+        if (sum[f] < sum[best])
+            best = f;
+    }
+    return best;
 }
 
 static int pw_stream(pw_t *w, const unsigned char *rgb, int wd, int ht)
@@ -335,21 +351,22 @@ static int pw_stream(pw_t *w, const unsigned char *rgb, int wd, int ht)
     ihdr[8] = 8;  /* bits per sample */
     ihdr[9] = 2;  /* colour type: RGB */
     ihdr[10] = 0; /* deflate */
-    ihdr[11] = 0; /* adaptive filtering; every row uses filter 0 (none) */
+    ihdr[11] = 0; /* adaptive filtering: a filter type per row */
     ihdr[12] = 0; /* no interlace */
     chunk_begin(w, "IHDR", 13);
     pw_out(w, ihdr, 13);
     chunk_end(w);
     size_t row = (size_t)wd * 3;
-    for (int y = 0; y < ht; y++) {
-        static const unsigned char filter_none = 0;
-        pw_push(w, &filter_none, 1);
-        pw_push(w, rgb + (size_t)y * row, row);
+    for (int y = 0; y < ht && !w->zerr; y++) {
+        const unsigned char *r = rgb + (size_t)y * row;
+        int f = pw_filter(w, r, y ? r - row : NULL, row);
+        pw_deflate(w, w->cand + (size_t)f * (row + 1), row + 1, Z_NO_FLUSH);
     }
-    pw_block(w, 1);
+    if (!w->zerr)
+        pw_deflate(w, NULL, 0, Z_FINISH);
     chunk_begin(w, "IEND", 0);
     chunk_end(w);
-    return ferror(w->f) ? -1 : 0;
+    return w->zerr || ferror(w->f) ? -1 : 0;
 }
 
 int cf_png_write(const char *path, const unsigned char *rgb, int w, int h, char *msg, size_t msglen)
@@ -363,20 +380,26 @@ int cf_png_write(const char *path, const unsigned char *rgb, int w, int h, char 
     if ((size_t)snprintf(tmp, sizeof tmp, "%s.tmp", path) >= sizeof tmp)
         return cf_fail(msg, msglen, CF_EARG, "%s: path too long", path);
     pw_t *pw = calloc(1, sizeof *pw);
-    unsigned char *blk = malloc(PW_BLOCK);
-    if (!pw || !blk) {
+    unsigned char *out = malloc(PW_OUT);
+    unsigned char *cand = malloc(5 * ((size_t)w * 3 + 1));
+    /* Level 9 and the default strategy: a map is mostly flat colour, which
+     * deflate's long matches take best; the whole image costs a few ms. */
+    if (!pw || !out || !cand || deflateInit(&pw->z, 9) != Z_OK) {
         free(pw);
-        free(blk);
+        free(out);
+        free(cand);
         return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
     }
+    pw->out = out;
+    pw->cand = cand;
+    pw->z.next_out = out;
+    pw->z.avail_out = PW_OUT;
     for (uint32_t n = 0; n < 256; n++) {
         uint32_t c = n;
         for (int k = 0; k < 8; k++)
             c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
         pw->tab[n] = c;
     }
-    pw->a = 1;
-    pw->blk = blk;
     int ec = CF_OK;
     pw->f = fopen(tmp, "wb");
     if (!pw->f) {
@@ -394,7 +417,8 @@ int cf_png_write(const char *path, const unsigned char *rgb, int w, int h, char 
     }
     if (bad) {
         remove(tmp);
-        ec = cf_fail(msg, msglen, CF_EIO, "%s: write failed: %s", tmp, strerror(eno));
+        ec = cf_fail(msg, msglen, CF_EIO, "%s: write failed: %s", tmp,
+                     pw->zerr ? "deflate error" : strerror(eno));
         goto out;
     }
     if (rename(tmp, path)) {
@@ -404,7 +428,9 @@ int cf_png_write(const char *path, const unsigned char *rgb, int w, int h, char 
                      strerror(eno));
     }
 out:
-    free(blk);
+    deflateEnd(&pw->z);
+    free(out);
+    free(cand);
     free(pw);
     return ec;
 }
