@@ -30,12 +30,15 @@ uint32_t cf_image_get(const cf_image_t *im, int x, int y);
 void cf_image_fill(cf_image_t *im, int x, int y, int w, int h, uint32_t rgb);
 void cf_image_box(cf_image_t *im, int x, int y, int w, int h, uint32_t rgb);
 
-/* Text in the 5x7 font: each glyph is 5x7 dots of scale x scale pixels on a
- * 6 x 8 cell (one dot of spacing), (x, y) the top-left corner of the first
- * cell. Printable ASCII and, as UTF-8, '±' and 'µ'; anything else draws as
- * '?'. '\n' is not interpreted. Returns the width drawn, in pixels. */
-#define CF_FONT_W 6 /* advance per glyph at scale 1 */
-#define CF_FONT_H 8 /* line height at scale 1 (7 dots + 1 spacing) */
+/* Text in the 8x13 font: each glyph is 7 x 13 dots of scale x scale pixels
+ * on an 8 x 13 cell (one column of spacing; row 0 blank, capitals and
+ * digits on rows 1-9, descenders on rows 10-12), (x, y) the top-left
+ * corner of the first cell. Printable ASCII and, as UTF-8, '±' and
+ * 'µ'; anything else draws as '?'. '\n' is not interpreted. g and 9,
+ * 0 and O, 1, l and I are drawn distinctly. Returns the width drawn, in
+ * pixels. */
+#define CF_FONT_W 8  /* advance per glyph at scale 1 */
+#define CF_FONT_H 13 /* rows per glyph and line height at scale 1 */
 int cf_image_text(cf_image_t *im, int x, int y, int scale, uint32_t rgb, const char *s);
 int cf_text_width(const char *s, int scale); /* what cf_image_text would return */
 

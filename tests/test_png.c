@@ -366,56 +366,94 @@ static void test_failures(void **state)
     free(b);
 }
 
-/* Dots of a glyph drawn at scale 1 at (0, 0), as a 5-character row string each. */
-static void expect_glyph(const cf_image_t *im, int x0, const char *const rows[7])
+/* Dots of a glyph drawn at scale 1 at (x0, 0), one 8-character row string
+ * per row of the 8 x 13 cell (the 8th column is spacing). */
+static void expect_glyph(const cf_image_t *im, int x0, const char *const rows[13])
 {
-    for (int r = 0; r < 7; r++)
-        for (int c = 0; c < 5; c++) {
+    for (int r = 0; r < 13; r++)
+        for (int c = 0; c < 8; c++) {
             int on = cf_image_get(im, x0 + c, r) == 0x000000;
             if (on != (rows[r][c] == '#'))
                 fail_msg("glyph at x %d: dot (%d, %d) is %s", x0, c, r, on ? "set" : "clear");
         }
-    for (int c = 0; c < 6; c++) /* spacing row below */
-        assert_int_equal(cf_image_get(im, x0 + c, 7), 0xFFFFFF);
+}
+
+/* Pixels in which two glyphs differ, drawn at scale 1. */
+static int glyph_diff(const char *a, const char *b)
+{
+    cf_image_t im;
+    assert_int_equal(cf_image_init(&im, 16, 13, 0xFFFFFF, msg, sizeof msg), CF_OK);
+    cf_image_text(&im, 0, 0, 1, 0x000000, a);
+    cf_image_text(&im, 8, 0, 1, 0x000000, b);
+    int n = 0;
+    for (int y = 0; y < 13; y++)
+        for (int x = 0; x < 8; x++) {
+            n += cf_image_get(&im, x, y) != cf_image_get(&im, x + 8, y);
+        }
+    cf_image_free(&im);
+    return n;
 }
 
 static void test_font(void **state)
 {
     (void)state;
     cf_image_t im;
-    assert_int_equal(cf_image_init(&im, 60, 20, 0xFFFFFF, msg, sizeof msg), CF_OK);
-    assert_int_equal(cf_image_text(&im, 0, 0, 1, 0x000000, "0-mR\xC2\xB1"), 5 * CF_FONT_W);
-    static const char *const zero[7] = {" ### ", "#   #", "#  ##", "# # #",
-                                        "##  #", "#   #", " ### "};
-    static const char *const minus[7] = {"     ", "     ", "     ", "#####",
-                                         "     ", "     ", "     "};
-    static const char *const m[7] = {"     ", "     ", "## # ", "# # #", "# # #", "#   #", "#   #"};
-    static const char *const R[7] = {"#### ", "#   #", "#   #", "#### ", "# #  ", "#  # ", "#   #"};
-    static const char *const pm[7] = {"  #  ", "  #  ", "#####", "  #  ",
-                                      "  #  ", "     ", "#####"};
+    assert_int_equal(cf_image_init(&im, 80, 30, 0xFFFFFF, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_image_text(&im, 0, 0, 1, 0x000000, "0g9l\xC2\xB1"), 5 * CF_FONT_W);
+    static const char *const zero[13] = {"........", "..###...", ".#...#..", ".#...#..", ".#..##..",
+                                         ".#.#.#..", ".##..#..", ".#...#..", ".#...#..", "..###...",
+                                         "........", "........", "........"};
+    static const char *const g[13] = {"........", "........", "........", "........", "..####..",
+                                      ".#...#..", ".#...#..", ".#...#..", ".#...#..", "..####..",
+                                      ".....#..", ".#...#..", "..###..."};
+    static const char *const nine[13] = {"........", "..###...", ".#...#..", ".#...#..", ".#...#..",
+                                         "..####..", ".....#..", ".....#..", "....#...", ".###....",
+                                         "........", "........", "........"};
+    static const char *const l[13] = {"........", "..##....", "...#....", "...#....", "...#....",
+                                      "...#....", "...#....", "...#....", "...#....", "....##..",
+                                      "........", "........", "........"};
+    static const char *const pm[13] = {"........", "........", "...#....", "...#....", ".#####..",
+                                       "...#....", "...#....", "........", ".#####..", "........",
+                                       "........", "........", "........"};
     expect_glyph(&im, 0, zero);
-    expect_glyph(&im, 6, minus);
-    expect_glyph(&im, 12, m);
-    expect_glyph(&im, 18, R);
-    expect_glyph(&im, 24, pm);
-    /* Scale 2: each dot 2 x 2; '1' has its stem in column 2. */
-    cf_image_fill(&im, 0, 0, 60, 20, 0xFFFFFF);
-    assert_int_equal(cf_image_text(&im, 10, 2, 2, 0xFF0000, "1"), 12);
-    for (int r = 1; r < 7; r++) /* stem rows 1..6 of column 2 */
+    expect_glyph(&im, 8, g);
+    expect_glyph(&im, 16, nine);
+    expect_glyph(&im, 24, l);
+    expect_glyph(&im, 32, pm);
+    /* The pairs the 5x7 font confused ("igs" read "i9s") differ clearly. */
+    assert_true(glyph_diff("g", "9") >= 8);
+    assert_true(glyph_diff("0", "O") >= 8);
+    assert_true(glyph_diff("1", "l") >= 6);
+    assert_true(glyph_diff("1", "I") >= 6);
+    assert_true(glyph_diff("l", "I") >= 6);
+    assert_true(glyph_diff("5", "S") >= 4);
+    assert_true(glyph_diff("8", "B") >= 4);
+    /* Every printable glyph differs from every other one. */
+    for (int a = 33; a < 127; a++)
+        for (int b = a + 1; b < 127; b++) {
+            char sa[2] = {(char)a, 0}, sb[2] = {(char)b, 0};
+            if (glyph_diff(sa, sb) < 2)
+                fail_msg("'%c' and '%c' differ in fewer than 2 dots", a, b);
+        }
+    /* Scale 2: each dot 2 x 2; '1' has its stem in column 3, rows 1-9. */
+    cf_image_fill(&im, 0, 0, 80, 30, 0xFFFFFF);
+    assert_int_equal(cf_image_text(&im, 10, 2, 2, 0xFF0000, "1"), 2 * CF_FONT_W);
+    for (int r = 1; r <= 9; r++)
         for (int dy = 0; dy < 2; dy++)
             for (int dx = 0; dx < 2; dx++)
-                assert_int_equal(cf_image_get(&im, 10 + 4 + dx, 2 + 2 * r + dy), 0xFF0000);
-    assert_int_equal(cf_image_get(&im, 10, 2 + 2 * 3), 0xFFFFFF);
+                assert_int_equal(cf_image_get(&im, 10 + 6 + dx, 2 + 2 * r + dy), 0xFF0000);
+    assert_int_equal(cf_image_get(&im, 10 + 6, 2), 0xFFFFFF); /* row 0 blank */
     /* Widths: one glyph per code point, unknown ones as '?'. */
     assert_int_equal(cf_text_width("RMS 0.012 mm", 1), 12 * CF_FONT_W);
     assert_int_equal(cf_text_width("\xC2\xB1\xC2\xB5m", 2), 3 * 2 * CF_FONT_W);
     assert_int_equal(cf_text_width("\xE2\x82\xAC", 1), CF_FONT_W); /* euro sign: '?' */
     /* Drawing clips at the canvas edges. */
-    cf_image_text(&im, 55, 15, 3, 0x0000FF, "W");
+    cf_image_fill(&im, 0, 0, 80, 30, 0xFFFFFF);
+    cf_image_text(&im, 75, 25, 3, 0x0000FF, "W");
     cf_image_text(&im, -20, -5, 3, 0x0000FF, "W");
-    cf_image_box(&im, -1, -1, 62, 22, 0x00FF00);
-    assert_int_equal(cf_image_get(&im, 55, 15), 0x0000FF); /* W's first dot */
-    assert_int_equal(cf_image_get(&im, 59, 19), 0xFFFFFF);
+    cf_image_box(&im, -1, -1, 82, 32, 0x00FF00);
+    assert_int_equal(cf_image_get(&im, 75, 28), 0x0000FF); /* W's first dot: row 1, column 0 */
+    assert_int_equal(cf_image_get(&im, 79, 29), 0xFFFFFF);
     cf_image_free(&im);
     assert_int_equal(cf_image_init(&im, 0, 10, 0, msg, sizeof msg), CF_EARG);
     assert_null(im.px);
