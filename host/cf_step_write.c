@@ -40,7 +40,7 @@ static void sw_str(char *dst, size_t dl, const char *src, size_t max, const char
     size_t o = 0;
     if (!src || !*src)
         src = dflt;
-    for (size_t i = 0; src[i] && i < max && o + 3 < dl; i++) {
+    for (size_t i = 0; i < max && src[i] && o + 3 < dl; i++) {
         char c = (src[i] >= 0x20 && src[i] < 0x7F) ? src[i] : '_';
         dst[o++] = c;
         if (c == '\'' || c == '\\')

@@ -10,7 +10,7 @@
 #                         (tests/fuzz/driver.c): no fuzzing, a few seconds
 #   make valgrind         the firmware-core unit tests, no sanitizers, once
 #                         under valgrind memcheck (in make test)
-FUZZ_NAMES := iges points jnl plc probe modbus trig conf uri
+FUZZ_NAMES := iges step points jnl plc probe modbus trig conf uri
 FUZZ_SECONDS ?= 30
 FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
 # The device-driver targets run on a virtual clock (tests/fuzz/fuzz_hal.h).

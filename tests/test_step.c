@@ -376,6 +376,7 @@ static void test_surfio(void **state)
     assert_int_equal(cf_surfio_read(ps, 0, &b, msg, sizeof msg), CF_OK);
     assert_same(&s, &a);
     assert_same(&s, &b);
+    cf_surf_free(&a);
     assert_int_equal(cf_surfio_read(px, 0, &a, msg, sizeof msg), CF_EUNSUPPORTED);
     cf_surf_free(&b);
     cf_surf_free(&s);
