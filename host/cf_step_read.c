@@ -448,7 +448,7 @@ static void rec_type(const sr_t *r, const sr_rec_t *rec, char *kw, size_t kl)
 
 /* ---- units ---------------------------------------------------------------------- */
 
-/* Millimetres per length unit of the file: the first instance with a
+/* Millimetres per length unit of the file: the lowest-numbered instance with a
  * LENGTH_UNIT part decides (SI_UNIT(prefix, .METRE.)); 1 when there is none. */
 static int sr_unit(const sr_t *r, double *mm)
 {

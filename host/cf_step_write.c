@@ -14,7 +14,9 @@
 
 typedef struct sw {
     FILE *f;
-    long id; /* last instance number given out */
+    long id;    /* last instance number given out */
+    long *pid;  /* nu nv + max(nu, nv): control point instances, then a boundary row */
+    double *wt; /* max(nu, nv): a boundary row's weights */
 } sw_t;
 
 /* A real as Part 21 wants it (a decimal point always, capital E), with the
@@ -190,7 +192,7 @@ static long sw_surface(sw_t *w, const nf_surf_t *s, const long *pid, int rationa
     return w->id;
 }
 
-/* The DATA section's instances; w->id = -1 when out of memory. */
+/* The DATA section's instances. */
 static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
 {
     FILE *f = w->f;
@@ -201,7 +203,7 @@ static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
     /* Product structure (AP242 / AP214 conventions). */
     fputs("#1=APPLICATION_CONTEXT('managed model based 3d engineering');\n"
           "#2=APPLICATION_PROTOCOL_DEFINITION('international standard',"
-          "'ap242_managed_model_based_3d_engineering',2011,#1);\n"
+          "'ap242_managed_model_based_3d_engineering',2014,#1);\n"
           "#3=PRODUCT_CONTEXT('',#1,'mechanical');\n",
           f);
     fprintf(f, "#4=PRODUCT('%s','%s','',(#3));\n", pname, pname);
@@ -231,20 +233,10 @@ static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
           "#21=SHELL_BASED_SURFACE_MODEL('',(#22));\n"
           "#22=OPEN_SHELL('',(#23));\n",
           f);
-    w->id = 23;
-    long face = w->id;
-    long bound = face + 1, loop = face + 2, oe = face + 3, ec = face + 7, vx = face + 11;
-    long first = face + 15; /* control points, then the rest */
-    w->id = first - 1;
-    long *pid = malloc(sizeof(long) * (size_t)(n + s->nu + s->nv));
-    double *wt = s->w && rational ? malloc(sizeof(double) * (size_t)(s->nu + s->nv)) : NULL;
-    if (!pid || (rational && !wt)) { /* caller sees the ferror-free short file as EIO */
-        free(pid);
-        free(wt);
-        fputs("out of memory\n", f);
-        w->id = -1;
-        return;
-    }
+    const long face = 23, bound = 24, loop = 25, oe = 26, ec = 30, vx = 34;
+    w->id = 37; /* control points from #38, then the surface and its edge curves */
+    long *pid = w->pid;
+    double *wt = rational ? w->wt : NULL;
     for (long k = 0; k < n; k++)
         pid[k] = sw_point(w, s->cp + 3 * k);
     long surf = sw_surface(w, s, pid, rational);
@@ -279,8 +271,6 @@ static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
     fprintf(f, "#%ld=EDGE_LOOP('',(#%ld,#%ld,#%ld,#%ld));\n", loop, oe, oe + 1, oe + 2, oe + 3);
     fprintf(f, "#%ld=FACE_OUTER_BOUND('',#%ld,.T.);\n", bound, loop);
     fprintf(f, "#%ld=ADVANCED_FACE('',(#%ld),#%ld,.T.);\n", face, bound, surf);
-    free(pid);
-    free(wt);
 }
 
 int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, const char *version,
@@ -306,16 +296,24 @@ int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, con
     snprintf(date, sizeof date, "%04d-%02d-%02dT%02d:%02d:%02d", tm.tm_year + 1900, tm.tm_mon + 1,
              tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
 
-    size_t pl = strlen(path);
+    size_t pl = strlen(path), side = (size_t)(s->nu > s->nv ? s->nu : s->nv);
     char *tmp = malloc(pl + 5);
-    if (!tmp)
+    sw_t w = {NULL, 0, malloc(sizeof(long) * ((size_t)s->nu * (size_t)s->nv + side)),
+              malloc(sizeof(double) * side)};
+    if (!tmp || !w.pid || !w.wt) {
+        free(tmp);
+        free(w.pid);
+        free(w.wt);
         return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
+    }
     memcpy(tmp, path, pl);
     memcpy(tmp + pl, ".tmp", 5);
     FILE *f = fopen(tmp, "w");
     if (!f) {
         rc = cf_fail(msg, msglen, CF_EIO, "%s: cannot create: %s", tmp, strerror(errno));
         free(tmp);
+        free(w.pid);
+        free(w.wt);
         return rc;
     }
     fputs("ISO-10303-21;\nHEADER;\n", f);
@@ -325,25 +323,23 @@ int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, con
     fputs("FILE_SCHEMA(('AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIB_LF { 1 0 10303 442 1 1 4 "
           "}'));\nENDSEC;\nDATA;\n",
           f);
-    sw_t w = {f, 0};
+    w.f = f;
     sw_data(&w, s, pname);
-    int nomem = w.id < 0;
     fputs("ENDSEC;\nEND-ISO-10303-21;\n", f);
     int werr = ferror(f) ? (errno ? errno : EIO) : 0;
     if (!werr && (fflush(f) || fsync(fileno(f))))
         werr = errno ? errno : EIO;
     if (fclose(f) && !werr)
         werr = errno ? errno : EIO;
-    if (nomem) {
-        remove(tmp);
-        rc = cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
-    } else if (!werr && rename(tmp, path))
+    if (!werr && rename(tmp, path))
         werr = errno;
     if (werr) {
         remove(tmp);
         rc = cf_fail(msg, msglen, CF_EIO, "%s: write failed: %s", path, strerror(werr));
     }
     free(tmp);
+    free(w.pid);
+    free(w.wt);
     return rc;
 }
 
