@@ -4,7 +4,10 @@
 // stdin, the face's surface (with its location) at (u, v) is printed as
 // "x y z" with %.17g. Exit 2 when OCCT cannot read it or finds no face,
 // 3 when it finds more than one.
-// Usage: occt_step FILE.stp < uv.txt
+// With --write OUT.stp, the shape read is also written by OCCT's own
+// STEPControl_Writer (as a shell-based surface model, mm), so that our
+// reader can be checked on a file we did not write.
+// Usage: occt_step [--write OUT.stp] FILE.stp < uv.txt
 #include <BRepCheck_Analyzer.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom_BSplineSurface.hxx>
@@ -14,7 +17,9 @@
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_PrinterOStream.hxx>
+#include <Interface_Static.hxx>
 #include <STEPControl_Reader.hxx>
+#include <STEPControl_Writer.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopLoc_Location.hxx>
@@ -24,8 +29,9 @@
 #include <gp_Pnt.hxx>
 
 #include <cstdio>
+#include <cstring>
 
-static int run(const char *path)
+static int run(const char *path, const char *out)
 {
     // OCCT reports progress on std::cout; stdout must carry only the points.
     Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
@@ -44,6 +50,15 @@ static int run(const char *path)
     std::fprintf(stderr, "occt_step: %d root(s), %d transferred, %d face(s)\n", roots, done, nf);
     if (!ex.More())
         return 2;
+    if (out) {
+        STEPControl_Writer wr;
+        Interface_Static::SetCVal("write.step.unit", "MM");
+        if (wr.Transfer(shape, STEPControl_ShellBasedSurfaceModel) != IFSelect_RetDone ||
+            wr.Write(out) != IFSelect_RetDone) {
+            std::fprintf(stderr, "occt_step: STEPControl_Writer cannot write %s\n", out);
+            return 2;
+        }
+    }
     TopoDS_Face face = TopoDS::Face(ex.Current());
     for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next())
         ne++;
@@ -89,12 +104,19 @@ static int run(const char *path)
 
 int main(int argc, char **argv)
 {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: occt_step FILE.stp < uv.txt\n");
+    const char *out = nullptr, *path = nullptr;
+    for (int i = 1; i < argc; i++) {
+        if (!std::strcmp(argv[i], "--write") && i + 1 < argc)
+            out = argv[++i];
+        else
+            path = argv[i];
+    }
+    if (!path) {
+        std::fprintf(stderr, "usage: occt_step [--write OUT.stp] FILE.stp < uv.txt\n");
         return 1;
     }
     try {
-        return run(argv[1]);
+        return run(path, out);
     } catch (Standard_Failure &e) {
         std::fprintf(stderr, "occt_step: OpenCASCADE exception: %s\n", e.GetMessageString());
         return 2;
