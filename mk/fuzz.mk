@@ -15,7 +15,7 @@
 #                         a manual make fuzz
 #   make valgrind         the firmware-core unit tests, no sanitizers, once
 #                         under valgrind memcheck (in make test)
-FUZZ_NAMES := iges points jnl plc mbap probe modbus trig conf uri
+FUZZ_NAMES := iges step points jnl plc mbap probe modbus trig conf uri
 FUZZ_SECONDS ?= 30
 FUZZ_BIN := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
 # The device-driver targets run on a virtual clock (tests/fuzz/fuzz_hal.h).
@@ -25,7 +25,7 @@ FUZZ_LIBFUZZER ?=
 # float-to-int overflow checks (gcc's -fsanitize=undefined leaves them out).
 FUZZ_UNITS := lib/cf_iges_read.c lib/cf_points.c lib/cf_conf.c host/cmd/cmd_serve.c hal/hal_uri.c \
 	hal/hal_stage.c hal/hal_probe.c hal/hal_probe_mb.c hal/hal_trig.c firmware/jnl.c \
-	firmware/plc_map.c firmware/plc_fsm.c firmware/plc_mbap.c
+	firmware/plc_map.c firmware/plc_fsm.c firmware/plc_mbap.c lib/cf_step_read.c
 FUZZ_UNIT_OBJ := $(patsubst %.c,$(BUILD)/fuzz/unit/%.o,$(FUZZ_UNITS))
 FUZZ_COMMON := $(BUILD)/fuzz/fuzz_util.o $(BUILD)/fuzz/fuzz_hal.o $(BUILD)/tests/ref_memstore.o \
 	$(FUZZ_UNIT_OBJ) \

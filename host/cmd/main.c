@@ -18,6 +18,7 @@ static const cmd_entry_t cmds[] = {
     {"report", cmd_report, "deviations of points from a surface: statistics, histogram, map"},
     {"project", cmd_project, "u v and distance of each point projected onto a surface"},
     {"thin", cmd_thin, "keep the nearest point per vertex of a quadrilateral blanket"},
+    {"convert", cmd_convert, "a surface from IGES to STEP AP242 or back, by extension"},
     {"eval", cmd_eval, "x y z of a surface at given u v"},
     {"info", cmd_info, "degrees, net, knots, weights and the bytes a fit needs"},
     {"gen", cmd_gen, "write a synthetic part: nominal, points, check grid"},

@@ -11,22 +11,29 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Image layout, pixels. Text is the 5x7 font at scale 2 (12 x 16 per glyph). */
+/* Image layout, pixels. Text is the 8x13 font at scale 1. */
 #define DM_W 1200                 /* image width */
 #define DM_M 20                   /* outer margin */
 #define DM_TOP 84                 /* top of the map and of the colour bar panel */
 #define DM_MAP_H 720              /* map height limit */
 #define DM_GAP 40                 /* between the map area and the colour bar panel */
-#define DM_FS 2                   /* font scale */
-#define DM_TH (7 * DM_FS)         /* text height */
+#define DM_FS 1                   /* font scale */
+#define DM_TH (CF_FONT_H * DM_FS) /* text height */
 #define DM_SEGS 4                 /* colour steps on each side between tol and range * tol */
 #define DM_NCOL (2 * DM_SEGS + 3) /* below range, 4 blues, green, 4 warm, above range */
 #define DM_SEG_H 30               /* colour bar box height */
 #define DM_BOX_W 34               /* colour bar box width */
 #define DM_CAP 34                 /* colour bar caption */
 #define DM_BAR_H ((DM_NCOL + 1) * DM_SEG_H) /* the green box is two high */
-#define DM_GREY 0xD9D9D9                    /* no data */
-#define DM_INK 0x1A1A1A                     /* text */
+/* The histogram of |d| / tol for the scale chosen from the data: bins of
+ * a quarter tolerance up to DM_HMAX tolerances (bin b holds ((b-1)/4, b/4],
+ * bin 0 exactly 0, the last everything beyond), so every segment edge the
+ * automatic scale can choose (1 + k * step, step a multiple of 1/4) is a
+ * bin edge and the share of points per colour is counted exactly. */
+#define DM_HMAX 1000
+#define DM_NBIN (4 * DM_HMAX + 2)
+#define DM_GREY 0xD9D9D9 /* no data */
+#define DM_INK 0x1A1A1A  /* text */
 
 /* Segmented diverging scale, from below -range * tol up to above it: the
  * metrology convention (blue short of material, green in tolerance, red
@@ -42,6 +49,9 @@ static const uint32_t palette[DM_NCOL] = {
 struct cf_devmap {
     cf_plane_t pl;
     double tol, range;
+    int autoscale;   /* range chosen from the data at render */
+    double p99;      /* auto: the 99th percentile of |d| (bin upper edge), mm */
+    long long *hist; /* DM_NBIN bins for d >= 0, then DM_NBIN for d < 0 */
     cf_devmap_cell_t cell;
     char title[161];
     /* extent of the points in plane coordinates, mm */
@@ -240,19 +250,61 @@ int cf_devmap_create(cf_devmap_t **out, const cf_plane_t *pl, const cf_devmap_op
     if (!out || !pl || !o)
         return cf_fail(msg, msglen, CF_EARG, "cf_devmap_create: NULL argument");
     *out = NULL;
-    double range = o->range == 0 ? 3.0 : o->range;
-    if (!(o->tol > 0) || !isfinite(o->tol) || !(range > 1) || !(range <= 1000))
+    if (!(o->tol > 0) || !isfinite(o->tol))
+        return cf_fail(msg, msglen, CF_EARG, "deviation map: tolerance must be > 0");
+    /* A fixed range in tolerances, else from the data (3 tolerances until
+     * the data are in). */
+    double range = o->range != 0 ? o->range : 3.0;
+    if (!(range > 1) || !(range <= DM_HMAX))
         return cf_fail(msg, msglen, CF_EARG,
-                       "deviation map: tolerance must be > 0 and range in (1, 1000]");
+                       "deviation map: the scale (%g mm) must lie above the tolerance (%g mm) "
+                       "and within %d tolerances",
+                       range * o->tol, o->tol, DM_HMAX);
     cf_devmap_t *m = calloc(1, sizeof *m);
-    if (!m)
+    long long *hist = calloc(2 * DM_NBIN, sizeof *hist);
+    if (!m || !hist) {
+        free(m);
+        free(hist);
         return cf_fail(msg, msglen, CF_ENOMEM, "deviation map: out of memory");
+    }
+    m->hist = hist;
+    m->autoscale = o->range == 0;
     m->pl = *pl;
     m->tol = o->tol;
     m->range = range;
     m->cell = o->cell;
     snprintf(m->title, sizeof m->title, "%s", o->title ? o->title : "Deviation map");
     *out = m;
+    return CF_OK;
+}
+
+static int seg_of_t(const cf_devmap_t *m, double t);
+
+int cf_devmap_set_scale(cf_devmap_t *m, double scale, char *msg, size_t msglen)
+{
+    if (!m)
+        return cf_fail(msg, msglen, CF_EARG, "cf_devmap_set_scale: NULL map");
+    if (scale == 0) {
+        m->autoscale = 1;
+        m->range = 3.0;
+        return CF_OK;
+    }
+    double range = scale / m->tol;
+    if (!(range > 1) || !(range <= DM_HMAX))
+        return cf_fail(msg, msglen, CF_EARG,
+                       "deviation map: the scale (%g mm) must lie above the tolerance (%g mm) "
+                       "and within %d tolerances",
+                       scale, m->tol, DM_HMAX);
+    /* The points added so far were counted on no fixed scale: count them
+     * from the histogram (to a quarter tolerance) when the scale changes
+     * late; before the first point this is exact. */
+    m->autoscale = 0;
+    m->range = range;
+    memset(m->seg, 0, sizeof m->seg);
+    for (int b = 0; b < DM_NBIN; b++) {
+        m->seg[seg_of_t(m, b / 4.0)] += m->hist[b];
+        m->seg[seg_of_t(m, -b / 4.0)] += m->hist[DM_NBIN + b];
+    }
     return CF_OK;
 }
 
@@ -266,6 +318,7 @@ void cf_devmap_free(cf_devmap_t *m)
     free(m->val);
     free(m->flag);
     free(m->dist);
+    free(m->hist);
     free(m);
 }
 
@@ -305,11 +358,11 @@ void cf_devmap_set_extent(cf_devmap_t *m, double u0, double u1, double v0, doubl
     m->have_ext = isfinite(u0) && isfinite(u1) && isfinite(v0) && isfinite(v1);
 }
 
-/* Colour segment of d: 0 below the scale, DM_SEGS + 1 within tolerance,
- * DM_NCOL - 1 above. */
-static int seg_of(const cf_devmap_t *m, double d)
+/* Colour segment of t = d / tol: 0 below the scale, DM_SEGS + 1 within
+ * tolerance, DM_NCOL - 1 above. */
+static int seg_of_t(const cf_devmap_t *m, double t)
 {
-    double t = d / m->tol, a = fabs(t);
+    double a = fabs(t);
     if (t > m->range)
         return DM_NCOL - 1;
     if (t < -m->range)
@@ -318,7 +371,43 @@ static int seg_of(const cf_devmap_t *m, double d)
         return DM_SEGS + 1;
     int k = (int)ceil((a - 1) / ((m->range - 1) / DM_SEGS));
     k = k < 1 ? 1 : k > DM_SEGS ? DM_SEGS : k;
-    return d > 0 ? DM_SEGS + 1 + k : DM_SEGS + 1 - k;
+    return t > 0 ? DM_SEGS + 1 + k : DM_SEGS + 1 - k;
+}
+
+static int seg_of(const cf_devmap_t *m, double d)
+{
+    return seg_of_t(m, d / m->tol);
+}
+
+/* The scale from the data: the smallest range 1 + 4 step (step a "round"
+ * multiple of a quarter tolerance) reaching the 99th percentile of |d|, so
+ * at most 1 % of the points fall off the scale and the colours spread over
+ * the deviations there are; then the share of points per colour from the
+ * histogram (exact: the edges are bin edges). */
+static void auto_scale(cf_devmap_t *m)
+{
+    static const double steps[] = {0.25, 0.5, 1, 2, 2.5, 5, 10, 20, 25, 50, 100, 200};
+    const long long *pos = m->hist, *neg = m->hist + DM_NBIN;
+    long long need = (99 * m->n + 99) / 100, cum = 0;
+    int b99 = 0;
+    for (int b = 0; b < DM_NBIN && m->n; b++) {
+        cum += pos[b] + neg[b];
+        if (cum >= need) {
+            b99 = b;
+            break;
+        }
+    }
+    double a99 = b99 / 4.0;
+    size_t k = 0;
+    while (k + 1 < sizeof steps / sizeof steps[0] && 1 + DM_SEGS * steps[k] < a99)
+        k++;
+    m->range = 1 + DM_SEGS * steps[k];
+    m->p99 = a99 * m->tol;
+    memset(m->seg, 0, sizeof m->seg);
+    for (int b = 0; b < DM_NBIN; b++) {
+        m->seg[seg_of_t(m, b / 4.0)] += pos[b];
+        m->seg[seg_of_t(m, -b / 4.0)] += neg[b];
+    }
 }
 
 /* The deviation at the edge between segments i and i + 1. */
@@ -333,6 +422,11 @@ static double edge_value(const cf_devmap_t *m, int i)
 uint32_t cf_devmap_colour(const cf_devmap_t *m, double d)
 {
     return palette[seg_of(m, d)];
+}
+
+double cf_devmap_scale_end(const cf_devmap_t *m)
+{
+    return m->range * m->tol;
 }
 
 static void edge_label(const cf_devmap_t *m, int i, char *buf, size_t n)
@@ -360,15 +454,23 @@ int cf_devmap_begin(cf_devmap_t *m, char *msg, size_t msglen)
     /* Panel width from its widest label, the map takes the rest. */
     char lab[64];
     int lw = 0;
+    double keep = m->range;
+    if (m->autoscale) /* the labels of the widest scale it may choose */
+        m->range = 1 + DM_SEGS * 200.0;
     for (int i = 0; i < DM_NCOL - 1; i++) {
         edge_label(m, i, lab, sizeof lab);
         int w = cf_text_width(lab, DM_FS);
         lw = w > lw ? w : lw;
     }
+    m->range = keep;
     m->pct_w = cf_text_width("100.0%", DM_FS);
     int panel_w = m->pct_w + 8 + DM_BOX_W + 10 + lw;
     if (panel_w < cf_text_width("deviation, mm", DM_FS))
         panel_w = cf_text_width("deviation, mm", DM_FS);
+    /* The scale's note under the bar, at its widest. */
+    snprintf(lab, sizeof lab, "99%% of |d| <= %.*f", cf_stats_decimals(m->tol), DM_HMAX * m->tol);
+    if (panel_w < cf_text_width(lab, DM_FS))
+        panel_w = cf_text_width(lab, DM_FS);
     m->panel_x = DM_W - DM_M - panel_w;
     int aw = m->panel_x - DM_GAP - DM_M, ah = DM_MAP_H;
     /* Cells: no finer than a pixel of the map with a 3 % margin round the
@@ -393,7 +495,7 @@ int cf_devmap_begin(cf_devmap_t *m, char *msg, size_t msglen)
     m->dh = (int)fmin(fmax(round(m->ch * m->pitch * fw), 1), ah);
     m->mx = DM_M + (aw - m->dw) / 2;
     m->my = DM_TOP;
-    int panel_h = DM_CAP + DM_BAR_H + DM_TH;
+    int panel_h = DM_CAP + DM_BAR_H + 3 * DM_TH + 8; /* the bar, then the scale's note */
     int body = m->dh + 44 > panel_h ? m->dh + 44 : panel_h;
     m->foot_y = DM_TOP + body + 10;
     m->img_h = m->foot_y + DM_TH + DM_M;
@@ -443,7 +545,10 @@ int cf_devmap_add(cf_devmap_t *m, const double p[3], double d)
     m->sum_d += d;
     m->sq += d * d;
     m->within += fabs(d) <= m->tol;
-    m->seg[seg_of(m, d)]++;
+    double t = d / m->tol, b = ceil(fabs(t) * 4);
+    m->hist[(t < 0 ? DM_NBIN : 0) + (b < DM_NBIN - 1 ? (int)b : DM_NBIN - 1)]++;
+    if (!m->autoscale)
+        m->seg[seg_of_t(m, t)]++;
     return CF_OK;
 }
 
@@ -747,10 +852,23 @@ static void draw_bar(const cf_devmap_t *m, cf_image_t *im)
             cf_image_text(im, lx, y - DM_TH / 2, DM_FS, DM_INK, s);
         }
     }
-    /* 0 in the middle of the green box, between the tolerance labels. */
+    /* 0 in the middle of the green box, between the tolerance labels, and
+     * the band marked as the tolerance beside it. */
     int yz = seg_top(DM_SEGS + 1) + DM_SEG_H;
     cf_image_fill(im, bx + DM_BOX_W, yz, 6, 1, 0x303030);
     cf_image_text(im, lx, yz - DM_TH / 2, DM_FS, DM_INK, " 0");
+    cf_image_text(im, x + m->pct_w - cf_text_width("tol", DM_FS), yz - DM_TH / 2 + DM_TH + 2, DM_FS,
+                  0x000000, "tol");
+    /* How the scale was set: by the data (its 99th percentile) or fixed. */
+    int dp = cf_stats_decimals(m->tol), yn = seg_top(-1) + 10;
+    if (m->autoscale) {
+        text_bold(im, x, yn, DM_INK, "scale from data:");
+        snprintf(s, sizeof s, "99%% of |d| <= %.*f", dp, m->p99);
+    } else {
+        text_bold(im, x, yn, DM_INK, "fixed scale:");
+        snprintf(s, sizeof s, "\xC2\xB1%.*f mm", dp, m->range * m->tol);
+    }
+    cf_image_text(im, x, yn + DM_TH + 3, DM_FS, DM_INK, s);
 }
 
 /* Scale bar under the map, about 160 pixels of a round length, then the
@@ -783,6 +901,8 @@ int cf_devmap_render(cf_devmap_t *m, const cf_stats_t *st, cf_image_t *im, char 
     int ec = cf_image_init(im, DM_W, m->img_h, 0xFFFFFF, msg, msglen);
     if (ec)
         return ec;
+    if (m->autoscale)
+        auto_scale(m);
     cell_values(m);
     draw_map(m, im);
     int dp = cf_stats_decimals(m->tol);

@@ -7,7 +7,8 @@
  * a title with RMS, max and the tolerance. Written as PNG by cf_png.
  *
  * Memory is fixed by the raster (at most about 915 x 723 cells of 22 bytes,
- * 15 MB, allocated by cf_devmap_begin; the image, 3.2 MB, while rendering),
+ * 15 MB, allocated by cf_devmap_begin; a 64 KB histogram of |d| for the
+ * scale; the image, 3.2 MB, while rendering),
  * never by the number of points: they stream through three passes the
  * caller drives,
  *     1. cf_devmap_plane_add  every point  -> cf_devmap_plane_fit (the view)
@@ -62,9 +63,17 @@ typedef enum cf_devmap_cell {
     CF_DEVMAP_MAXABS = 1 /* ... the deviation of largest magnitude (defects stand out) */
 } cf_devmap_cell_t;
 
+/* The colour scale is symmetric about 0: green within +/- tol (the band
+ * marked on the legend), four steps each side out to the scale's end, one
+ * colour each beyond. Its end is, in this order: the one
+ * cf_devmap_set_scale fixed in mm; range * tol when range is not 0;
+ * otherwise chosen from the data at render, the smallest end 1 + 4 k tol
+ * (k a round multiple of 1/4: 0.25, 0.5, 1, 2, 2.5, 5, ... 200) covering
+ * the 99th percentile of |d|, so that at most 1 % of the points fall off
+ * the scale. A fixed end must lie in (tol, 1000 tol]. */
 typedef struct cf_devmap_opts {
     double tol;            /* mm, > 0: green is |d| <= tol */
-    double range;          /* the scale ends at +/- range * tol (> 1); 0: 3 */
+    double range;          /* fixed end at +/- range * tol (> 1); 0: see above */
     cf_devmap_cell_t cell; /* what a cell shows */
     const char *title;     /* first line of the image; NULL: "Deviation map" */
 } cf_devmap_opts_t;
@@ -75,6 +84,12 @@ typedef struct cf_devmap cf_devmap_t; /* opaque */
 int cf_devmap_create(cf_devmap_t **m, const cf_plane_t *pl, const cf_devmap_opts_t *o, char *msg,
                      size_t msglen);
 void cf_devmap_free(cf_devmap_t *m);
+
+/* Fix the scale's end at +/- scale mm (`cellfit report --scale MM`), or with
+ * scale = 0 choose it from the data (the default unless opts.range is
+ * set). Any time before cf_devmap_render. CF_EARG unless tol < scale <=
+ * 1000 tol (or 0). */
+int cf_devmap_set_scale(cf_devmap_t *m, double scale, char *msg, size_t msglen);
 
 /* Pass 2: grow the extent by one point (non-finite coordinates ignored). */
 void cf_devmap_extent(cf_devmap_t *m, const double p[3]);
@@ -107,8 +122,12 @@ int cf_devmap_render(cf_devmap_t *m, const cf_stats_t *st, cf_image_t *im, char 
 int cf_devmap_write_png(cf_devmap_t *m, const cf_stats_t *st, const char *path, char *msg,
                         size_t msglen);
 
-/* The colour a deviation gets on the scale (0xRRGGBB). */
+/* The colour a deviation gets on the scale (0xRRGGBB). A scale chosen from
+ * the data is known after cf_devmap_render (3 tol before). */
 uint32_t cf_devmap_colour(const cf_devmap_t *m, double d);
+
+/* The scale's end, mm (see cf_devmap_opts_t; from the data: after render). */
+double cf_devmap_scale_end(const cf_devmap_t *m);
 
 /* Where point p lands in the rendered image (pixel column x, row y); 0 if it
  * is on the map, -1 if not (or before cf_devmap_begin). */

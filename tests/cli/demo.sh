@@ -67,6 +67,9 @@ done
 for f in deviation-map.png fitted-vs-nominal.png; do
     [ "$(head -c 8 "$D/$f" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] && ok "$f is a PNG" ||
         no "$f: not a PNG"
+    # Deflate-compressed (issue 17): at most 200 KB (stored, they were 3 MB).
+    sz=$(wc -c <"$D/$f")
+    le "$sz" 200000 && ok "$f: $sz bytes (<= 200 KB)" || no "$f: $sz bytes, over 200 KB"
 done
 R=$D/report.json
 miss=""

@@ -132,12 +132,20 @@ static void test_plane_fit(void **state)
     assert_int_equal(cf_plane_from_axes(&pl, o, e1, e3, msg, sizeof msg), CF_EARG);
 }
 
-static cf_devmap_t *make_map(const cf_plane_t *pl, double tol, cf_devmap_cell_t cell)
+/* A map on the fixed scale of +/- 3 tol unless scale_from_data. */
+static cf_devmap_t *make_map_s(const cf_plane_t *pl, double tol, cf_devmap_cell_t cell,
+                               int scale_from_data)
 {
-    cf_devmap_opts_t o = {.tol = tol, .range = 0, .cell = cell, .title = "test part"};
+    cf_devmap_opts_t o = {
+        .tol = tol, .range = scale_from_data ? 0 : 3, .cell = cell, .title = "test part"};
     cf_devmap_t *m = NULL;
     assert_int_equal(cf_devmap_create(&m, pl, &o, msg, sizeof msg), CF_OK);
     return m;
+}
+
+static cf_devmap_t *make_map(const cf_plane_t *pl, double tol, cf_devmap_cell_t cell)
+{
+    return make_map_s(pl, tol, cell, 0);
 }
 
 static void test_colours(void **state)
@@ -185,6 +193,15 @@ static void test_colours(void **state)
     bad.tol = 0.1;
     bad.range = 0.5;
     assert_int_equal(cf_devmap_create(&m, &pl, &bad, msg, sizeof msg), CF_EARG);
+    bad.range = 0;
+    assert_int_equal(cf_devmap_create(&m, &pl, &bad, msg, sizeof msg), CF_OK);
+    /* A fixed end must lie above the tolerance, and within 1000 of them. */
+    assert_int_equal(cf_devmap_set_scale(m, 0.1, msg, sizeof msg), CF_EARG);
+    assert_int_equal(cf_devmap_set_scale(m, 100.01, msg, sizeof msg), CF_EARG);
+    assert_int_equal(cf_devmap_set_scale(m, -0.3, msg, sizeof msg), CF_EARG);
+    assert_int_equal(cf_devmap_set_scale(m, 0.3, msg, sizeof msg), CF_OK);
+    assert_near(cf_devmap_scale_end(m), 0.3, 1e-15);
+    cf_devmap_free(m);
 }
 
 static int is_green(uint32_t c)
@@ -440,12 +457,124 @@ static void test_degenerate(void **state)
     assert_true(a[0] == b[0] && a[1] == b[1] && a[0] <= 1200 && a[1] <= 900);
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The scale's end is the smallest the rule allows that covers the 99th
+ * percentile of |d| (found here by sorting), symmetric, with at most 1 %
+ * of the points in the off-scale colours. */
+static void check_auto(const char *name, double tol, double (*dev)(int, int), int keep)
+{
+    enum { N = 120 };
+    cf_plane_t pl;
+    double o[3] = {0, 0, 0}, ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
+    assert_int_equal(cf_plane_from_axes(&pl, o, ex, ey, msg, sizeof msg), CF_OK);
+    cf_devmap_t *m = make_map_s(&pl, tol, CF_DEVMAP_MEAN, 1);
+    cf_devmap_set_extent(m, 0, N - 1, 0, N - 1, (long long)N * N);
+    assert_int_equal(cf_devmap_begin(m, msg, sizeof msg), CF_OK);
+    static double a[N * N];
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++) {
+            double p[3] = {i, j, 0}, d = dev(i, j);
+            a[j * N + i] = fabs(d);
+            assert_int_equal(cf_devmap_add(m, p, d), CF_OK);
+        }
+    qsort(a, N * N, sizeof a[0], cmp_double);
+    double p99 = a[(99 * N * N + 99) / 100 - 1]; /* the smallest value 99 % do not exceed */
+    cf_image_t im;
+    assert_int_equal(cf_devmap_render(m, NULL, &im, msg, sizeof msg), CF_OK);
+    double end = cf_devmap_scale_end(m);
+    static const double steps[] = {0.25, 0.5, 1, 2, 2.5, 5, 10, 20, 25, 50, 100, 200};
+    int k = 0;
+    while (k < 11 && (1 + 4 * steps[k]) * tol < p99 * (1 - 1e-12))
+        k++;
+    if (fabs(end - (1 + 4 * steps[k]) * tol) > 1e-12 * tol)
+        fail_msg("%s: scale end %.17g mm, want %.17g (P99 %.17g)", name, end,
+                 (1 + 4 * steps[k]) * tol, p99);
+    long off = 0;
+    uint32_t lo = cf_devmap_colour(m, -2 * end), hi = cf_devmap_colour(m, 2 * end);
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++) {
+            uint32_t c = cf_devmap_colour(m, dev(i, j));
+            off += c == lo || c == hi;
+        }
+    assert_true(off <= N * N / 100);
+    /* Symmetric, and the tolerance band is green either side. */
+    assert_int_equal(cf_devmap_colour(m, tol), cf_devmap_colour(m, -tol));
+    assert_int_equal(cf_devmap_colour(m, tol), cf_devmap_colour(m, 0));
+    assert_true(cf_devmap_colour(m, end) != hi && cf_devmap_colour(m, -end) != lo);
+    assert_true(cf_devmap_colour(m, end * 1.001) == hi);
+    const char *dir = getenv("CF_DEVMAP_PNG_DIR");
+    if (keep && dir) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/auto-%s.png", dir, name);
+        assert_int_equal(cf_png_write_image(path, &im, msg, sizeof msg), CF_OK);
+    }
+    cf_image_free(&im);
+    cf_devmap_free(m);
+}
+
+static double dev_ramp(int i, int j) /* 0 .. 6 tol, along x */
+{
+    (void)j;
+    return 0.05 * 6.0 * i / 119.0;
+}
+
+static double dev_warp(int i, int j) /* a warped part: -0.4 .. +1.1 mm, tol 0.05 */
+{
+    double x = i / 119.0, y = j / 119.0;
+    return -0.4 + 1.5 * x * x * (0.5 + 0.5 * y);
+}
+
+static double dev_small(int i, int j) /* everything within 0.8 tol */
+{
+    return 0.04 * sin(i * 0.3) * cos(j * 0.2);
+}
+
+static double dev_outliers(int i, int j) /* 0.5 % spikes of 50 tol on a flat part */
+{
+    return (i * 131 + j * 71) % 200 == 0 ? 2.5 : 0.01 * sin(i * 0.1);
+}
+
+static void test_auto_scale(void **state)
+{
+    (void)state;
+    check_auto("ramp", 0.05, dev_ramp, 0);
+    check_auto("warp", 0.05, dev_warp, 1);
+    check_auto("small", 0.05, dev_small, 0);
+    check_auto("outliers", 0.05, dev_outliers, 0);
+    /* A fixed scale in mm holds whatever the data. */
+    cf_plane_t pl;
+    double o[3] = {0, 0, 0}, ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
+    assert_int_equal(cf_plane_from_axes(&pl, o, ex, ey, msg, sizeof msg), CF_OK);
+    cf_devmap_opts_t fo = {.tol = 0.05, .title = "fixed"};
+    cf_devmap_t *m = NULL;
+    assert_int_equal(cf_devmap_create(&m, &pl, &fo, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_devmap_set_scale(m, 0.3, msg, sizeof msg), CF_OK);
+    cf_devmap_set_extent(m, 0, 10, 0, 10, 100);
+    assert_int_equal(cf_devmap_begin(m, msg, sizeof msg), CF_OK);
+    for (int k = 0; k < 100; k++) {
+        double p[3] = {k % 10, k / 10, 0};
+        assert_int_equal(cf_devmap_add(m, p, 3.0 * k / 100), CF_OK);
+    }
+    cf_image_t im;
+    assert_int_equal(cf_devmap_render(m, NULL, &im, msg, sizeof msg), CF_OK);
+    assert_near(cf_devmap_scale_end(m), 0.3, 1e-15);
+    assert_true(cf_devmap_colour(m, 0.29) != cf_devmap_colour(m, 0.31));
+    assert_int_equal(cf_devmap_colour(m, 0.31), cf_devmap_colour(m, 2.9));
+    cf_image_free(&im);
+    cf_devmap_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plane_fit),  cmocka_unit_test(test_colours),
         cmocka_unit_test(test_dent_map),   cmocka_unit_test(test_sparse_disc),
-        cmocka_unit_test(test_degenerate),
+        cmocka_unit_test(test_degenerate), cmocka_unit_test(test_auto_scale),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,7 +1,8 @@
-/* test_png.c: the PNG writer, checked by an independent decoder written here
- * (chunk walk, bitwise CRC-32 without a table, stored-block inflate, Adler-32
- * by definition, filter bytes) and, when python3 is installed, by Python's
- * zlib; the canvas and the 5x7 font against typed-in dot patterns. */
+/* test_png.c: the PNG writer, checked by a decoder written here (chunk walk,
+ * bitwise CRC-32 without a table, zlib's inflate, the PNG filters undone)
+ * and, when python3 is installed, by Python's zlib with its own unfiltering;
+ * compression on flat and map-like images; the canvas and the font against
+ * typed-in dot patterns. */
 
 #include "cf_err.h"
 #include "cf_png.h"
@@ -12,6 +13,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 static char tmpdir[512];
 static char msg[1024];
@@ -83,9 +85,32 @@ static uint32_t rd32(const unsigned char *p)
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
 }
 
-/* Decode path (an RGB8 PNG of stored blocks) and compare with rgb. Returns the
- * number of stored blocks. */
-static int check_png(const char *path, const unsigned char *rgb, int w, int h)
+/* PNG spec 9.4: undo filter type ft on row r (len bytes, 3 per pixel)
+ * given the previous reconstructed row (NULL for the first). */
+static void unfilter(unsigned char *r, const unsigned char *prev, size_t len, int ft)
+{
+    for (size_t i = 0; i < len; i++) {
+        int a = i >= 3 ? r[i - 3] : 0, b = prev ? prev[i] : 0, c = i >= 3 && prev ? prev[i - 3] : 0;
+        int pred = 0;
+        if (ft == 1)
+            pred = a;
+        else if (ft == 2)
+            pred = b;
+        else if (ft == 3)
+            pred = (a + b) >> 1;
+        else if (ft == 4) {
+            int p = a + b - c, pa = p > a ? p - a : a - p, pb = p > b ? p - b : b - p;
+            int pc = p > c ? p - c : c - p;
+            pred = (pa <= pb && pa <= pc) ? a : (pb <= pc) ? b : c;
+        }
+        r[i] = (unsigned char)(r[i] + pred);
+    }
+}
+
+/* Decode path (an RGB8 PNG) and compare with rgb: chunks and their CRCs
+ * walked here, the zlib stream inflated by zlib's uncompress (which checks
+ * the Adler-32), the filters undone here. Returns the compressed size. */
+static size_t check_png(const char *path, const unsigned char *rgb, int w, int h)
 {
     size_t n;
     unsigned char *f = read_all(path, &n);
@@ -113,6 +138,7 @@ static int check_png(const char *path, const unsigned char *rgb, int w, int h)
             assert_int_equal(data[12], 0);
         } else if (!memcmp(type, "IDAT", 4)) {
             assert_false(idat_done); /* IDAT chunks are consecutive */
+            assert_true(len > 0);
             memcpy(z + zlen, data, len);
             zlen += len;
         } else {
@@ -130,46 +156,32 @@ static int check_png(const char *path, const unsigned char *rgb, int w, int h)
     }
     assert_true(seen_iend);
     assert_int_equal(pos, n); /* nothing after IEND */
-    /* zlib: CMF/FLG, stored blocks, Adler-32. */
-    assert_true(zlen >= 2 + 5 + 4);
+    assert_true(zlen >= 2 + 4);
     assert_int_equal(z[0] & 0x0F, 8);              /* deflate */
     assert_int_equal((z[0] * 256 + z[1]) % 31, 0); /* header check */
     assert_int_equal(z[1] & 0x20, 0);              /* no preset dictionary */
-    size_t rawcap = (size_t)h * (1 + 3 * (size_t)w), rawlen = 0, zp = 2;
-    unsigned char *raw = malloc(rawcap);
+    size_t stride = 1 + 3 * (size_t)w, rawcap = (size_t)h * stride;
+    uLongf rawlen = (uLongf)rawcap + 1; /* one spare byte: a longer stream would show */
+    unsigned char *raw = malloc(rawcap + 1);
     assert_non_null(raw);
-    int blocks = 0, final = 0;
-    while (!final) {
-        assert_true(zp + 5 <= zlen);
-        final = z[zp] & 1;
-        assert_int_equal((z[zp] >> 1) & 3, 0); /* BTYPE 00: stored */
-        unsigned len = z[zp + 1] | (unsigned)z[zp + 2] << 8;
-        unsigned nlen = z[zp + 3] | (unsigned)z[zp + 4] << 8;
-        assert_int_equal(len ^ 0xFFFFu, nlen);
-        zp += 5;
-        assert_true(zp + len <= zlen);
-        assert_true(rawlen + len <= rawcap);
-        memcpy(raw + rawlen, z + zp, len);
-        rawlen += len;
-        zp += len;
-        blocks++;
-    }
-    assert_int_equal(zp + 4, zlen);
-    assert_int_equal(rd32(z + zp), adler_def(raw, rawlen));
+    assert_int_equal(uncompress(raw, &rawlen, z, (uLong)zlen), Z_OK);
     assert_int_equal(rawlen, rawcap);
+    assert_int_equal(rd32(z + zlen - 4), adler_def(raw, rawcap)); /* by RFC 1950's definition */
     for (int y = 0; y < h; y++) {
-        const unsigned char *r = raw + (size_t)y * (1 + 3 * (size_t)w);
-        assert_int_equal(r[0], 0); /* filter: none */
+        unsigned char *r = raw + (size_t)y * stride;
+        assert_true(r[0] <= 4); /* filter types 0..4 */
+        unfilter(r + 1, y ? r + 1 - stride : NULL, stride - 1, r[0]);
         assert_memory_equal(r + 1, rgb + (size_t)y * 3 * (size_t)w, 3 * (size_t)w);
     }
     free(raw);
     free(z);
     free(f);
-    return blocks;
+    return n;
 }
 
 /* Python's zlib as a second, unrelated decoder: it checks every chunk CRC,
- * inflates the IDAT stream and prints "w h crc32(pixels)". */
+ * inflates the IDAT stream, undoes the filters and prints
+ * "w h crc32(pixels)". */
 static const char *py_check =
     "import sys, zlib, struct\n"
     "d = open(sys.argv[1], 'rb').read()\n"
@@ -184,9 +196,27 @@ static const char *py_check =
     "    p += 12 + n\n"
     "r = zlib.decompress(z)\n"
     "s = 3 * w + 1\n"
-    "assert len(r) == h * s and all(r[y * s] == 0 for y in range(h))\n"
-    "px = b''.join(r[y * s + 1:(y + 1) * s] for y in range(h))\n"
-    "print(w, h, zlib.crc32(px))\n";
+    "assert len(r) == h * s\n"
+    "out, prev = bytearray(), bytearray(s - 1)\n"
+    "for y in range(h):\n"
+    "    ft, row = r[y * s], bytearray(r[y * s + 1:(y + 1) * s])\n"
+    "    for i in range(s - 1):\n"
+    "        a = row[i - 3] if i >= 3 else 0\n"
+    "        b = prev[i]\n"
+    "        c = prev[i - 3] if i >= 3 else 0\n"
+    "        if ft == 0: q = 0\n"
+    "        elif ft == 1: q = a\n"
+    "        elif ft == 2: q = b\n"
+    "        elif ft == 3: q = (a + b) // 2\n"
+    "        elif ft == 4:\n"
+    "            pp = a + b - c\n"
+    "            pa, pb, pc = abs(pp - a), abs(pp - b), abs(pp - c)\n"
+    "            q = a if pa <= pb and pa <= pc else (b if pb <= pc else c)\n"
+    "        else: raise SystemExit('bad filter %d' % ft)\n"
+    "        row[i] = (row[i] + q) & 255\n"
+    "    out += row\n"
+    "    prev = row\n"
+    "print(w, h, zlib.crc32(bytes(out)))\n";
 
 static const char *find_python(void)
 {
@@ -236,35 +266,47 @@ static unsigned char *pattern(int w, int h, unsigned seed)
     return p;
 }
 
-static int write_and_check(int w, int h, const char *name)
+static size_t write_and_check(int w, int h, const char *name)
 {
     char path[600];
     tmp_path(path, sizeof path, name);
     unsigned char *rgb = pattern(w, h, (unsigned)(w * 7919 + h));
     assert_int_equal(cf_png_write(path, rgb, w, h, msg, sizeof msg), CF_OK);
-    int blocks = check_png(path, rgb, w, h);
+    size_t bytes = check_png(path, rgb, w, h);
     python_check(path, rgb, w, h);
     char tmp[700];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
     assert_false(exists(tmp));
     free(rgb);
     remove(path);
-    return blocks;
+    return bytes;
+}
+
+/* A map-like image: flat colour areas, a smooth ramp, text, lines. */
+static void map_like(cf_image_t *im)
+{
+    for (int y = 0; y < im->h; y++)
+        for (int x = 0; x < im->w; x++) {
+            int band = (x / 97 + y / 61) % 5;
+            static const uint32_t pal[5] = {0x28BE46, 0x0064FF, 0xFFB400, 0xD9D9D9, 0xDC1414};
+            cf_image_set(im, x, y, x < im->w / 3 ? pal[band] : (uint32_t)((x * 255 / im->w) << 8));
+        }
+    for (int k = 0; k < 30; k++)
+        cf_image_text(im, 10 + 7 * k, 10 + 25 * k, 1, 0x000000, "RMS 0.012 mm igs 90Ol1");
 }
 
 static void test_roundtrip(void **state)
 {
     (void)state;
-    assert_int_equal(write_and_check(1, 1, "1x1.png"), 1);
-    /* 300 x 200: 180200 raw bytes, three stored blocks (65535 + 65535 + 49130). */
-    assert_int_equal(write_and_check(300, 200, "300x200.png"), 3);
-    /* 28 x 771: exactly 65535 raw bytes, one full block that is also the last. */
-    assert_int_equal(write_and_check(28, 771, "28x771.png"), 1);
-    /* 29 x 744 = 65472 raw bytes: 63 short of a block. */
-    assert_int_equal(write_and_check(29, 744, "29x744.png"), 1);
-    /* Rows longer than the 5552 bytes Adler-32 sums may take between two
-     * reductions, random and all 0xFF (the largest sums). */
-    assert_int_equal(write_and_check(6000, 12, "6000x12.png"), 4);
+    size_t raw;
+    assert_true(write_and_check(1, 1, "1x1.png") > 0);
+    /* Random bytes do not compress: the file stays near the raw size
+     * (180,200 bytes), i.e. nothing was dropped. */
+    raw = 200 * (1 + 3 * 300);
+    assert_true(write_and_check(300, 200, "300x200.png") >= raw);
+    assert_true(write_and_check(28, 771, "28x771.png") > 0);
+    /* Output longer than one 64 KB IDAT chunk, and rows longer than a chunk. */
+    assert_true(write_and_check(6000, 12, "6000x12.png") > 65536);
     {
         char path[600];
         tmp_path(path, sizeof path, "white.png");
@@ -272,13 +314,26 @@ static void test_roundtrip(void **state)
         assert_non_null(rgb);
         memset(rgb, 0xFF, 16384 * 3 * 2);
         assert_int_equal(cf_png_write(path, rgb, 16384, 2, msg, sizeof msg), CF_OK);
-        assert_int_equal(check_png(path, rgb, 16384, 2), 2);
+        /* 98,306 raw bytes of one value: deflate takes them to a few hundred. */
+        assert_true(check_png(path, rgb, 16384, 2) < 1000);
         python_check(path, rgb, 16384, 2);
         remove(path);
         free(rgb);
     }
-    /* 28 x 1542: 131070 raw bytes, two full blocks and no empty third one. */
-    assert_int_equal(write_and_check(28, 1542, "28x1542.png"), 2);
+    {
+        /* A 1200 x 900 map-like canvas: 3.2 MB raw, far below 200 KB. */
+        cf_image_t im;
+        char path[600];
+        assert_int_equal(cf_image_init(&im, 1200, 900, 0xFFFFFF, msg, sizeof msg), CF_OK);
+        map_like(&im);
+        tmp_path(path, sizeof path, "map.png");
+        assert_int_equal(cf_png_write_image(path, &im, msg, sizeof msg), CF_OK);
+        size_t bytes = check_png(path, im.px, im.w, im.h);
+        assert_true(bytes < 200 * 1000);
+        python_check(path, im.px, im.w, im.h);
+        remove(path);
+        cf_image_free(&im);
+    }
 }
 
 /* Overwriting keeps the new content; failures leave no file under either name. */
@@ -311,56 +366,94 @@ static void test_failures(void **state)
     free(b);
 }
 
-/* Dots of a glyph drawn at scale 1 at (0, 0), as a 5-character row string each. */
-static void expect_glyph(const cf_image_t *im, int x0, const char *const rows[7])
+/* Dots of a glyph drawn at scale 1 at (x0, 0), one 8-character row string
+ * per row of the 8 x 13 cell (the 8th column is spacing). */
+static void expect_glyph(const cf_image_t *im, int x0, const char *const rows[13])
 {
-    for (int r = 0; r < 7; r++)
-        for (int c = 0; c < 5; c++) {
+    for (int r = 0; r < 13; r++)
+        for (int c = 0; c < 8; c++) {
             int on = cf_image_get(im, x0 + c, r) == 0x000000;
             if (on != (rows[r][c] == '#'))
                 fail_msg("glyph at x %d: dot (%d, %d) is %s", x0, c, r, on ? "set" : "clear");
         }
-    for (int c = 0; c < 6; c++) /* spacing row below */
-        assert_int_equal(cf_image_get(im, x0 + c, 7), 0xFFFFFF);
+}
+
+/* Pixels in which two glyphs differ, drawn at scale 1. */
+static int glyph_diff(const char *a, const char *b)
+{
+    cf_image_t im;
+    assert_int_equal(cf_image_init(&im, 16, 13, 0xFFFFFF, msg, sizeof msg), CF_OK);
+    cf_image_text(&im, 0, 0, 1, 0x000000, a);
+    cf_image_text(&im, 8, 0, 1, 0x000000, b);
+    int n = 0;
+    for (int y = 0; y < 13; y++)
+        for (int x = 0; x < 8; x++) {
+            n += cf_image_get(&im, x, y) != cf_image_get(&im, x + 8, y);
+        }
+    cf_image_free(&im);
+    return n;
 }
 
 static void test_font(void **state)
 {
     (void)state;
     cf_image_t im;
-    assert_int_equal(cf_image_init(&im, 60, 20, 0xFFFFFF, msg, sizeof msg), CF_OK);
-    assert_int_equal(cf_image_text(&im, 0, 0, 1, 0x000000, "0-mR\xC2\xB1"), 5 * CF_FONT_W);
-    static const char *const zero[7] = {" ### ", "#   #", "#  ##", "# # #",
-                                        "##  #", "#   #", " ### "};
-    static const char *const minus[7] = {"     ", "     ", "     ", "#####",
-                                         "     ", "     ", "     "};
-    static const char *const m[7] = {"     ", "     ", "## # ", "# # #", "# # #", "#   #", "#   #"};
-    static const char *const R[7] = {"#### ", "#   #", "#   #", "#### ", "# #  ", "#  # ", "#   #"};
-    static const char *const pm[7] = {"  #  ", "  #  ", "#####", "  #  ",
-                                      "  #  ", "     ", "#####"};
+    assert_int_equal(cf_image_init(&im, 80, 30, 0xFFFFFF, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_image_text(&im, 0, 0, 1, 0x000000, "0g9l\xC2\xB1"), 5 * CF_FONT_W);
+    static const char *const zero[13] = {"........", "..###...", ".#...#..", ".#...#..", ".#..##..",
+                                         ".#.#.#..", ".##..#..", ".#...#..", ".#...#..", "..###...",
+                                         "........", "........", "........"};
+    static const char *const g[13] = {"........", "........", "........", "........", "..####..",
+                                      ".#...#..", ".#...#..", ".#...#..", ".#...#..", "..####..",
+                                      ".....#..", ".#...#..", "..###..."};
+    static const char *const nine[13] = {"........", "..###...", ".#...#..", ".#...#..", ".#...#..",
+                                         "..####..", ".....#..", ".....#..", "....#...", ".###....",
+                                         "........", "........", "........"};
+    static const char *const l[13] = {"........", "..##....", "...#....", "...#....", "...#....",
+                                      "...#....", "...#....", "...#....", "...#....", "....##..",
+                                      "........", "........", "........"};
+    static const char *const pm[13] = {"........", "........", "...#....", "...#....", ".#####..",
+                                       "...#....", "...#....", "........", ".#####..", "........",
+                                       "........", "........", "........"};
     expect_glyph(&im, 0, zero);
-    expect_glyph(&im, 6, minus);
-    expect_glyph(&im, 12, m);
-    expect_glyph(&im, 18, R);
-    expect_glyph(&im, 24, pm);
-    /* Scale 2: each dot 2 x 2; '1' has its stem in column 2. */
-    cf_image_fill(&im, 0, 0, 60, 20, 0xFFFFFF);
-    assert_int_equal(cf_image_text(&im, 10, 2, 2, 0xFF0000, "1"), 12);
-    for (int r = 1; r < 7; r++) /* stem rows 1..6 of column 2 */
+    expect_glyph(&im, 8, g);
+    expect_glyph(&im, 16, nine);
+    expect_glyph(&im, 24, l);
+    expect_glyph(&im, 32, pm);
+    /* The pairs the 5x7 font confused ("igs" read "i9s") differ clearly. */
+    assert_true(glyph_diff("g", "9") >= 8);
+    assert_true(glyph_diff("0", "O") >= 8);
+    assert_true(glyph_diff("1", "l") >= 6);
+    assert_true(glyph_diff("1", "I") >= 6);
+    assert_true(glyph_diff("l", "I") >= 6);
+    assert_true(glyph_diff("5", "S") >= 4);
+    assert_true(glyph_diff("8", "B") >= 4);
+    /* Every printable glyph differs from every other one. */
+    for (int a = 33; a < 127; a++)
+        for (int b = a + 1; b < 127; b++) {
+            char sa[2] = {(char)a, 0}, sb[2] = {(char)b, 0};
+            if (glyph_diff(sa, sb) < 2)
+                fail_msg("'%c' and '%c' differ in fewer than 2 dots", a, b);
+        }
+    /* Scale 2: each dot 2 x 2; '1' has its stem in column 3, rows 1-9. */
+    cf_image_fill(&im, 0, 0, 80, 30, 0xFFFFFF);
+    assert_int_equal(cf_image_text(&im, 10, 2, 2, 0xFF0000, "1"), 2 * CF_FONT_W);
+    for (int r = 1; r <= 9; r++)
         for (int dy = 0; dy < 2; dy++)
             for (int dx = 0; dx < 2; dx++)
-                assert_int_equal(cf_image_get(&im, 10 + 4 + dx, 2 + 2 * r + dy), 0xFF0000);
-    assert_int_equal(cf_image_get(&im, 10, 2 + 2 * 3), 0xFFFFFF);
+                assert_int_equal(cf_image_get(&im, 10 + 6 + dx, 2 + 2 * r + dy), 0xFF0000);
+    assert_int_equal(cf_image_get(&im, 10 + 6, 2), 0xFFFFFF); /* row 0 blank */
     /* Widths: one glyph per code point, unknown ones as '?'. */
     assert_int_equal(cf_text_width("RMS 0.012 mm", 1), 12 * CF_FONT_W);
     assert_int_equal(cf_text_width("\xC2\xB1\xC2\xB5m", 2), 3 * 2 * CF_FONT_W);
     assert_int_equal(cf_text_width("\xE2\x82\xAC", 1), CF_FONT_W); /* euro sign: '?' */
     /* Drawing clips at the canvas edges. */
-    cf_image_text(&im, 55, 15, 3, 0x0000FF, "W");
+    cf_image_fill(&im, 0, 0, 80, 30, 0xFFFFFF);
+    cf_image_text(&im, 75, 25, 3, 0x0000FF, "W");
     cf_image_text(&im, -20, -5, 3, 0x0000FF, "W");
-    cf_image_box(&im, -1, -1, 62, 22, 0x00FF00);
-    assert_int_equal(cf_image_get(&im, 55, 15), 0x0000FF); /* W's first dot */
-    assert_int_equal(cf_image_get(&im, 59, 19), 0xFFFFFF);
+    cf_image_box(&im, -1, -1, 82, 32, 0x00FF00);
+    assert_int_equal(cf_image_get(&im, 75, 28), 0x0000FF); /* W's first dot: row 1, column 0 */
+    assert_int_equal(cf_image_get(&im, 79, 29), 0xFFFFFF);
     cf_image_free(&im);
     assert_int_equal(cf_image_init(&im, 0, 10, 0, msg, sizeof msg), CF_EARG);
     assert_null(im.px);

@@ -1,0 +1,48 @@
+/* cf_step.h: STEP AP242 (ISO 10303-21 exchange files) for NURBS surfaces,
+ * read and written by our own code (the entity set is small).
+ *
+ * Written: one surface as the one face of a CAD model. The header names the
+ * AP242 schema (AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIB_LF) and, in
+ * FILE_NAME, the cellfit version; units are millimetres (LENGTH_UNIT
+ * SI_UNIT(.MILLI.,.METRE.)). The surface is B_SPLINE_SURFACE_WITH_KNOTS, or
+ * for unequal weights the complex entity with RATIONAL_B_SPLINE_SURFACE;
+ * it is the geometry of an ADVANCED_FACE bounded by an EDGE_LOOP of its
+ * four boundary curves (B-spline curves: the edge rows of the net, which
+ * is clamped) between VERTEX_POINTs at the corners, in an OPEN_SHELL of a
+ * SHELL_BASED_SURFACE_MODEL, the item of a
+ * MANIFOLD_SURFACE_SHAPE_REPRESENTATION tied to a PRODUCT through the
+ * usual product-definition chain. Numbers are %.17g, so reading back is
+ * bit-exact.
+ *
+ * Read: a B_SPLINE_SURFACE_WITH_KNOTS (simple or as the rational complex
+ * entity) with its CARTESIAN_POINTs, wherever it sits in the file; knot
+ * multiplicities expanded. The file's length unit is applied (SI_UNIT with
+ * any prefix; a CONVERSION_BASED_UNIT such as the inch is refused). */
+#ifndef CF_STEP_H
+#define CF_STEP_H
+
+#include "nf_surf.h"
+#include <stddef.h>
+
+/* Write s to path as an AP242 file (to path.tmp, then renamed, so path is
+ * complete or absent). name (may be NULL: "surface") names the product;
+ * version (may be NULL) goes into FILE_NAME's originating_system, as
+ * "cellfit VERSION". Timestamp: the current UTC time, or
+ * SOURCE_DATE_EPOCH when that is set. CF_EARG, the nf_err_t of
+ * nf_surf_check, CF_ENOMEM, CF_EIO; msg names the file. */
+int cf_step_write(const char *path, const nf_surf_t *s, const char *name, const char *version,
+                  char *msg, size_t msglen);
+
+/* cf_step_write with an explicit timestamp (seconds since 1970, UTC). */
+int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, const char *version,
+                     long long utc, char *msg, size_t msglen);
+
+/* Read the surface of instance #id (id = 0: the first B-spline surface with
+ * knots in the file) into out (cf_surf_alloc'd, always with weights;
+ * cf_surf_free it). CF_EIO, CF_EPARSE (msg: file and line), CF_ENOTFOUND,
+ * CF_EUNSUPPORTED (a surface type or unit we do not take), CF_ENOMEM, or
+ * the nf_err_t of nf_surf_check. On failure out is zeroed and owns
+ * nothing. */
+int cf_step_read(const char *path, long id, nf_surf_t *out, char *msg, size_t msglen);
+
+#endif

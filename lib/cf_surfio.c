@@ -1,0 +1,56 @@
+/* cf_surfio.c: surface read and write dispatched on the file's extension. */
+#include "cf_surfio.h"
+#include "cf_err.h"
+#include "cf_iges.h"
+#include "cf_step.h"
+#include <ctype.h>
+#include <string.h>
+
+static int ext_is(const char *ext, const char *want)
+{
+    for (; *ext && *want; ext++, want++)
+        if (tolower((unsigned char)*ext) != *want)
+            return 0;
+    return !*ext && !*want;
+}
+
+cf_surfio_fmt_t cf_surfio_format(const char *path)
+{
+    const char *dot = path ? strrchr(path, '.') : NULL, *slash = path ? strrchr(path, '/') : NULL;
+    if (!dot || (slash && dot < slash))
+        return CF_SURFIO_UNKNOWN;
+    dot++;
+    if (ext_is(dot, "igs") || ext_is(dot, "iges"))
+        return CF_SURFIO_IGES;
+    if (ext_is(dot, "stp") || ext_is(dot, "step"))
+        return CF_SURFIO_STEP;
+    return CF_SURFIO_UNKNOWN;
+}
+
+int cf_surfio_read(const char *path, long which, nf_surf_t *out, char *msg, size_t msglen)
+{
+    switch (cf_surfio_format(path)) {
+    case CF_SURFIO_IGES:
+        if (which < 0 || which > 9999999)
+            return cf_fail(msg, msglen, CF_EARG, "%s: IGES DE number %ld", path, which);
+        return cf_iges_read(path, (int)which, out, msg, msglen);
+    case CF_SURFIO_STEP: return cf_step_read(path, which, out, msg, msglen);
+    default:
+        return cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                       "%s: unknown surface format (use .igs, .iges, .stp or .step)",
+                       path ? path : "(null)");
+    }
+}
+
+int cf_surfio_write(const char *path, const nf_surf_t *s, const char *name, const char *version,
+                    char *msg, size_t msglen)
+{
+    switch (cf_surfio_format(path)) {
+    case CF_SURFIO_IGES: return cf_iges_write(path, s, name, msg, msglen);
+    case CF_SURFIO_STEP: return cf_step_write(path, s, name, version, msg, msglen);
+    default:
+        return cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                       "%s: unknown surface format (use .igs, .iges, .stp or .step)",
+                       path ? path : "(null)");
+    }
+}

@@ -1,0 +1,34 @@
+/* cf_surfio.h: surface files by extension: ".igs"/".iges" IGES entity 128
+ * (cf_iges), ".stp"/".step" STEP AP242 (cf_step), case-insensitive. The one
+ * place every reader and writer of a surface (fit --out, base --out,
+ * convert, serve's EXPORT) should go through, so the extension chooses the
+ * format everywhere. */
+#ifndef CF_SURFIO_H
+#define CF_SURFIO_H
+
+#include "nf_surf.h"
+#include <stddef.h>
+
+typedef enum cf_surfio_fmt {
+    CF_SURFIO_UNKNOWN = 0,
+    CF_SURFIO_IGES = 1,
+    CF_SURFIO_STEP = 2
+} cf_surfio_fmt_t;
+
+/* The format path's extension names. */
+cf_surfio_fmt_t cf_surfio_format(const char *path);
+
+/* Read the surface of path (which = 0: the first; otherwise IGES's DE
+ * number or STEP's instance number) into out (cf_surf_free it). An unknown
+ * extension is refused (CF_EUNSUPPORTED), errors otherwise as
+ * cf_iges_read / cf_step_read. */
+int cf_surfio_read(const char *path, long which, nf_surf_t *out, char *msg, size_t msglen);
+
+/* Write s to path in the format its extension names (atomically: path.tmp,
+ * then renamed). name: the product/surface name (may be NULL); version: the
+ * cellfit version for STEP's FILE_NAME (may be NULL). CF_EUNSUPPORTED for
+ * another extension; errors otherwise as cf_iges_write / cf_step_write. */
+int cf_surfio_write(const char *path, const nf_surf_t *s, const char *name, const char *version,
+                    char *msg, size_t msglen);
+
+#endif
