@@ -41,10 +41,10 @@ int cmd_convert(int argc, char **argv)
     if (rc)
         return cf_opt_exit(rc);
     if (cf_surfio_format(pos[1]) == CF_SURFIO_UNKNOWN)
-        return cli_error("convert", CLI_USAGE,
-                         "%s: the extension names no format (.igs, .iges, "
-                         ".stp, .step)",
-                         pos[1]);
+        return cli_error(
+            "convert", CLI_USAGE,
+            "%s: unknown surface format (the extension must be .igs, .iges, .stp or .step)",
+            pos[1]);
     char msg[1024];
     nf_surf_t s;
     if ((rc = cf_surfio_read(pos[0], entity, &s, msg, sizeof msg)))
