@@ -4,6 +4,7 @@
  * (x, y) by Newton from the nearest sample of a seed grid. */
 #include "cf_iges.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "sim.h"
 #include <math.h>
 #include <stdio.h>
@@ -51,7 +52,7 @@ int sim_part_iges(sim_part_t *p, const char *path, char *msg, size_t len)
 {
     memset(p, 0, sizeof *p);
     cf_part_default(&p->pt);
-    if (cf_iges_read(path, 0, &p->s, msg, len))
+    if (cf_surfio_read(path, 0, &p->s, msg, len))
         return -1;
     return seed_grid(p, msg, len);
 }

@@ -9,6 +9,7 @@
 #include "cf_seedgrid.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "cf_version.h"
 #include "jnl.h"
 #include "nf_err.h"
@@ -238,7 +239,7 @@ int cellfit_fit_open_file(cellfit_fit_t **fit, const char *path, const cellfit_p
     *fit = NULL;
     nf_surf_t s;
     char m[512];
-    int rc = cf_iges_read(path, 0, &s, m, sizeof m);
+    int rc = cf_surfio_read(path, 0, &s, m, sizeof m);
     if (rc) {
         if (msg && msglen)
             snprintf(msg, msglen, "%s", m);
@@ -372,7 +373,8 @@ int cellfit_fit_write(const cellfit_fit_t *f, const char *path)
     cellfit_fit_t *m = (cellfit_fit_t *)f; /* the message buffer only */
     if (!f->solved)
         return api_fail(m, CELLFIT_ESTATE, "nothing to write before cellfit_fit_solve");
-    int rc = cf_iges_write(path, &f->fitted, "cellfit fit", m->msg, sizeof m->msg);
+    int rc = cf_surfio_write(path, &f->fitted, "cellfit fit", cf_version_string(), m->msg,
+                             sizeof m->msg);
     return api_code(rc);
 }
 

@@ -18,6 +18,8 @@
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
+#include "cf_version.h"
 #include "cmd.h"
 #include "nf_base.h"
 #include "nf_coons.h"
@@ -266,7 +268,7 @@ static int extract(const base_opts_t *o)
 {
     char msg[512];
     nf_surf_t s;
-    int rc = cf_iges_read(o->extract, (int)o->entity, &s, msg, sizeof msg);
+    int rc = cf_surfio_read(o->extract, (int)o->entity, &s, msg, sizeof msg);
     if (rc)
         return cli_error("base", CLI_USAGE, "%s", msg);
     nf_curve_t c[4];
@@ -862,7 +864,8 @@ int cmd_base(int argc, char **argv)
     cf_points_close(r);
     if (ec)
         return ec;
-    if (cf_iges_write(o.out, &out, "cellfit base surface", msg, sizeof msg)) {
+    if (cf_surfio_write(o.out, &out, "cellfit base surface", cf_version_string(), msg,
+                        sizeof msg)) {
         cf_surf_free(&out);
         return cli_error("base", CLI_FAIL, "%s", msg);
     }

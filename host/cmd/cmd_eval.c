@@ -4,6 +4,7 @@
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "cmd.h"
 
 int cmd_eval(int argc, char **argv)
@@ -32,7 +33,7 @@ int cmd_eval(int argc, char **argv)
     const char *surf = pos[0], *uvf = pos[1];
     char msg[512];
     nf_surf_t s;
-    if (cf_iges_read(surf, (int)entity, &s, msg, sizeof msg))
+    if (cf_surfio_read(surf, (int)entity, &s, msg, sizeof msg))
         return cli_error("eval", CLI_USAGE, "%s", msg);
     cf_points_t *r = NULL;
     if (cf_points_open(&r, uvf, 2, msg, sizeof msg)) {

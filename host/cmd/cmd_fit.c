@@ -10,6 +10,8 @@
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
+#include "cf_version.h"
 #include "cmd.h"
 #include "nf_err.h"
 #include <string.h>
@@ -307,7 +309,7 @@ int cmd_fit(int argc, char **argv)
     char msg[1024];
     double t0 = cli_now();
     nf_surf_t base;
-    if (cf_iges_read(a.base, (int)a.entity, &base, msg, sizeof msg))
+    if (cf_surfio_read(a.base, (int)a.entity, &base, msg, sizeof msg))
         return cli_error("fit", CLI_USAGE, "%s", msg);
     cf_fitjob_t *j = NULL;
     rc = cf_fitjob_open(&j, &base, &a.o, msg, sizeof msg);
@@ -330,7 +332,7 @@ int cmd_fit(int argc, char **argv)
         return cli_error("fit", cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
     double t2 = cli_now();
     int ec = CLI_OK;
-    if (cf_iges_write(a.out, &r.surf, "cellfit fit", msg, sizeof msg)) {
+    if (cf_surfio_write(a.out, &r.surf, "cellfit fit", cf_version_string(), msg, sizeof msg)) {
         ec = cli_error("fit", CLI_FAIL, "%s", msg);
         goto done;
     }

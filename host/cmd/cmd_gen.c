@@ -7,6 +7,8 @@
 #include "cf_opt.h"
 #include "cf_part.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
+#include "cf_version.h"
 #include "cmd.h"
 #include <errno.h>
 #include <math.h>
@@ -164,7 +166,8 @@ int cmd_gen(int argc, char **argv)
     cf_part_nominal(&pt, &s);
     char path[4096], msg[512];
     snprintf(path, sizeof path, "%s/nominal.igs", dir);
-    if (cf_iges_write(path, &s, "cellfit synthetic panel (nominal)", msg, sizeof msg)) {
+    if (cf_surfio_write(path, &s, "cellfit synthetic panel (nominal)", cf_version_string(), msg,
+                        sizeof msg)) {
         cf_surf_free(&s);
         return cli_error("gen", CLI_FAIL, "%s", msg);
     }

@@ -5,6 +5,7 @@
 #include "cf_json.h"
 #include "cf_opt.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "cmd.h"
 #include "nf_budget.h"
 #include <math.h>
@@ -88,7 +89,7 @@ int cmd_info(int argc, char **argv)
     const char *path = pos[0];
     char msg[512];
     nf_surf_t s;
-    if (cf_iges_read(path, (int)entity, &s, msg, sizeof msg))
+    if (cf_surfio_read(path, (int)entity, &s, msg, sizeof msg))
         return cli_error("info", CLI_USAGE, "%s", msg);
     double lo[3], hi[3], wlo, whi, slo[3], shi[3];
     bbox(&s, lo, hi, &wlo, &whi);

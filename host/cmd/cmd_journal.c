@@ -13,6 +13,8 @@
 #include "cf_points.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
+#include "cf_version.h"
 #include "cmd.h"
 #include "jnl.h"
 #include "nf_err.h"
@@ -320,7 +322,7 @@ static int do_fit(int argc, char **argv)
                          (unsigned long long)hash);
     }
     nf_surf_t nom;
-    if (cf_iges_read(nominal, (int)entity, &nom, msg, sizeof msg)) {
+    if (cf_surfio_read(nominal, (int)entity, &nom, msg, sizeof msg)) {
         cf_store_file_close(&j.f);
         return cli_error(CMD, CLI_USAGE, "%s", msg);
     }
@@ -340,7 +342,8 @@ static int do_fit(int argc, char **argv)
         ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
         goto out;
     }
-    if (cf_iges_write(out, &r.surf, "cellfit journal fit", msg, sizeof msg)) {
+    if (cf_surfio_write(out, &r.surf, "cellfit journal fit", cf_version_string(), msg,
+                        sizeof msg)) {
         ec = cli_error(CMD, CLI_FAIL, "%s", msg);
         goto out;
     }

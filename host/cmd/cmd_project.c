@@ -11,6 +11,7 @@
 #include "cf_points.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "cmd.h"
 #include "nf_err.h"
 #include "nf_project.h"
@@ -47,7 +48,7 @@ int cmd_project(int argc, char **argv)
     const char *surf = pos[0], *xyzf = pos[1];
     char msg[512];
     nf_surf_t s;
-    if (cf_iges_read(surf, (int)entity, &s, msg, sizeof msg))
+    if (cf_surfio_read(surf, (int)entity, &s, msg, sizeof msg))
         return cli_error("project", CLI_USAGE, "%s", msg);
     cf_points_t *r = NULL;
     if (cf_points_open(&r, xyzf, 3, msg, sizeof msg)) {

@@ -13,6 +13,7 @@
 #include "cf_seedgrid.h"
 #include "cf_stats.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "cmd.h"
 #include <stdlib.h>
 #include <string.h>
@@ -98,7 +99,7 @@ int cmd_report(int argc, char **argv)
     char msg[512];
     double t0 = cli_now();
     nf_surf_t s;
-    if (cf_iges_read(o.surf, (int)o.entity, &s, msg, sizeof msg))
+    if (cf_surfio_read(o.surf, (int)o.entity, &s, msg, sizeof msg))
         return cli_error("report", CLI_USAGE, "%s", msg);
     cf_points_t *pr = NULL;
     cf_seedgrid_t sg;

@@ -14,6 +14,8 @@
 #include "cf_opt.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
+#include "cf_version.h"
 #include "cmd.h"
 #include "hal_rig.h"
 #include "nf_err.h"
@@ -359,7 +361,7 @@ int cmd_scan(int argc, char **argv)
     double t0 = cli_now();
     char msg[512];
     nf_surf_t nom;
-    if (cf_iges_read(o.nominal, (int)o.entity, &nom, msg, sizeof msg))
+    if (cf_surfio_read(o.nominal, (int)o.entity, &nom, msg, sizeof msg))
         return cli_error(CMD, CLI_USAGE, "%s", msg);
     jnl_header_t h;
     memset(&h, 0, sizeof h);
@@ -473,7 +475,8 @@ int cmd_scan(int argc, char **argv)
             ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
             goto out_dev;
         }
-        if (cf_iges_write(o.fit, &fr.surf, "cellfit scan", msg, sizeof msg)) {
+        if (cf_surfio_write(o.fit, &fr.surf, "cellfit scan", cf_version_string(), msg,
+                            sizeof msg)) {
             ec = cli_error(CMD, CLI_FAIL, "%s", msg);
             goto out_dev;
         }

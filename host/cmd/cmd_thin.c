@@ -12,6 +12,7 @@
 #include "cf_opt.h"
 #include "cf_points.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include "cmd.h"
 #include "nf_err.h"
 #include "nf_quad.h"
@@ -146,7 +147,7 @@ int cmd_thin(int argc, char **argv)
     char msg[512];
     const double t0 = cli_now();
     nf_surf_t s;
-    if (cf_iges_read(o.surf, (int)o.entity, &s, msg, sizeof msg))
+    if (cf_surfio_read(o.surf, (int)o.entity, &s, msg, sizeof msg))
         return cli_error("thin", CLI_USAGE, "%s", msg);
     const size_t qb = NF_QUAD_BYTES(THIN_MAXQ, s.nu, s.nv);
     void *qmem = malloc(qb);

@@ -6,6 +6,7 @@
 #include "cf_json.h"
 #include "cf_points.h"
 #include "cf_surf.h"
+#include "cf_surfio.h"
 #include <errno.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -15,7 +16,7 @@ int cf_job_open(const cf_job_fit_opts_t *o, cf_fitjob_t **j, char *msg, size_t m
 {
     nf_surf_t s;
     *j = NULL;
-    int rc = cf_iges_read(o->nominal, 0, &s, msg, ml);
+    int rc = cf_surfio_read(o->nominal, 0, &s, msg, ml);
     if (rc)
         return rc;
     cf_fitjob_opts_t fo = o->fit;
