@@ -108,6 +108,10 @@ void sim_part_free(sim_part_t *p);
 /* z of the real part (nominal + deviation) above (x, y): 0, or 1 when the
  * part is not below (x, y). */
 int sim_part_z(const sim_part_t *p, double x, double y, double *z);
+/* The same from a start uv (NaN: the nearest seed sample), which gets the
+ * solution: along a profile each point starts from the last, so Newton
+ * takes a step or two instead of a search of the seed grid. */
+int sim_part_z_near(const sim_part_t *p, double x, double y, double uv[2], double *z);
 
 /* --- the probe (sim_probe.c) --- */
 typedef struct sim_probe {

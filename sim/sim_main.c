@@ -4,12 +4,14 @@
 #include "cf_cli.h"
 #include "hal_regmap.h"
 #include "sim.h"
+#include "sim_gev.h"
 #include "sim_net.h"
 #include <errno.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 static volatile sig_atomic_t g_stop;
@@ -30,6 +32,14 @@ static int usage(FILE *f, int code)
         "  --rtu PATH          Modbus RTU on the tty PATH (e.g. one end of a socat pty pair)\n"
         "  --ascii PATH        the probe's ASCII protocol on the tty PATH\n"
         "                      (each may be given up to 8 times in all)\n"
+        "  --gev SERIAL        the laser line profiler: Aravis's fake GigE Vision camera on\n"
+        "                      127.0.0.1 (port 3956: one per machine), serial SERIAL, open it as\n"
+        "                      gev:127.0.0.1:SERIAL (docs/rig-profiler.md); with it:\n"
+        "    --gev-loss R      GVSP packet loss ratio 0..1 (0)\n"
+        "    --gev-width W     points per profile (1024)   --gev-height H  profiles a frame (64)\n"
+        "    --gev-profiles P  profiles over one pass of the part (256)\n"
+        "    --gev-scale MM    mm per range count (0.001)  --gev-flank DEG  no reading on flanks\n"
+        "                      steeper than DEG degrees (60); z0, range and noise are the probe's\n"
         "  Every Modbus server carries the stage (holding registers, --stage-unit, default 1;\n"
         "  on TCP also units 0 and 255) and the probe (input registers, --probe-unit, default 2).\n"
         "the part under the probe:\n"
@@ -66,7 +76,9 @@ static int usage(FILE *f, int code)
         "  Holding registers 100 (E-stop 1/0) and 101 (write 1: drive fault) do the same.\n"
         "  --verbose           log faults and line events on stderr\n"
         "start-up: prints 'cellsim: tcp 127.0.0.1 PORT', 'cellsim: rtu PATH', 'cellsim: ascii\n"
-        "  PATH' and last 'cellsim: ready pid PID' on stdout; --pidfile FILE writes the PID.\n"
+        "  PATH', 'cellsim: gev 127.0.0.1 SERIAL width W height H profiles P x0 X dx DX y0 Y\n"
+        "  dy DY z0 Z lo LO scale S' and last 'cellsim: ready pid PID' on stdout; --pidfile FILE "
+        "writes the PID.\n"
         "  SIGTERM or SIGINT stops it. Exit status: 0 stopped, 1 failed, 2 bad usage.\n");
     return code;
 }
@@ -145,6 +157,10 @@ int main(int argc, char **argv)
     double speed = 200, settle = 0, lim[4] = {-10, 210, -10, 160};
     long seed = 1, unit;
     int homed = 0, verbose = 0, warp_set = 0;
+    sim_gev_cfg_t gev = {
+        .width = 1024, .height = 64, .profiles = 256, .scale = 0.001, .flank_deg = 60};
+    sim_gev_t *gevs = NULL;
+    long gl;
     sim_stage_init(&stage, &faults);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -187,7 +203,23 @@ int main(int argc, char **argv)
                 rig.stage_unit = (int)unit;
             else
                 rig.probe_unit = (int)unit;
-        } else if (!strcmp(a, "--part"))
+        } else if (!strcmp(a, "--gev"))
+            bad = !v[0] || strlen(v) > 15 || !(gev.serial = v);
+        else if (!strcmp(a, "--gev-loss"))
+            bad = cli_double(v, &gev.loss) || gev.loss < 0 || gev.loss > 1;
+        else if (!strcmp(a, "--gev-width")) {
+            bad = cli_int(v, 2, 2048, &gl);
+            gev.width = (int)gl;
+        } else if (!strcmp(a, "--gev-height")) {
+            bad = cli_int(v, 1, 2048, &gl);
+            gev.height = (int)gl;
+        } else if (!strcmp(a, "--gev-profiles"))
+            bad = cli_int(v, 2, 100000, &gev.profiles);
+        else if (!strcmp(a, "--gev-scale"))
+            bad = cli_double(v, &gev.scale) || !(gev.scale > 0);
+        else if (!strcmp(a, "--gev-flank"))
+            bad = cli_double(v, &gev.flank_deg) || !(gev.flank_deg > 0);
+        else if (!strcmp(a, "--part"))
             part_path = v;
         else if (!strcmp(a, "--dent-depth"))
             bad = cli_double(v, &dent) || dent < 0;
@@ -226,8 +258,9 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (!net.nports) {
-        fprintf(stderr, "cellsim: no server asked (--tcp, --rtu or --ascii; cellsim --help)\n");
+    if (!net.nports && !gev.serial) {
+        fprintf(stderr,
+                "cellsim: no server asked (--tcp, --rtu, --ascii or --gev; cellsim --help)\n");
         return 2;
     }
     if (rig.stage_unit == rig.probe_unit) {
@@ -277,10 +310,29 @@ int main(int argc, char **argv)
     sa.sa_handler = on_signal;
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
-    if (sim_net_start(&net, msg, sizeof msg)) {
+    if (net.nports && sim_net_start(&net, msg, sizeof msg)) {
         fprintf(stderr, "cellsim: %s\n", msg);
         sim_part_free(&part);
         return 1;
+    }
+    if (gev.serial) {
+        gev.part = &part;
+        gev.z0 = z0;
+        gev.lo = range[0];
+        gev.hi = range[1];
+        gev.noise = noise;
+        gev.seed = (uint64_t)seed;
+        if (sim_gev_start(&gevs, &gev, msg, sizeof msg)) {
+            fprintf(stderr, "cellsim: %s\n", msg);
+            if (net.nports)
+                sim_net_stop(&net);
+            sim_part_free(&part);
+            return 1;
+        }
+        printf("cellsim: gev 127.0.0.1 %s width %d height %d profiles %ld x0 %.17g dx %.17g y0 "
+               "%.17g dy %.17g z0 %.17g lo %.17g scale %.17g\n",
+               gev.serial, gev.width, gev.height, gev.profiles, gev.x0, gev.dx, gev.y0, gev.dy,
+               gev.z0, gev.lo, gev.scale);
     }
     for (int i = 0; i < net.nports; i++) {
         const sim_port_t *p = &net.port[i];
@@ -293,7 +345,9 @@ int main(int argc, char **argv)
         FILE *f = fopen(pidfile, "w");
         if (!f || fprintf(f, "%ld\n", (long)getpid()) < 0 || fclose(f)) {
             fprintf(stderr, "cellsim: %s: cannot write the PID file\n", pidfile);
-            sim_net_stop(&net);
+            sim_gev_stop(gevs);
+            if (net.nports)
+                sim_net_stop(&net);
             sim_part_free(&part);
             return 1;
         }
@@ -306,9 +360,16 @@ int main(int argc, char **argv)
             control(ctl, &faults, &stage);
             next_ctl = sim_now_ms() + 100;
         }
-        sim_net_poll(&net, 100);
+        if (net.nports)
+            sim_net_poll(&net, 100);
+        else {
+            struct timespec ts = {0, 100000000L};
+            nanosleep(&ts, NULL);
+        }
     }
-    sim_net_stop(&net);
+    sim_gev_stop(gevs);
+    if (net.nports)
+        sim_net_stop(&net);
     sim_part_free(&part);
     if (pidfile)
         unlink(pidfile);
