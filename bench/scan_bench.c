@@ -5,6 +5,13 @@
  *       the part's nominal net, until POINTS points were delivered; then
  *       nf_fit_finish and nf_fit_solve: the fit-ready time after the last
  *       profile. Points/s sustained, frames lost, peak RSS.
+ *   otf-mb STAGE_URI PROBE_URI ROWS PERIOD_US NOISE  on the fly over
+ *       cellsim's Modbus: each row the stage is sent across at its speed
+ *       (no wait), the probe's streaming mode armed (its trigger simulated
+ *       in cellsim, docs/rig-devices.md), the FIFO popped while it moves and
+ *       drained after, the entries paired by scan_otf and streamed into the
+ *       fit; every 37th point checked against the part itself. Exit 1 when
+ *       a point is wrong or a loss is not accounted for.
  *   otf POINTS  on-the-fly pairing in one process: the stage runs raster
  *       rows (190 mm, 1 mm apart, 140 a pass) at constant speed, a trigger every SPACING mm latches both
  *       encoder counts, the probe's reading of the part at that position
@@ -17,6 +24,8 @@
  * knot domain (the panel is a height field over x, y), so the figures are
  * those of the stream and the accumulation, not of projection. */
 #include "hal_gev.h"
+#include "hal_regmap.h"
+#include "hal_rig.h"
 #include "nf_fit.h"
 #include "nf_solve.h"
 #include "scan_otf.h"
@@ -336,22 +345,167 @@ static int run_otf(const sim_part_t *part, long want)
     return rc || frc || !accounted ? 1 : 0;
 }
 
+/* --- on the fly over cellsim's Modbus: the stage and the probe's FIFO --- */
+
+/* A non-blocking move: target and command in one write (registers 0-4 are
+ * applied in order: an atomic move, docs/rig-devices.md). */
+static int move_start(hal_t *h, double x, double y)
+{
+    int32_t tx = (int32_t)lround(x * 1e3), ty = (int32_t)lround(y * 1e3);
+    uint16_t r[5] = {(uint16_t)((uint32_t)tx >> 16), (uint16_t)((uint32_t)tx & 0xFFFFu),
+                     (uint16_t)((uint32_t)ty >> 16), (uint16_t)((uint32_t)ty & 0xFFFFu),
+                     STG_CMD_MOVE};
+    return hal_write_regs(h, STG_TARGET_X, 5, r);
+}
+
+typedef struct mb_ctx {
+    bfit_t *b;
+    const sim_part_t *part;
+    double noise;
+    long checked, wrong;
+    double worst;
+} mb_ctx_t;
+
+/* Each point into the fit; every 37th checked against the part itself:
+ * a reading paired with another trigger's position would be off by the
+ * part's change over the stage's travel between them. */
+static int mb_row(void *ctx, long row, const double *xyz, const uint64_t *trig, long n, int last)
+{
+    mb_ctx_t *m = ctx;
+    (void)row;
+    (void)last;
+    for (long i = 0; i < n; i++) {
+        bfit_point(m->b, xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+        double z;
+        if (trig[i] % 37 == 0 && !sim_part_z(m->part, xyz[3 * i], xyz[3 * i + 1], &z)) {
+            double e = fabs(xyz[3 * i + 2] - z);
+            m->checked++;
+            m->worst = e > m->worst ? e : m->worst;
+            /* noise, and the latched position rounded to 1 um on a slope */
+            if (!(e <= 6 * m->noise + 0.002))
+                m->wrong++;
+        }
+    }
+    bfit_flush(m->b);
+    return 0;
+}
+
+static int run_otf_mb(const sim_part_t *part, const char *stage_uri, const char *probe_uri,
+                      long rows_n, long period_us, double noise)
+{
+    hal_opts_t ho = HAL_OPTS_DEFAULT;
+    hal_rig_t *rig;
+    char msg[512];
+    int rc = hal_rig_open(stage_uri, probe_uri, &ho, &rig, msg, sizeof msg);
+    if (rc) {
+        fprintf(stderr, "scan-bench: %s\n", msg);
+        return 1;
+    }
+    /* The probe at z0 50 over the stage frame, no offset: scan.h's model
+     * with the latched positions in um. */
+    const scan_kin_t kin = {50.0, {0, 0, 0}};
+    const scan_otf_enc_t enc = {{0, 0}, {0.001, 0.001}};
+    static scan_otf_t o;
+    bfit_t b;
+    if (bfit_init(&b, part, SCAN_OTF_ROW_MAX)) {
+        fprintf(stderr, "scan-bench: fit set-up failed\n");
+        hal_rig_close(rig);
+        return 1;
+    }
+    mb_ctx_t m = {&b, part, noise, 0, 0, 0};
+    scan_otf_init(&o, &kin, &enc, mb_row, &m);
+    unsigned long dropped = 0;
+    double t_stream = 0;
+    const double xa = 10, xb = 190;
+    uint32_t bits = 0;
+    rc = rig->stage.ops->status(rig->stage.ctx, &bits);
+    if (!rc && !(bits & RIG_ST_HOMED))
+        rc = rig->stage.ops->home(rig->stage.ctx);
+    for (long row = 0; row < rows_n && !rc; row++) {
+        double y = 10 + (double)(row % 130);
+        double x0 = row % 2 ? xb : xa, x1 = row % 2 ? xa : xb;
+        rc = rig->stage.ops->move_to(rig->stage.ctx, x0, y);
+        double t0 = now();
+        if (!rc)
+            rc = scan_otf_row_begin(&o, row);
+        if (!rc)
+            rc = move_start(rig->st.h, x1, y);
+        if (!rc)
+            rc = hal_probe_stream_start(&rig->pr, (uint32_t)period_us);
+        int moving = 1;
+        while (!rc) {
+            rig_reading_t rd[256];
+            rig_trig_event_t pos[256];
+            size_t n = 0;
+            rc = hal_probe_stream_read(&rig->pr, rd, pos, 256, &n, &dropped);
+            if (!rc && n)
+                rc = scan_otf_trig(&o, pos, n);
+            if (!rc && n)
+                rc = scan_otf_read(&o, rd, n);
+            if (rc || (!moving && !n))
+                break;
+            if (moving && n < 256) {
+                uint16_t st;
+                rc = hal_read_regs(rig->st.h, 'h', STG_STATUS, 1, &st);
+                if (!rc && !(st & RIG_ST_BUSY)) {
+                    moving = 0; /* the row's end: stop the triggers, drain the FIFO */
+                    rc = hal_probe_stream_stop(&rig->pr);
+                }
+            }
+        }
+        if (!rc)
+            rc = scan_otf_row_end(&o, 0, 0);
+        t_stream += now() - t0;
+    }
+    int frc = 0;
+    double ready = rc ? 0 : bfit_ready(&b, &frc);
+    const scan_otf_counts_t *c = &o.c;
+    /* Entries the probe dropped on a full FIFO are numbers lost on both
+     * sides: the two counts must agree. */
+    int accounted = c->both_lost == dropped && !c->trig_no_read && !c->read_no_trig;
+    printf("{\"mode\": \"otf-mb\", \"rows\": %ld, \"period_us\": %ld, \"triggers\": %llu, "
+           "\"paired\": %llu, \"nosurf\": %llu, \"fitted\": %ld, \"dropped_by_probe\": %lu, "
+           "\"both_lost\": %llu, \"lost_readings\": %llu, \"lost_triggers\": %llu, \"dup\": "
+           "%llu, \"late\": %llu, \"accounted\": %d, \"checked\": %ld, \"wrong\": %ld, "
+           "\"worst_mm\": %.4f, \"seconds\": %.3f, \"points_per_s\": %.0f, \"fit_ready_s\": "
+           "%.3f, \"maxrss_kb\": %ld, \"rc\": %d}\n",
+           rows_n, period_us, (unsigned long long)c->trig, (unsigned long long)c->paired,
+           (unsigned long long)c->nosurf, b.points, dropped, (unsigned long long)c->both_lost,
+           (unsigned long long)c->trig_no_read, (unsigned long long)c->read_no_trig,
+           (unsigned long long)(c->dup_read + c->dup_trig), (unsigned long long)c->late, accounted,
+           m.checked, m.wrong, m.worst, t_stream,
+           t_stream > 0 ? (double)(c->paired + c->nosurf) / t_stream : 0, ready, maxrss_kb(),
+           rc ? rc : frc);
+    if (rc)
+        fprintf(stderr, "scan-bench: %s (%s; %s)\n", rig_strerror(rc), hal_stage_error(&rig->st),
+                hal_probe_error(&rig->pr));
+    bfit_free(&b);
+    hal_rig_close(rig);
+    return rc || frc || !accounted || m.wrong || !m.checked ? 1 : 0;
+}
+
 int main(int argc, char **argv)
 {
     sim_part_t part;
     char msg[512];
-    if (argc < 3 || (strcmp(argv[1], "gev") && strcmp(argv[1], "otf")) ||
-        (!strcmp(argv[1], "gev") && argc < 5)) {
-        fprintf(stderr, "usage: scan-bench gev URI 'GEOMETRY' POINTS [RATE] | otf POINTS\n");
+    if (argc < 3 ||
+        (strcmp(argv[1], "gev") && strcmp(argv[1], "otf") && strcmp(argv[1], "otf-mb")) ||
+        (!strcmp(argv[1], "gev") && argc < 5) || (!strcmp(argv[1], "otf-mb") && argc < 7)) {
+        fprintf(stderr, "usage: scan-bench gev URI 'GEOMETRY' POINTS [RATE] | otf POINTS |\n"
+                        "       otf-mb STAGE_URI PROBE_URI ROWS PERIOD_US NOISE\n");
         return 2;
     }
     if (sim_part_builtin(&part, msg, sizeof msg)) {
         fprintf(stderr, "scan-bench: %s\n", msg);
         return 1;
     }
-    int rc = !strcmp(argv[1], "gev")
-                 ? run_gev(&part, argv[2], argv[3], atol(argv[4]), argc > 5 ? atof(argv[5]) : 100)
-                 : run_otf(&part, atol(argv[2]));
+    int rc;
+    if (!strcmp(argv[1], "gev"))
+        rc = run_gev(&part, argv[2], argv[3], atol(argv[4]), argc > 5 ? atof(argv[5]) : 100);
+    else if (!strcmp(argv[1], "otf"))
+        rc = run_otf(&part, atol(argv[2]));
+    else
+        rc = run_otf_mb(&part, argv[2], argv[3], atol(argv[4]), atol(argv[5]), atof(argv[6]));
     sim_part_free(&part);
     return rc;
 }

@@ -39,6 +39,9 @@ typedef struct hal_probe {
     int modbus;    /* 1: input registers; 0: ASCII protocol */
     double lo, hi; /* measuring range, mm */
     char err[320];
+    /* Appended: streaming (Modbus FIFO). */
+    uint16_t overrun; /* the FIFO's overrun register at the last read */
+    int streaming;
 } hal_probe_t;
 
 /* Bind a probe to an open transport: Modbus (rtu:, tcp:) uses the input
@@ -47,6 +50,19 @@ typedef struct hal_probe {
 int hal_probe_init(hal_probe_t *p, hal_t *h);
 extern const rig_probe_ops_t hal_probe_ascii_ops; /* ctx: hal_probe_t * */
 extern const rig_probe_ops_t hal_probe_modbus_ops;
+
+/* Streaming over Modbus (hal_regmap.h's PRB_H_* and PRB_FIFO_*): arm one
+ * reading per trigger every period_us (numbers restart at 0), stop, and
+ * pop what the FIFO holds: up to max entries (at most PRB_FIFO_MAX_READ a
+ * request, as many requests as it takes while entries remain), each a
+ * reading (r) and the position latched at its trigger (pos: enc in um;
+ * RIG_TRIG_F_OVERRUN on the first event after the probe dropped entries on
+ * a full FIFO, *dropped adds how many). For scan_otf, which pairs them by
+ * number. RIG_EUNSUPPORTED on the ASCII variant. */
+int hal_probe_stream_start(hal_probe_t *p, uint32_t period_us);
+int hal_probe_stream_stop(hal_probe_t *p);
+int hal_probe_stream_read(hal_probe_t *p, rig_reading_t *r, rig_trig_event_t *pos, size_t max,
+                          size_t *n, unsigned long *dropped);
 
 /* Parse one ASCII reply line (without CR LF) to a "M0" request: RIG_OK and
  * *mm, RIG_ENOSURF for "M0,FFFFFFF", RIG_EEXCEPTION for "ER,M0,nn",

@@ -370,6 +370,7 @@ int main(int argc, char **argv)
     sim_gev_stop(gevs);
     if (net.nports)
         sim_net_stop(&net);
+    sim_stream_free(&probe);
     sim_part_free(&part);
     if (pidfile)
         unlink(pidfile);
