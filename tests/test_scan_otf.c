@@ -136,7 +136,7 @@ static void deliver(scan_otf_t *o, const plan_t *p, long lag)
             }
         }
         assert_int_equal(scan_otf_trig(o, ev, ne), RIG_OK);
-        rig_reading_t rd[32], dups[16];
+        rig_reading_t rd[32] = {{0}}, dups[16] = {{0}};
         size_t nrd = 0, ndup = 0;
         long upto = nt - (long)(urand() * (double)lag);
         if (nt >= p->n)
