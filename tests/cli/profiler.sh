@@ -60,7 +60,7 @@ figure() { sed -n "s/.* $1 \([0-9.e+-]*\).*/\1/p" "$T/out"; }
 # wrap: the fake camera starts at 65400), 100 values of each checked.
 sim_start clean || { echo "profiler: $pass passed, $fail failed"; exit 1; }
 expect 0 "200 frames, range values match the part, none lost" \
-    timeout 60 "$CHECK" "gev:127.0.0.1:$SER" 200 "$G" $NOISE $FLANK 100 100
+    timeout 60 "$CHECK" "gev:127.0.0.1:$SER" 200 "$G" $NOISE $FLANK 50 100
 cat "$T/out"
 [ "$(figure 'lost')" = 0 ] && ok "0 frames lost at 0 % injected loss" || no "lost $(figure 'lost')"
 c=$(figure 'checked'); d=$(figure 'dropouts')
@@ -80,7 +80,7 @@ stop_all
 # are lost, each one counted as a gap, and no delivered profile is shifted.
 sim_start loss --gev-loss 0.01 || { echo "profiler: $pass passed, $fail failed"; exit 1; }
 expect 0 "1 % packet loss: every loss counted, no shifted profile" \
-    timeout 60 "$CHECK" "gev:127.0.0.1:$SER" 40 "$G" $NOISE $FLANK 100 300 expect-loss
+    timeout 60 "$CHECK" "gev:127.0.0.1:$SER" 40 "$G" $NOISE $FLANK 50 300 expect-loss
 cat "$T/out"
 l=$(figure 'lost')
 le 1 "${l:-0}" && ok "$l frames lost and counted" || no "no loss seen at 1 %"
