@@ -1,7 +1,7 @@
 #!/bin/sh
 # bench/scan.sh BUILD: the scan benchmark (make bench-scan; issue 19):
 # on-the-fly pairing in process (build/scan-bench otf) and over cellsim's
-# Modbus TCP (otf-mb: the probe's streaming FIFO), and the laser line
+# Modbus TCP (otf-rig: the probe's streaming FIFO), and the laser line
 # profiler over GigE Vision on loopback (cellsim --gev, build/scan-bench
 # gev) at 0 % and 1 % injected packet loss, every profile streamed into the
 # fit; prints a Markdown table and keeps the JSON lines in
@@ -49,7 +49,7 @@ spid=$!
 i=0
 while ! grep -q '^cellsim: ready' "$T/mb.out" && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
 P=$(sed -n 's/^cellsim: tcp 127.0.0.1 //p' "$T/mb.out")
-timeout 300 "$B/scan-bench" otf-mb "tcp:127.0.0.1:$P:1" "tcp:127.0.0.1:$P:2" 3 50 0.002 | tee -a "$J"
+timeout 300 "$B/scan-bench" otf-rig "tcp:127.0.0.1:$P:1" "tcp:127.0.0.1:$P:2" 3 50 0.002 | tee -a "$J"
 kill -TERM "$spid" 2>/dev/null; wait "$spid" 2>/dev/null; spid=""
 sim_start 0
 for n in 1000000 10000000; do
@@ -69,7 +69,7 @@ f("mode") == "\"otf\"" {
     printf "| on the fly, in process (pairing + fit; part model %.2f s apart) | %s | %s | %s readings, %s triggers, %s duplicates (all injected ones: %s) | %s s | %s kB |\n",
         f("sim_seconds"), f("paired"), f("points_per_s"), f("lost_readings"), f("lost_triggers"), f("dup"),
         f("accounted") == 1 ? "yes" : "NO", f("fit_ready_s"), f("maxrss_kb") }
-f("mode") == "\"otf-mb\"" {
+f("mode") == "\"otf-rig\"" {
     printf "| on the fly over Modbus TCP (cellsim, %s us triggers) | %s | %s | %s dropped by the probe = %s lost on both sides; %s readings, %s triggers | %s s | %s kB |\n",
         f("period_us"), f("paired"), f("points_per_s"), f("dropped_by_probe"), f("both_lost"),
         f("lost_readings"), f("lost_triggers"), f("fit_ready_s"), f("maxrss_kb") }

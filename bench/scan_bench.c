@@ -5,7 +5,7 @@
  *       the part's nominal net, until POINTS points were delivered; then
  *       nf_fit_finish and nf_fit_solve: the fit-ready time after the last
  *       profile. Points/s sustained, frames lost, peak RSS.
- *   otf-mb STAGE_URI PROBE_URI ROWS PERIOD_US NOISE  on the fly over
+ *   otf-rig STAGE_URI PROBE_URI ROWS PERIOD_US NOISE  on the fly over
  *       cellsim's Modbus: each row the stage is sent across at its speed
  *       (no wait), the probe's streaming mode armed (its trigger simulated
  *       in cellsim, docs/rig-devices.md), the FIFO popped while it moves and
@@ -442,7 +442,7 @@ static int run_otf_mb(const sim_part_t *part, const char *stage_uri, const char 
                 rc = scan_otf_trig(&o, pos, n);
             if (!rc && n)
                 rc = scan_otf_read(&o, rd, n);
-            if (rc || (!moving && !n))
+            if (rc || (!moving && !n && !rig->pr.streaming))
                 break;
             if (moving && n < 256) {
                 uint16_t st;
@@ -463,7 +463,7 @@ static int run_otf_mb(const sim_part_t *part, const char *stage_uri, const char 
     /* Entries the probe dropped on a full FIFO are numbers lost on both
      * sides: the two counts must agree. */
     int accounted = c->both_lost == dropped && !c->trig_no_read && !c->read_no_trig;
-    printf("{\"mode\": \"otf-mb\", \"rows\": %ld, \"period_us\": %ld, \"triggers\": %llu, "
+    printf("{\"mode\": \"otf-rig\", \"rows\": %ld, \"period_us\": %ld, \"triggers\": %llu, "
            "\"paired\": %llu, \"nosurf\": %llu, \"fitted\": %ld, \"dropped_by_probe\": %lu, "
            "\"both_lost\": %llu, \"lost_readings\": %llu, \"lost_triggers\": %llu, \"dup\": "
            "%llu, \"late\": %llu, \"accounted\": %d, \"checked\": %ld, \"wrong\": %ld, "
@@ -489,10 +489,10 @@ int main(int argc, char **argv)
     sim_part_t part;
     char msg[512];
     if (argc < 3 ||
-        (strcmp(argv[1], "gev") && strcmp(argv[1], "otf") && strcmp(argv[1], "otf-mb")) ||
-        (!strcmp(argv[1], "gev") && argc < 5) || (!strcmp(argv[1], "otf-mb") && argc < 7)) {
+        (strcmp(argv[1], "gev") && strcmp(argv[1], "otf") && strcmp(argv[1], "otf-rig")) ||
+        (!strcmp(argv[1], "gev") && argc < 5) || (!strcmp(argv[1], "otf-rig") && argc < 7)) {
         fprintf(stderr, "usage: scan-bench gev URI 'GEOMETRY' POINTS [RATE] | otf POINTS |\n"
-                        "       otf-mb STAGE_URI PROBE_URI ROWS PERIOD_US NOISE\n");
+                        "       otf-rig STAGE_URI PROBE_URI ROWS PERIOD_US NOISE\n");
         return 2;
     }
     if (sim_part_builtin(&part, msg, sizeof msg)) {

@@ -4,7 +4,7 @@
  * reading, its status and sequence number come in one request, so they
  * belong together. Retries and reconnection are the transport's. The
  * streaming mode pops the probe's FIFO: readings with their trigger
- * numbers and latched positions. */
+ * numbers and latched positions (the ASCII variant's is in hal_probe.c). */
 #include "hal_priv.h"
 #include "hal_regmap.h"
 #include "hal_rig.h"
@@ -71,7 +71,7 @@ int hal_probe_stream_start(hal_probe_t *p, uint32_t period_us)
     if (!p || period_us < PRB_MIN_PERIOD_US || period_us > PRB_MAX_PERIOD_US)
         return RIG_EARG;
     if (!p->modbus)
-        return hal_probe_pfail(p, RIG_EUNSUPPORTED, "streaming: Modbus probes only");
+        return hal_probe_ascii_stream_start(p, period_us);
     uint16_t r[2] = {(uint16_t)(period_us >> 16), (uint16_t)(period_us & 0xFFFFu)};
     int rc = hal_write_regs(p->h, PRB_H_PERIOD, 2, r);
     if (rc)
@@ -86,7 +86,7 @@ int hal_probe_stream_stop(hal_probe_t *p)
     if (!p)
         return RIG_EARG;
     if (!p->modbus)
-        return hal_probe_pfail(p, RIG_EUNSUPPORTED, "streaming: Modbus probes only");
+        return hal_probe_ascii_stream_stop(p);
     uint16_t r[2] = {0, 0};
     int rc = hal_write_regs(p->h, PRB_H_PERIOD, 2, r);
     if (rc)
@@ -102,7 +102,7 @@ int hal_probe_stream_read(hal_probe_t *p, rig_reading_t *rd, rig_trig_event_t *p
         return RIG_EARG;
     *n = 0;
     if (!p->modbus)
-        return hal_probe_pfail(p, RIG_EUNSUPPORTED, "streaming: Modbus probes only");
+        return hal_probe_ascii_stream_read(p, rd, pos, max, n, dropped);
     while (*n < max) {
         size_t k = max - *n < PRB_FIFO_MAX_READ ? max - *n : PRB_FIFO_MAX_READ;
         uint16_t r[2 + PRB_FIFO_ENTRY * PRB_FIFO_MAX_READ];

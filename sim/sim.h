@@ -130,6 +130,12 @@ typedef struct sim_stream {
     size_t cap, head, count;
     uint16_t overrun;
     double uv[2]; /* the part's parameters at the last reading (warm start) */
+    /* The ASCII protocol's streaming (sim_ascii.c): entries go out as lines
+     * on the connection that asked, the end line after the last. */
+    uint32_t ascii_period; /* TP's value, us (0: 100) */
+    int ascii;             /* 0 off, 1 streaming, 2 stopped: end line after the queue */
+    int ascii_new;         /* MS just answered: the server records its connection */
+    int ascii_conn;        /* that connection (sim_net.c) */
 } sim_stream_t;
 
 /* --- the probe (sim_probe.c) --- */
@@ -185,5 +191,9 @@ int sim_rtu_frame_len(const uint8_t *buf, size_t n);
 /* --- ASCII probe protocol (sim_ascii.c) --- */
 /* Answer one request line (without its terminator) into out (with CR LF). */
 size_t sim_ascii_answer(sim_probe_t *pr, double now, const char *line, char *out, size_t cap);
+/* Streaming: queued entries as "SQ,..." lines into out (at most cap
+ * bytes, whole lines), then once stopped and empty the "MQ,..." end line;
+ * the bytes written. */
+size_t sim_ascii_stream_lines(sim_probe_t *pr, double now, char *out, size_t cap);
 
 #endif
