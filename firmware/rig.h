@@ -91,4 +91,59 @@ typedef struct rig_clock {
     void *ctx;
 } rig_clock_t;
 
+/* On-the-fly scanning (scan_otf.h): the stage keeps moving, a trigger box
+ * latches both encoder counts at every trigger, and the probe streams one
+ * reading per trigger. Both number their events from 0 at arming, 16 bits
+ * on the wire (wrapping), so a reading is paired with the position of the
+ * same trigger number, never by arrival order. */
+enum {
+    RIG_TRIG_F_OVERRUN = 1u << 0 /* the box's queue overflowed before this event */
+};
+
+typedef struct rig_trig_event {
+    uint16_t seq;   /* trigger number since arming, wraps */
+    uint8_t flags;  /* RIG_TRIG_F_* */
+    uint32_t t_us;  /* box time, us, wraps */
+    int32_t enc[2]; /* encoder counts of x and y latched at the trigger */
+} rig_trig_event_t;
+
+/* A trigger/encoder box: fires every period_us (0 keeps it) and queues one
+ * event per trigger; read returns the events queued so far (up to max,
+ * *n of them, 0 after its own short timeout). */
+typedef struct rig_trig_ops {
+    int version;
+    int (*set_period)(void *ctx, uint32_t period_us);
+    int (*arm)(void *ctx, int on); /* on: numbering restarts at 0 */
+    int (*read)(void *ctx, rig_trig_event_t *ev, size_t max, size_t *n);
+} rig_trig_ops_t;
+
+typedef struct rig_trig {
+    const rig_trig_ops_t *ops;
+    void *ctx;
+} rig_trig_t;
+
+/* Status of one streamed reading. */
+enum { RIG_RD_VALID = 0, RIG_RD_NOSURF = 1, RIG_RD_ERROR = 2 };
+
+typedef struct rig_reading {
+    uint16_t seq;   /* trigger number the probe saw, wraps */
+    uint8_t status; /* RIG_RD_* */
+    double d;       /* mm, when status is RIG_RD_VALID */
+} rig_reading_t;
+
+/* A probe in streaming mode: start arms it (one reading per trigger input,
+ * numbered from 0), read returns the readings queued so far, stop ends the
+ * stream (readings still in flight are delivered by the next reads). */
+typedef struct rig_probe_stream_ops {
+    int version;
+    int (*start)(void *ctx);
+    int (*stop)(void *ctx);
+    int (*read)(void *ctx, rig_reading_t *r, size_t max, size_t *n);
+} rig_probe_stream_ops_t;
+
+typedef struct rig_probe_stream {
+    const rig_probe_stream_ops_t *ops;
+    void *ctx;
+} rig_probe_stream_t;
+
 #endif

@@ -56,11 +56,14 @@ int hal_open(const char *uri, const hal_opts_t *opts, hal_t **h, char *msg, size
     case HAL_TTY: ctor = hal_tty_open; break;
     case HAL_SERIAL: ctor = hal_serial_open; break;
     case HAL_USB: ctor = hal_usb_open; break;
+    case HAL_GEV: break; /* not a byte or register transport: hal_gev_open */
     }
     if (!ctor) {
         if (msg && msglen)
             snprintf(msg, msglen, "%s: backend not built (%s)", uri,
-                     u.kind == HAL_USB ? "libusb" : "libserialport");
+                     u.kind == HAL_USB   ? "libusb"
+                     : u.kind == HAL_GEV ? "a profiler: hal_gev_open"
+                                         : "libserialport");
         return RIG_EUNSUPPORTED;
     }
     return ctor(&u, &o, h, msg, msglen);

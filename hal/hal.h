@@ -6,6 +6,8 @@
  *   tty:PATH:BAUD[:8N1]          byte stream on a tty or pty (termios), for
  *                                pseudo-terminals libserialport cannot open
  *   usb:VID:PID[:SERIAL]         bulk and control transfers (libusb)
+ *   gev:ADDRESS[:SERIAL]         a GigE Vision profiler (Aravis): parsed here,
+ *                                opened by hal_gev_open (hal_gev.h)
  * A backend fills the operations its wire has and leaves the rest NULL
  * (hal_* then returns RIG_EUNSUPPORTED). Every call has a timeout; failures
  * come back as rig_err_t codes (rig_err.h), with the detail (errno text,
@@ -25,7 +27,8 @@ typedef enum hal_kind {
     HAL_TCP = 2,
     HAL_SERIAL = 3,
     HAL_TTY = 4,
-    HAL_USB = 5
+    HAL_USB = 5,
+    HAL_GEV = 6 /* a GigE Vision profiler: hal_gev.h, not a hal_t transport */
 } hal_kind_t;
 
 /* A parsed device URI (hal_uri_parse). */
@@ -39,7 +42,7 @@ typedef struct hal_uri {
     int port;       /* tcp */
     int unit;       /* Modbus slave / unit id (rtu, tcp) */
     uint16_t vid, pid;
-    char serial[64]; /* usb: optional serial number, "" for any */
+    char serial[64]; /* usb, gev: optional serial number, "" for any */
 } hal_uri_t;
 
 /* Parse a URI of the forms above. RIG_EARG with the reason in msg. */

@@ -19,5 +19,10 @@ void hal_opts_fill(hal_opts_t *o, const hal_opts_t *in);
 int hal_probe_pfail(hal_probe_t *p, int code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 int hal_probe_modbus_range(hal_probe_t *p);
+/* The ASCII protocol's streaming (hal_probe.c), behind hal_probe_stream_*. */
+int hal_probe_ascii_stream_start(hal_probe_t *p, uint32_t period_us);
+int hal_probe_ascii_stream_stop(hal_probe_t *p);
+int hal_probe_ascii_stream_read(hal_probe_t *p, rig_reading_t *r, rig_trig_event_t *pos, size_t max,
+                                size_t *n, unsigned long *dropped);
 
 #endif

@@ -2,7 +2,9 @@
  * byte-stream transport (tty:, serial:): "M0" CR LF asks for a reading,
  * "M0,+01.234" is mm, "M0,FFFFFFF" out of range (RIG_ENOSURF), "ER,M0,nn"
  * an error; "RG" asks for the measuring range. Timeouts and malformed
- * lines are retried with backoff after waiting out a late reply. */
+ * lines are retried with backoff after waiting out a late reply. Streaming:
+ * "TP,<us>" and "MS" start one "SQ,<n>,<mm>,<x um>,<y um>" line per
+ * trigger, "MQ" stops them and "MQ,<triggers>,<dropped>" ends them. */
 #include "hal_priv.h"
 #include "hal_regmap.h"
 #include "hal_rig.h"
@@ -186,4 +188,144 @@ int hal_probe_init(hal_probe_t *p, hal_t *h)
         return hal_probe_modbus_range(p);
     char line[64];
     return transact(p, "RG\r\n", line, sizeof line, parse_rg, &p->lo, &p->hi);
+}
+
+/* "TP,nnnnnnn": the period the probe took, in *a. */
+static int parse_tp(const char *line, double *a, double *b)
+{
+    (void)b;
+    if (strncmp(line, "TP,", 3) || strlen(line) != 10 || strspn(line + 3, "0123456789") != 7)
+        return RIG_EPROTO;
+    *a = strtod(line + 3, NULL);
+    return RIG_OK;
+}
+
+static int parse_ms(const char *line, double *a, double *b)
+{
+    (void)a;
+    (void)b;
+    return strcmp(line, "MS") ? RIG_EPROTO : RIG_OK;
+}
+
+int hal_probe_ascii_stream_start(hal_probe_t *p, uint32_t period_us)
+{
+    char line[64], req[32];
+    double got = 0;
+    snprintf(req, sizeof req, "TP,%lu\r\n", (unsigned long)period_us);
+    int rc = transact(p, req, line, sizeof line, parse_tp, &got, NULL);
+    if (!rc && got != (double)period_us)
+        return hal_probe_pfail(p, RIG_EPROTO, "probe took period %.0f us, not %lu", got,
+                               (unsigned long)period_us);
+    if (!rc)
+        rc = transact(p, "MS\r\n", line, sizeof line, parse_ms, NULL, NULL);
+    if (rc)
+        return rc;
+    p->sn = 0;
+    p->streaming = 1;
+    return RIG_OK;
+}
+
+int hal_probe_ascii_stream_stop(hal_probe_t *p)
+{
+    int rc = hal_write(p->h, "MQ\r\n", 4);
+    return rc ? hal_probe_pfail(p, rc, "probe stream stop: %s", hal_last_error(p->h)) : RIG_OK;
+}
+
+/* An integer field of a streamed line up to its comma or end. */
+static int field_long(const char *s, const char **end, long *v)
+{
+    char *e;
+    *v = strtol(s, &e, 10);
+    if (e == s || (*e != ',' && *e))
+        return -1;
+    *end = e;
+    return 0;
+}
+
+/* One streamed line: an entry (1), the end line (2), or RIG_EPROTO. */
+static int stream_line(hal_probe_t *p, const char *line, rig_reading_t *r, rig_trig_event_t *t,
+                       unsigned long *dropped)
+{
+    const char *c;
+    long seq, x, y, trig, lost;
+    if (!strncmp(line, "MQ,", 3)) {
+        if (field_long(line + 3, &c, &trig) || *c != ',' || field_long(c + 1, &c, &lost) || *c ||
+            lost < 0)
+            return RIG_EPROTO;
+        if (dropped)
+            *dropped += (unsigned long)lost;
+        return 2;
+    }
+    if (strncmp(line, "SQ,", 3) || field_long(line + 3, &c, &seq) || *c != ',' || seq < 0 ||
+        seq > 65535)
+        return RIG_EPROTO;
+    const char *v = c + 1, *ve = strchr(v, ',');
+    if (!ve)
+        return RIG_EPROTO;
+    double d = 0;
+    uint8_t st;
+    if (!strncmp(v, "FFFFFFF,", 8))
+        st = RIG_RD_NOSURF;
+    else if (!strncmp(v, "ER01,", 5))
+        st = RIG_RD_ERROR;
+    else if (number(v, &c, &d) || c != ve)
+        return RIG_EPROTO;
+    else
+        st = RIG_RD_VALID;
+    if (field_long(ve + 1, &c, &x) || *c != ',' || field_long(c + 1, &c, &y) || *c)
+        return RIG_EPROTO;
+    (void)p;
+    rig_reading_t rd = {(uint16_t)seq, st, d};
+    rig_trig_event_t ev = {(uint16_t)seq, 0, 0, {(int32_t)x, (int32_t)y}};
+    *r = rd;
+    *t = ev;
+    return 1;
+}
+
+int hal_probe_ascii_stream_read(hal_probe_t *p, rig_reading_t *rd, rig_trig_event_t *pos,
+                                size_t max, size_t *n, unsigned long *dropped)
+{
+    hal_t *h = p->h;
+    int waited = 0;
+    while (*n < max) {
+        /* Whole lines in the buffer first. */
+        char *nl = memchr(p->sbuf, '\n', p->sn);
+        if (nl) {
+            size_t len = (size_t)(nl - p->sbuf);
+            if (!len || p->sbuf[len - 1] != '\r')
+                return hal_probe_pfail(p, RIG_EPROTO, "probe stream: line end without CR");
+            p->sbuf[len - 1] = '\0';
+            int k = stream_line(p, p->sbuf, &rd[*n], &pos[*n], dropped);
+            if (k < 0)
+                hal_probe_pfail(p, k, "probe stream: bad line '%.40s'", p->sbuf);
+            memmove(p->sbuf, nl + 1, p->sn - len - 1);
+            p->sn -= len + 1;
+            if (k < 0)
+                return k;
+            if (k == 2) {
+                p->streaming = 0;
+                return RIG_OK;
+            }
+            ++*n;
+            continue;
+        }
+        if (p->sn == sizeof p->sbuf)
+            return hal_probe_pfail(p, RIG_EPROTO, "probe stream: line longer than %zu bytes",
+                                   sizeof p->sbuf);
+        if (waited && !p->sn)
+            break; /* nothing more came within the wait */
+        size_t got = 0;
+        int rc = hal_read(h, p->sbuf + p->sn, sizeof p->sbuf - p->sn, 5, &got);
+        if (rc == RIG_ETIMEOUT || (!rc && !got)) {
+            if (waited)
+                break;
+            waited = 1;
+            continue;
+        }
+        if (rc)
+            return hal_probe_pfail(p, rc, "probe stream: %s", hal_last_error(h));
+        p->sn += got;
+        waited = 1;
+    }
+    return RIG_OK;
 }

@@ -57,6 +57,31 @@ enum {
 
 enum { PRB_ST_VALID = 1u << 0, PRB_ST_NOSURF = 1u << 1, PRB_ST_ERROR = 1u << 2 };
 
+/* Probe streaming (on the fly, docs/rig-devices.md): one reading per
+ * trigger input into a FIFO, each with its trigger number and the encoder
+ * positions latched at the trigger. Holding registers (functions 03, 06,
+ * 16) arm it; input registers from PRB_FIFO_COUNT read it, and a read of
+ * PRB_FIFO_COUNT with 2 + 8 k registers pops up to k entries at once. */
+enum {
+    PRB_H_PERIOD = 0, /* 0-1 uint32 us between triggers: > 0 arms (numbers from 0, FIFO
+                       * emptied), 0 stops */
+    PRB_H_NREGS = 2
+};
+enum {
+    PRB_FIFO_COUNT = 8,   /* entries waiting, before this read's pops (saturates at 65535) */
+    PRB_FIFO_OVERRUN = 9, /* entries dropped on a full FIFO since arming, mod 65536 */
+    PRB_FIFO_DATA = 10,   /* PRB_FIFO_ENTRY registers an entry, oldest first: */
+    PRB_FE_SEQ = 0,       /*   trigger number since arming, mod 65536 */
+    PRB_FE_STATUS = 1,    /*   PRB_ST_* */
+    PRB_FE_DIST = 2,      /*   2-3 int32 um (PRB_NOSURF_RAW out of range) */
+    PRB_FE_X = 4,         /*   4-5 int32 um, x latched at the trigger */
+    PRB_FE_Y = 6,         /*   6-7 int32 um, y latched at the trigger */
+    PRB_FIFO_ENTRY = 8,
+    PRB_FIFO_MAX_READ = 14 /* entries in one read (2 + 8 x 14 = 114 registers) */
+};
+#define PRB_MIN_PERIOD_US 20u
+#define PRB_MAX_PERIOD_US 1000000u
+
 #define PRB_NOSURF_RAW 0x7FFFFFFF
 
 /* Default unit ids: the stage and the probe on one bus or server. */

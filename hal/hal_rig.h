@@ -39,6 +39,11 @@ typedef struct hal_probe {
     int modbus;    /* 1: input registers; 0: ASCII protocol */
     double lo, hi; /* measuring range, mm */
     char err[320];
+    /* Appended: streaming (Modbus FIFO or ASCII lines). */
+    uint16_t overrun; /* the FIFO's overrun register at the last read */
+    int streaming;    /* 1 from start until the stream has ended (ASCII: its end line read) */
+    char sbuf[512];   /* ASCII: bytes of lines not yet complete */
+    size_t sn;
 } hal_probe_t;
 
 /* Bind a probe to an open transport: Modbus (rtu:, tcp:) uses the input
@@ -47,6 +52,22 @@ typedef struct hal_probe {
 int hal_probe_init(hal_probe_t *p, hal_t *h);
 extern const rig_probe_ops_t hal_probe_ascii_ops; /* ctx: hal_probe_t * */
 extern const rig_probe_ops_t hal_probe_modbus_ops;
+
+/* Streaming (docs/rig-devices.md): arm one reading per trigger every
+ * period_us (numbers restart at 0), stop, and take what has come: up to
+ * max entries, each a reading (r) and the position latched at its trigger
+ * (pos: enc in um; RIG_TRIG_F_OVERRUN on the first event after the probe
+ * dropped entries, *dropped adds how many). For scan_otf, which pairs them
+ * by number. Modbus: the FIFO (hal_regmap.h's PRB_H_*, PRB_FIFO_*), popped
+ * PRB_FIFO_MAX_READ a request while entries remain; stop ends the stream at
+ * once (drain it with reads until none come). ASCII: "TP" and "MS", then
+ * the "SQ" lines that have arrived (a read waits at most 5 ms for more);
+ * stop sends "MQ", and p->streaming stays 1 until its end line is read (its
+ * count of dropped readings added to *dropped). */
+int hal_probe_stream_start(hal_probe_t *p, uint32_t period_us);
+int hal_probe_stream_stop(hal_probe_t *p);
+int hal_probe_stream_read(hal_probe_t *p, rig_reading_t *r, rig_trig_event_t *pos, size_t max,
+                          size_t *n, unsigned long *dropped);
 
 /* Parse one ASCII reply line (without CR LF) to a "M0" request: RIG_OK and
  * *mm, RIG_ENOSURF for "M0,FFFFFFF", RIG_EEXCEPTION for "ER,M0,nn",

@@ -1,6 +1,7 @@
-/* hal_uri.c: strict parsing of device URIs (rtu:, tcp:, serial:, tty:, usb:)
+/* hal_uri.c: strict parsing of device URIs (rtu:, tcp:, serial:, tty:, usb:, gev:)
  * into hal_uri_t; every refusal gives a one-line reason naming the field. */
 #include "hal.h"
+#include <arpa/inet.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -168,5 +169,22 @@ int hal_uri_parse(const char *s, hal_uri_t *u, char *msg, size_t msglen)
         }
         return RIG_OK;
     }
-    return bad(msg, msglen, s, "unknown scheme (rtu, tcp, serial, tty, usb)", k);
+    if (!strcmp(k, "gev")) {
+        /* GigE Vision: opened by address (no discovery: loopback has no
+         * broadcast), so a dotted IPv4 address, never a name. */
+        u->kind = HAL_GEV;
+        struct in_addr a;
+        if (nf != 2 && nf != 3)
+            return bad(msg, msglen, s, "want gev:ADDRESS[:SERIAL]", NULL);
+        if (strlen(fld[1]) >= sizeof u->path || inet_pton(AF_INET, fld[1], &a) != 1)
+            return bad(msg, msglen, s, "address not a dotted IPv4 address", fld[1]);
+        strcpy(u->path, fld[1]);
+        if (nf == 3) {
+            if (word(fld[2]) || strlen(fld[2]) >= sizeof u->serial)
+                return bad(msg, msglen, s, "bad serial number", fld[2]);
+            strcpy(u->serial, fld[2]);
+        }
+        return RIG_OK;
+    }
+    return bad(msg, msglen, s, "unknown scheme (rtu, tcp, serial, tty, usb, gev)", k);
 }

@@ -5,7 +5,8 @@
 set -eu
 
 # The rig's libraries are build dependencies: cellfit talks to devices.
-build_pkgs="gcc make libc6-dev pkg-config zlib1g-dev libmodbus-dev libserialport-dev libusb-1.0-0-dev"
+# libaravis-dev: the GigE Vision profiler (hal/hal_gev.c) and its simulator (sim/sim_gev.c).
+build_pkgs="gcc make libc6-dev pkg-config zlib1g-dev libmodbus-dev libserialport-dev libusb-1.0-0-dev libaravis-dev"
 # The simulated rig's wiring and the third-party peers the tests use.
 rig_pkgs="socat mbpoll python3-pymodbus python3-serial python3-serial-asyncio umockdev libumockdev-dev"
 test_pkgs="$rig_pkgs libcmocka-dev clang libclang-rt-14-dev cppcheck clang-format valgrind python3 libocct-data-exchange-dev libocct-foundation-dev libocct-modeling-data-dev g++ gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm"

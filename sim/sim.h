@@ -108,6 +108,35 @@ void sim_part_free(sim_part_t *p);
 /* z of the real part (nominal + deviation) above (x, y): 0, or 1 when the
  * part is not below (x, y). */
 int sim_part_z(const sim_part_t *p, double x, double y, double *z);
+/* The same from a start uv (NaN: the nearest seed sample), which gets the
+ * solution: along a profile each point starts from the last, so Newton
+ * takes a step or two instead of a search of the seed grid. */
+int sim_part_z_near(const sim_part_t *p, double x, double y, double uv[2], double *z);
+
+/* --- the probe's streaming mode (sim_stream.c) --- */
+typedef struct sim_fifo_ent {
+    uint16_t seq, status;
+    int32_t d_um, x_um, y_um;
+} sim_fifo_ent_t;
+
+/* The trigger input is simulated inside cellsim (there is no trigger box
+ * on its wires): every period_us from arming, the probe measures at the
+ * stage's position at that instant and latches it with the reading. */
+typedef struct sim_stream {
+    uint32_t period_us;   /* 0: not streaming */
+    double t_arm;         /* ms */
+    uint64_t k;           /* next trigger number */
+    sim_fifo_ent_t *fifo; /* cap entries (allocated at the first arming) */
+    size_t cap, head, count;
+    uint16_t overrun;
+    double uv[2]; /* the part's parameters at the last reading (warm start) */
+    /* The ASCII protocol's streaming (sim_ascii.c): entries go out as lines
+     * on the connection that asked, the end line after the last. */
+    uint32_t ascii_period; /* TP's value, us (0: 100) */
+    int ascii;             /* 0 off, 1 streaming, 2 stopped: end line after the queue */
+    int ascii_new;         /* MS just answered: the server records its connection */
+    int ascii_conn;        /* that connection (sim_net.c) */
+} sim_stream_t;
 
 /* --- the probe (sim_probe.c) --- */
 typedef struct sim_probe {
@@ -120,12 +149,26 @@ typedef struct sim_probe {
     sim_rng_t rng;
     uint16_t seq;
     sim_faults_t *faults;
+    sim_stream_t stream;
 } sim_probe_t;
 
 /* One reading at the stage's present position: 0 and *d, 1 out of range,
  * 2 sensor error (fault). wire says which server asked (fault filters). */
 int sim_probe_measure(sim_probe_t *pr, double now, int wire, double *d);
 int sim_probe_read_input(sim_probe_t *pr, double now, int addr, int n, uint16_t *out);
+/* The same reading with the stage at xy, the part from a warm start uv
+ * (NaN: a fresh search; sim_part_z_near). */
+int sim_probe_measure_at(sim_probe_t *pr, const double xy[2], int wire, double uv[2], double *d);
+
+/* Streaming (sim_stream.c): triggers up to now taken (call before any
+ * request is served, so the stage has not yet moved on); the holding
+ * registers of the probe unit; the FIFO's input registers. Each returns 0
+ * or a Modbus exception code. */
+void sim_stream_catch_up(sim_probe_t *pr, double now);
+int sim_stream_read_holding(sim_probe_t *pr, int addr, int n, uint16_t *out);
+int sim_stream_write(sim_probe_t *pr, double now, int addr, int n, const uint16_t *in);
+int sim_stream_read_fifo(sim_probe_t *pr, int addr, int n, uint16_t *out);
+void sim_stream_free(sim_probe_t *pr);
 
 /* --- Modbus (sim_mb.c) --- */
 typedef struct sim_rig {
@@ -148,5 +191,9 @@ int sim_rtu_frame_len(const uint8_t *buf, size_t n);
 /* --- ASCII probe protocol (sim_ascii.c) --- */
 /* Answer one request line (without its terminator) into out (with CR LF). */
 size_t sim_ascii_answer(sim_probe_t *pr, double now, const char *line, char *out, size_t cap);
+/* Streaming: queued entries as "SQ,..." lines into out (at most cap
+ * bytes, whole lines), then once stopped and empty the "MQ,..." end line;
+ * the bytes written. */
+size_t sim_ascii_stream_lines(sim_probe_t *pr, double now, char *out, size_t cap);
 
 #endif

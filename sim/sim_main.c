@@ -5,12 +5,14 @@
 #include "cf_opt.h"
 #include "hal_regmap.h"
 #include "sim.h"
+#include "sim_gev.h"
 #include "sim_net.h"
 #include <errno.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 static volatile sig_atomic_t g_stop;
@@ -24,7 +26,7 @@ static void on_signal(int sig)
 /* What --help says beyond the option lines: the wires, the part, the
  * fault language and the start-up lines tests wait for. */
 static const char descr[] =
-    "Servers: at least one of --tcp, --rtu, --ascii (up to 8 in all). Every Modbus server "
+    "Servers: at least one of --tcp, --rtu, --ascii (up to 8 in all) or --gev. Every Modbus server "
     "carries the stage (holding registers, --stage-unit; on TCP also units 0 and 255) and the "
     "probe (input registers, --probe-unit). docs/rig-devices.md has the register map.\n"
     "The part: the nominal (--part, or the built-in panel: cellfit gen's nominal, 200 x 150 mm, "
@@ -208,6 +210,9 @@ int main(int argc, char **argv)
     int homed = 0, verbose = 0, warp_set = 0;
     int stage_unit = HAL_STAGE_UNIT, probe_unit = HAL_PROBE_UNIT;
     fault_specs_t specs = {{0}, 0};
+    sim_gev_cfg_t gev = {
+        .width = 1024, .height = 64, .profiles = 256, .scale = 0.001, .flank_deg = 60};
+    sim_gev_t *gevs = NULL;
     sim_stage_init(&stage, &faults);
     const cf_opt_t opts[] = {
         {.name = "tcp",
@@ -245,6 +250,54 @@ int main(int argc, char **argv)
          .help = "the probe's Modbus unit",
          .lo = 1,
          .hi = 247},
+        {.name = "gev",
+         .kind = CF_OPT_STR,
+         .dst = &gev.serial,
+         .arg = "SERIAL",
+         .help = "the laser line profiler: Aravis's fake GigE Vision camera on 127.0.0.1 (port "
+                 "3956: one per machine), opened as gev:127.0.0.1:SERIAL (docs/rig-profiler.md)"},
+        {.name = "gev-loss",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &gev.loss,
+         .arg = "R",
+         .help = "the profiler's GVSP packet loss ratio",
+         .lo = 0,
+         .hi = 1},
+        {.name = "gev-width",
+         .kind = CF_OPT_INT,
+         .dst = &gev.width,
+         .arg = "W",
+         .help = "points per profile",
+         .lo = 2,
+         .hi = 2048},
+        {.name = "gev-height",
+         .kind = CF_OPT_INT,
+         .dst = &gev.height,
+         .arg = "H",
+         .help = "profiles a frame",
+         .lo = 1,
+         .hi = 2048},
+        {.name = "gev-profiles",
+         .kind = CF_OPT_LONG,
+         .dst = &gev.profiles,
+         .arg = "P",
+         .help = "profiles over one pass of the part",
+         .lo = 2,
+         .hi = 100000},
+        {.name = "gev-scale",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &gev.scale,
+         .arg = "MM",
+         .help = "mm per range count",
+         .lo = 1e-9,
+         .hi = 1e3},
+        {.name = "gev-flank",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &gev.flank_deg,
+         .arg = "DEG",
+         .help = "no reading on flanks steeper than DEG degrees",
+         .lo = 1e-6,
+         .hi = 90},
         {.name = "part",
          .kind = CF_OPT_STR,
          .dst = &part_path,
@@ -368,8 +421,13 @@ int main(int argc, char **argv)
             return 2;
     rig.stage_unit = stage_unit;
     rig.probe_unit = probe_unit;
-    if (!net.nports) {
-        fprintf(stderr, "cellsim: no server asked (--tcp, --rtu or --ascii; cellsim --help)\n");
+    if (gev.serial && (!gev.serial[0] || strlen(gev.serial) > 15)) {
+        fprintf(stderr, "cellsim: --gev '%s': a serial of 1 to 15 characters\n", gev.serial);
+        return 2;
+    }
+    if (!net.nports && !gev.serial) {
+        fprintf(stderr,
+                "cellsim: no server asked (--tcp, --rtu, --ascii or --gev; cellsim --help)\n");
         return 2;
     }
     if (rig.stage_unit == rig.probe_unit) {
@@ -419,10 +477,29 @@ int main(int argc, char **argv)
     sa.sa_handler = on_signal;
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
-    if (sim_net_start(&net, msg, sizeof msg)) {
+    if (net.nports && sim_net_start(&net, msg, sizeof msg)) {
         fprintf(stderr, "cellsim: %s\n", msg);
         sim_part_free(&part);
         return 1;
+    }
+    if (gev.serial) {
+        gev.part = &part;
+        gev.z0 = z0;
+        gev.lo = range[0];
+        gev.hi = range[1];
+        gev.noise = noise;
+        gev.seed = (uint64_t)seed;
+        if (sim_gev_start(&gevs, &gev, msg, sizeof msg)) {
+            fprintf(stderr, "cellsim: %s\n", msg);
+            if (net.nports)
+                sim_net_stop(&net);
+            sim_part_free(&part);
+            return 1;
+        }
+        printf("cellsim: gev 127.0.0.1 %s width %d height %d profiles %ld x0 %.17g dx %.17g y0 "
+               "%.17g dy %.17g z0 %.17g lo %.17g scale %.17g\n",
+               gev.serial, gev.width, gev.height, gev.profiles, gev.x0, gev.dx, gev.y0, gev.dy,
+               gev.z0, gev.lo, gev.scale);
     }
     for (int i = 0; i < net.nports; i++) {
         const sim_port_t *p = &net.port[i];
@@ -435,7 +512,9 @@ int main(int argc, char **argv)
         FILE *f = fopen(pidfile, "w");
         if (!f || fprintf(f, "%ld\n", (long)getpid()) < 0 || fclose(f)) {
             fprintf(stderr, "cellsim: %s: cannot write the PID file\n", pidfile);
-            sim_net_stop(&net);
+            sim_gev_stop(gevs);
+            if (net.nports)
+                sim_net_stop(&net);
             sim_part_free(&part);
             return 1;
         }
@@ -448,9 +527,17 @@ int main(int argc, char **argv)
             control(ctl, &faults, &stage);
             next_ctl = sim_now_ms() + 100;
         }
-        sim_net_poll(&net, 100);
+        if (net.nports) {
+            sim_net_poll(&net, 100);
+        } else {
+            struct timespec ts = {0, 100000000L};
+            nanosleep(&ts, NULL);
+        }
     }
-    sim_net_stop(&net);
+    sim_gev_stop(gevs);
+    if (net.nports)
+        sim_net_stop(&net);
+    sim_stream_free(&probe);
     sim_part_free(&part);
     if (pidfile)
         unlink(pidfile);

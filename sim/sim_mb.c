@@ -1,8 +1,10 @@
 /* sim_mb.c: the simulator's Modbus server side: request PDUs (functions
  * 03, 04, 06, 16) answered from the stage and probe models, exceptions
- * for the rest, the RTU CRC and RTU request lengths. Framing is done here
+ * for the rest (the probe unit's holding registers and FIFO are its
+ * streaming mode, sim_stream.c), the RTU CRC and RTU request lengths. Framing is done here
  * rather than by libmodbus's server so that faults can touch single bytes
  * and one bus can carry two unit ids (stage and probe). */
+#include "hal_regmap.h"
 #include "sim.h"
 
 uint16_t sim_crc16(const uint8_t *p, size_t n)
@@ -56,6 +58,10 @@ int sim_mb_pdu(sim_rig_t *r, int wire, int unit, const uint8_t *req, size_t n, u
     if (busy)
         return exc(req, rsp, 6);
     double now = sim_now_ms();
+    /* Triggers up to now first, while the stage is still on the segment
+     * they fell in. */
+    if (r->probe)
+        sim_stream_catch_up(r->probe, now);
     uint8_t fc = req[0];
     uint16_t regs[125];
     if (fc == 3 || fc == 4) {
@@ -66,9 +72,14 @@ int sim_mb_pdu(sim_rig_t *r, int wire, int unit, const uint8_t *req, size_t n, u
             return exc(req, rsp, 3);
         int e;
         if (fc == 3)
-            e = is_stage ? sim_stage_read(r->stage, now, addr, cnt, regs) : 2;
+            e = is_stage ? sim_stage_read(r->stage, now, addr, cnt, regs)
+                         : sim_stream_read_holding(r->probe, addr, cnt, regs);
+        else if (!is_probe)
+            e = 2;
+        else if (addr >= PRB_FIFO_COUNT)
+            e = sim_stream_read_fifo(r->probe, addr, cnt, regs);
         else
-            e = is_probe ? sim_probe_read_input(r->probe, now, addr, cnt, regs) : 2;
+            e = sim_probe_read_input(r->probe, now, addr, cnt, regs);
         if (e)
             return exc(req, rsp, e);
         rsp[0] = fc;
@@ -94,7 +105,8 @@ int sim_mb_pdu(sim_rig_t *r, int wire, int unit, const uint8_t *req, size_t n, u
             for (int i = 0; i < cnt; i++)
                 regs[i] = (uint16_t)get16(req + 6 + 2 * i);
         }
-        int e = is_stage ? sim_stage_write(r->stage, now, addr, cnt, regs) : 2;
+        int e = is_stage ? sim_stage_write(r->stage, now, addr, cnt, regs)
+                         : sim_stream_write(r->probe, now, addr, cnt, regs);
         if (e)
             return exc(req, rsp, e);
         /* 06 echoes the request; 16 answers address and count. */

@@ -70,7 +70,7 @@ static sim_conn_t *tty_conn(sim_net_t *n, int p)
 static void conn_reset(sim_conn_t *c)
 {
     c->fd = -1;
-    c->nin = c->nout = 0;
+    c->nin = c->nout = c->nsout = 0;
 }
 
 static int port_open(sim_net_t *n, int i)
@@ -201,10 +201,14 @@ static int request(sim_net_t *n, sim_conn_t *c, int wire, const uint8_t *hdr, in
         return 0;
     uint8_t rsp[300];
     int rl;
-    if (wire == SIM_W_ASCII)
+    if (wire == SIM_W_ASCII) {
         rl = (int)sim_ascii_answer(n->rig->probe, sim_now_ms(), (const char *)pdu, (char *)rsp,
                                    sizeof rsp);
-    else
+        if (n->rig->probe->stream.ascii_new) { /* the stream's lines go to this line */
+            n->rig->probe->stream.ascii_new = 0;
+            n->rig->probe->stream.ascii_conn = (int)(c - n->conn);
+        }
+    } else
         rl = sim_mb_pdu(n->rig, wire, unit, pdu, plen, rsp, (f & (1u << SIM_F_BUSY)) != 0);
     if (rl > 0)
         reply(n, c, wire, hdr, unit, rsp, rl, f, ms);
@@ -323,6 +327,27 @@ static void conn_send(sim_net_t *n, sim_conn_t *c)
     }
 }
 
+/* The probe's streamed lines on the line that asked for them: what the
+ * pty takes now; the rest stays queued (in the FIFO or in sout). */
+static void stream_out(sim_net_t *n, sim_conn_t *c)
+{
+    if (!c->nsout)
+        c->nsout =
+            sim_ascii_stream_lines(n->rig->probe, sim_now_ms(), (char *)c->sout, sizeof c->sout);
+    size_t done = 0;
+    while (done < c->nsout) {
+        ssize_t w = write(c->fd, c->sout + done, c->nsout - done);
+        if (w > 0)
+            done += (size_t)w;
+        else if (w < 0 && errno == EINTR)
+            continue;
+        else
+            break; /* the pty is full: later */
+    }
+    memmove(c->sout, c->sout + done, c->nsout - done);
+    c->nsout -= done;
+}
+
 void sim_net_poll(sim_net_t *n, double max_ms)
 {
     double now = sim_now_ms(), wait = max_ms;
@@ -359,6 +384,8 @@ void sim_net_poll(sim_net_t *n, double max_ms)
             wait = t < wait ? t : wait;
         }
     }
+    if (n->rig->probe && n->rig->probe->stream.ascii && wait > 1)
+        wait = 1; /* streaming: lines go out every millisecond */
     wait = wait < 0 ? 0 : wait;
     struct timeval tv = {(time_t)(wait / 1e3),
                          (long)((wait - 1e3 * (double)(time_t)(wait / 1e3)) * 1e3)};
@@ -404,6 +431,9 @@ void sim_net_poll(sim_net_t *n, double max_ms)
             if (!c->nout && c->nin == before)
                 break;
         }
+        if (c->fd >= 0 && n->rig->probe && n->rig->probe->stream.ascii &&
+            n->rig->probe->stream.ascii_conn == k && !c->nout)
+            stream_out(n, c);
         /* RTU: bytes of an incomplete frame followed by silence are noise. */
         if (c->fd >= 0 && c->nin && n->port[c->port].wire == SIM_W_RTU &&
             sim_now_ms() - c->t_last >= n->gap_ms && sim_rtu_frame_len(c->in, c->nin) >= 0)

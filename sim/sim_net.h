@@ -18,7 +18,9 @@ typedef struct sim_conn {
     double t_last; /* last byte received (RTU frame gap) */
     uint8_t out[600];
     size_t nout;
-    double t_send; /* when the held reply goes out */
+    double t_send;      /* when the held reply goes out */
+    uint8_t sout[8192]; /* the probe's streamed lines not yet taken by the line */
+    size_t nsout;
 } sim_conn_t;
 
 typedef struct sim_port {

@@ -64,18 +64,32 @@ void sim_part_free(sim_part_t *p)
     p->seed = NULL;
 }
 
-int sim_part_z(const sim_part_t *p, double x, double y, double *z)
+/* The seed sample nearest to (x, y): a start for Newton. */
+static void seed_near(const sim_part_t *p, double x, double y, double uv[2])
 {
-    double best = INFINITY, u = 0, v = 0;
+    double best = INFINITY;
     for (int k = 0; k < p->ns * p->ns; k++) {
         const double *q = p->seed + 4 * k;
         double d = (q[0] - x) * (q[0] - x) + (q[1] - y) * (q[1] - y);
         if (d < best) {
             best = d;
-            u = q[2];
-            v = q[3];
+            uv[0] = q[2];
+            uv[1] = q[3];
         }
     }
+}
+
+int sim_part_z(const sim_part_t *p, double x, double y, double *z)
+{
+    double uv[2] = {NAN, NAN};
+    return sim_part_z_near(p, x, y, uv, z);
+}
+
+int sim_part_z_near(const sim_part_t *p, double x, double y, double uv[2], double *z)
+{
+    if (!isfinite(uv[0]) || !isfinite(uv[1]))
+        seed_near(p, x, y, uv);
+    double u = uv[0], v = uv[1];
     double u0, u1, v0, v1;
     nf_surf_domain(&p->s, &u0, &u1, &v0, &v1);
     double r = INFINITY, skl[27];
@@ -95,6 +109,8 @@ int sim_part_z(const sim_part_t *p, double x, double y, double *z)
     }
     nf_surf_derivs(&p->s, u, v, 0, skl);
     r = hypot(skl[0] - x, skl[1] - y);
+    uv[0] = u;
+    uv[1] = v;
     if (!(r < 1e-6))
         return 1; /* (x, y) is off the part's footprint */
     *z = skl[2] + cf_part_deviation(&p->pt, x, y);

@@ -10,15 +10,24 @@
 
 int sim_probe_measure(sim_probe_t *pr, double now, int wire, double *d)
 {
-    double xy[2], z, ms;
+    double xy[2], uv[2] = {NAN, NAN};
     sim_stage_pos(pr->stage, now, xy);
+    return sim_probe_measure_at(pr, xy, wire, uv, d);
+}
+
+int sim_probe_measure_at(sim_probe_t *pr, const double xy[2], int wire, double uv[2], double *d)
+{
+    double z, ms;
     pr->seq++;
     unsigned f = pr->faults ? sim_faults_event(pr->faults, 1, wire, &ms) : 0;
     if (f & (1u << SIM_F_PROBEERR))
         return 2;
-    if ((f & (1u << SIM_F_NOSURF)) ||
-        sim_part_z(pr->part, xy[0] + pr->off[0], xy[1] + pr->off[1], &z))
+    if (f & (1u << SIM_F_NOSURF))
         return 1;
+    if (sim_part_z_near(pr->part, xy[0] + pr->off[0], xy[1] + pr->off[1], uv, &z)) {
+        uv[0] = uv[1] = NAN; /* off the part: the next one searches afresh */
+        return 1;
+    }
     *d = pr->z0 - z + pr->noise * sim_gauss(&pr->rng);
     return *d < pr->lo || *d > pr->hi ? 1 : 0;
 }

@@ -59,6 +59,13 @@ static void test_uri_good(void **state)
     assert_int_equal(u.vid, 0x1D50);
     assert_int_equal(u.pid, 0x60AF);
     assert_string_equal(u.serial, "A12B");
+    assert_int_equal(hal_uri_parse("gev:127.0.0.1", &u, msg, sizeof msg), RIG_OK);
+    assert_int_equal(u.kind, HAL_GEV);
+    assert_string_equal(u.path, "127.0.0.1");
+    assert_string_equal(u.serial, "");
+    assert_int_equal(hal_uri_parse("gev:10.1.2.3:PRF-07", &u, msg, sizeof msg), RIG_OK);
+    assert_string_equal(u.path, "10.1.2.3");
+    assert_string_equal(u.serial, "PRF-07");
 }
 
 /* Each refusal: the code, and the reason names what is wrong. */
@@ -98,6 +105,11 @@ static void test_uri_bad(void **state)
     refuse("usb:403:6001", "vendor id not 4 hex digits");
     refuse("usb:0403:60g1", "product id not 4 hex digits");
     refuse("usb:0403", "want usb:VID:PID[:SERIAL]");
+    refuse("gev", "want gev:ADDRESS[:SERIAL]");
+    refuse("gev:localhost", "not a dotted IPv4 address");
+    refuse("gev:127.0.0.256", "not a dotted IPv4 address");
+    refuse("gev:127.0.0.1:", "bad serial number");
+    refuse("gev:127.0.0.1:a:b", "want gev:ADDRESS[:SERIAL]");
     refuse("a:b:c:d:e:f:g:h:i", "too many");
     char longp[600];
     memset(longp, 'a', sizeof longp - 1);

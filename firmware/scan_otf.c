@@ -1,0 +1,230 @@
+/* scan_otf.c: on-the-fly pairing of latched positions and streamed
+ * readings by trigger number (scan_otf.h): a ring of SCAN_OTF_WINDOW slots
+ * indexed by number, retired in number order. */
+#include "scan_otf.h"
+#include <string.h>
+
+enum { HAVE_POS = 1, HAVE_RD = 2 };
+
+int scan_otf_init(scan_otf_t *o, const scan_kin_t *kin, const scan_otf_enc_t *enc,
+                  scan_otf_row_fn fn, void *ctx)
+{
+    if (!o || !kin || !enc || !fn)
+        return RIG_EARG;
+    memset(o, 0, sizeof *o);
+    o->kin = *kin;
+    o->enc = *enc;
+    o->row_fn = fn;
+    o->row_ctx = ctx;
+    o->row = -1;
+    return RIG_OK;
+}
+
+int scan_otf_row_begin(scan_otf_t *o, long row)
+{
+    if (!o || row < 0)
+        return RIG_EARG;
+    if (o->row >= 0 || o->err)
+        return o->err ? o->err : RIG_ESTATE;
+    o->row = row;
+    o->base = 0;
+    o->hi_trig = o->hi_read = 0;
+    o->any_trig = o->any_read = 0;
+    o->n_out = 0;
+    for (int i = 0; i < SCAN_OTF_WINDOW; i++)
+        o->slot[i].state = 0;
+    return RIG_OK;
+}
+
+/* The unwrapped number of a 16-bit one, against the stream's highest so
+ * far: the nearest number with those low bits. */
+static uint64_t unwrap(uint64_t hi, int any, uint16_t w)
+{
+    if (!any)
+        return w;
+    int16_t step = (int16_t)(uint16_t)(w - (uint16_t)hi);
+    if (step < 0 && (uint64_t)(-step) > hi)
+        return UINT64_MAX; /* before number 0: cannot be, taken as late */
+    return hi + (uint64_t)(int64_t)step;
+}
+
+static int flush_out(scan_otf_t *o, int last)
+{
+    if (o->err)
+        return o->err;
+    if (!o->n_out && !last)
+        return RIG_OK;
+    int rc = o->row_fn(o->row_ctx, o->row, o->out, o->out_num, o->n_out, last);
+    o->n_out = 0;
+    if (rc)
+        o->err = rc;
+    return rc;
+}
+
+/* Settle the slot of number base and move the window on by one. */
+static int retire_one(scan_otf_t *o)
+{
+    scan_otf_slot_t *s = &o->slot[o->base & (SCAN_OTF_WINDOW - 1)];
+    int rc = RIG_OK;
+    if (s->state == (HAVE_POS | HAVE_RD) && s->num == o->base) {
+        if (s->rst == RIG_RD_VALID) {
+            scan_kin_point(&o->kin, s->x, s->y, s->d, o->out + 3 * o->n_out);
+            o->out_num[o->n_out++] = s->num;
+            o->c.paired++;
+            if (o->n_out == SCAN_OTF_ROW_MAX)
+                rc = flush_out(o, 0);
+        } else if (s->rst == RIG_RD_NOSURF)
+            o->c.nosurf++;
+        else
+            o->c.errors++;
+    } else if (s->state == HAVE_POS)
+        o->c.trig_no_read++;
+    else if (s->state == HAVE_RD)
+        o->c.read_no_trig++;
+    else
+        o->c.both_lost++;
+    s->state = 0;
+    o->base++;
+    return rc;
+}
+
+/* Make room for number num: retire everything more than a window behind. */
+static int make_room(scan_otf_t *o, uint64_t num)
+{
+    while (num >= o->base + SCAN_OTF_WINDOW) {
+        /* A long gap: the slots between are empty, skip them at once. */
+        if (num - o->base > 2 * SCAN_OTF_WINDOW) {
+            int rc = RIG_OK;
+            for (int i = 0; i < SCAN_OTF_WINDOW && !rc; i++)
+                rc = retire_one(o);
+            if (rc)
+                return rc;
+            o->c.both_lost += num - SCAN_OTF_WINDOW + 1 - o->base;
+            o->base = num - SCAN_OTF_WINDOW + 1;
+            continue;
+        }
+        int rc = retire_one(o);
+        if (rc)
+            return rc;
+    }
+    return RIG_OK;
+}
+
+/* Retire completed slots from the front, so points leave in number order
+ * as soon as they can. */
+static int advance(scan_otf_t *o)
+{
+    for (;;) {
+        scan_otf_slot_t *s = &o->slot[o->base & (SCAN_OTF_WINDOW - 1)];
+        if (s->state != (HAVE_POS | HAVE_RD) || s->num != o->base)
+            return RIG_OK;
+        int rc = retire_one(o);
+        if (rc)
+            return rc;
+    }
+}
+
+/* The slot for num, or NULL when num is behind the window (late). */
+static scan_otf_slot_t *slot_for(scan_otf_t *o, uint64_t num, int *rc)
+{
+    *rc = RIG_OK;
+    if (num < o->base || num == UINT64_MAX) {
+        o->c.late++;
+        return NULL;
+    }
+    *rc = make_room(o, num);
+    if (*rc)
+        return NULL;
+    scan_otf_slot_t *s = &o->slot[num & (SCAN_OTF_WINDOW - 1)];
+    if (!s->state)
+        s->num = num;
+    return s;
+}
+
+int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n)
+{
+    if (!o || (n && !ev))
+        return RIG_EARG;
+    if (o->err)
+        return o->err;
+    if (o->row < 0)
+        return RIG_ESTATE;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t num = unwrap(o->hi_trig, o->any_trig, ev[i].seq);
+        int rc;
+        scan_otf_slot_t *s = slot_for(o, num, &rc);
+        if (rc)
+            return rc;
+        if (!s)
+            continue;
+        if (s->state & HAVE_POS) {
+            o->c.dup_trig++;
+            continue;
+        }
+        if (!o->any_trig || num > o->hi_trig)
+            o->hi_trig = num;
+        o->any_trig = 1;
+        o->c.trig++;
+        if (ev[i].flags & RIG_TRIG_F_OVERRUN) /* once per event, not per copy */
+            o->c.overrun++;
+        s->state |= HAVE_POS;
+        s->x = o->enc.org[0] + (double)ev[i].enc[0] * o->enc.mm_per_count[0];
+        s->y = o->enc.org[1] + (double)ev[i].enc[1] * o->enc.mm_per_count[1];
+    }
+    return advance(o);
+}
+
+int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n)
+{
+    if (!o || (n && !r))
+        return RIG_EARG;
+    if (o->err)
+        return o->err;
+    if (o->row < 0)
+        return RIG_ESTATE;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t num = unwrap(o->hi_read, o->any_read, r[i].seq);
+        int rc;
+        scan_otf_slot_t *s = slot_for(o, num, &rc);
+        if (rc)
+            return rc;
+        if (!s)
+            continue;
+        if (s->state & HAVE_RD) {
+            o->c.dup_read++; /* the first one stands: never overwritten */
+            continue;
+        }
+        if (!o->any_read || num > o->hi_read)
+            o->hi_read = num;
+        o->any_read = 1;
+        o->c.read++;
+        s->state |= HAVE_RD;
+        s->rst = r[i].status <= RIG_RD_ERROR ? r[i].status : RIG_RD_ERROR;
+        s->d = r[i].d;
+    }
+    return advance(o);
+}
+
+int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected)
+{
+    if (!o)
+        return RIG_EARG;
+    if (o->err)
+        return o->err;
+    if (o->row < 0)
+        return RIG_ESTATE;
+    uint64_t end =
+        o->any_trig || o->any_read ? (o->hi_trig > o->hi_read ? o->hi_trig : o->hi_read) + 1 : 0;
+    int rc = RIG_OK;
+    while (!rc && o->base < end)
+        rc = retire_one(o);
+    if (!rc && !stage_fault && expected > o->base) /* the last triggers, lost on both sides */
+        o->c.both_lost += expected - o->base;
+    if (!rc)
+        rc = flush_out(o, 1);
+    o->c.rows++;
+    if (stage_fault)
+        o->c.rows_cut++;
+    o->row = -1;
+    return rc;
+}

@@ -1,0 +1,106 @@
+/* scan_otf.h: on-the-fly pairing: positions latched by the trigger box and
+ * readings streamed by the probe (rig.h) are matched BY TRIGGER NUMBER in a
+ * window of the last SCAN_OTF_WINDOW triggers, never by arrival order; each
+ * pair becomes a point by the kinematic model (scan.h), and the points of a
+ * row go to the caller in trigger order, in chunks of at most
+ * SCAN_OTF_ROW_MAX (to be journalled and streamed into the fit row by row).
+ *
+ * What cannot be paired is counted, once each, never guessed:
+ *   a trigger whose reading never came     -> trig_no_read (a lost reading)
+ *   a reading whose position never came    -> read_no_trig (a lost trigger)
+ *   the same number twice                  -> dup_read / dup_trig (ignored)
+ *   a number lost on both sides            -> both_lost (seen as a gap)
+ *   a number already behind the window     -> late (dropped)
+ *   the box's overrun flag                 -> overrun
+ *   a row ended by a stage fault           -> rows_cut
+ * so that, once a row is ended, trig = paired + nosurf + errors +
+ * trig_no_read and read = paired + nosurf + errors + read_no_trig, and every
+ * number below the row's end is in exactly one of paired, nosurf, errors,
+ * trig_no_read, read_no_trig, both_lost.
+ *
+ * Numbers are 16 bits on the wire; each stream is unwrapped against its own
+ * highest number so far (a jump of 32768 or more cannot be told from a
+ * step back). Memory: the struct alone, fixed by the two sizes below. */
+#ifndef SCAN_OTF_H
+#define SCAN_OTF_H
+
+#include "rig.h"
+#include "scan.h"
+#include <stdint.h>
+
+#ifndef SCAN_OTF_WINDOW
+#define SCAN_OTF_WINDOW 256 /* triggers in flight at once: a power of two */
+#endif
+#ifndef SCAN_OTF_ROW_MAX
+#define SCAN_OTF_ROW_MAX 1024 /* points per chunk handed to the caller */
+#endif
+_Static_assert((SCAN_OTF_WINDOW & (SCAN_OTF_WINDOW - 1)) == 0 && SCAN_OTF_WINDOW >= 2,
+               "SCAN_OTF_WINDOW must be a power of two");
+
+/* Encoder counts to stage millimetres: x = org[0] + enc[0] * mm_per_count[0]. */
+typedef struct scan_otf_enc {
+    double org[2];
+    double mm_per_count[2];
+} scan_otf_enc_t;
+
+typedef struct scan_otf_counts {
+    uint64_t trig, read;     /* unique events taken */
+    uint64_t paired, nosurf; /* points handed on; pairs without a surface */
+    uint64_t errors;         /* pairs whose reading reported a sensor error */
+    uint64_t trig_no_read, read_no_trig, both_lost;
+    uint64_t dup_trig, dup_read, late, overrun;
+    uint64_t rows, rows_cut;
+} scan_otf_counts_t;
+
+/* A chunk of a row: n points (x y z each) in trigger order, their trigger
+ * numbers (unwrapped), and last = 1 on the row's final chunk. A non-zero
+ * return stops the pairing with that code. */
+typedef int (*scan_otf_row_fn)(void *ctx, long row, const double *xyz, const uint64_t *trig, long n,
+                               int last);
+
+typedef struct scan_otf_slot {
+    uint64_t num;  /* unwrapped trigger number held, when state != 0 */
+    uint8_t state; /* bit 0 position, bit 1 reading */
+    uint8_t rst;   /* reading status RIG_RD_* */
+    double x, y, d;
+} scan_otf_slot_t;
+
+typedef struct scan_otf {
+    scan_kin_t kin;
+    scan_otf_enc_t enc;
+    scan_otf_row_fn row_fn;
+    void *row_ctx;
+    long row;         /* current row, -1 between rows */
+    uint64_t base;    /* lowest trigger number still in the window */
+    uint64_t hi_trig; /* highest unwrapped number seen, per stream */
+    uint64_t hi_read;
+    int any_trig, any_read;
+    int err; /* the callback's code once it failed */
+    scan_otf_counts_t c;
+    scan_otf_slot_t slot[SCAN_OTF_WINDOW];
+    long n_out;
+    double out[3 * SCAN_OTF_ROW_MAX];
+    uint64_t out_num[SCAN_OTF_ROW_MAX];
+} scan_otf_t;
+
+/* Errors beyond rig_err_t's: none; RIG_EARG for a bad call, RIG_ESTATE for
+ * events outside a row, or the callback's own code. */
+int scan_otf_init(scan_otf_t *o, const scan_kin_t *kin, const scan_otf_enc_t *enc,
+                  scan_otf_row_fn fn, void *ctx);
+
+/* A row starts (the box and the probe were armed for it: numbering from 0). */
+int scan_otf_row_begin(scan_otf_t *o, long row);
+
+/* Events as they arrive, in any order and in batches of any size. */
+int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n);
+int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n);
+
+/* The row ends: everything still in the window is settled (counted or
+ * paired) and the final chunk handed on. expected: the triggers the row
+ * should have fired (its length over the spacing; 0 unknown), so triggers
+ * lost at its end on both sides are counted too. stage_fault != 0 counts
+ * the row as cut short by the stage (its points so far are kept, and the
+ * triggers it never reached are not losses). */
+int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected);
+
+#endif
