@@ -1,28 +1,37 @@
-/* cmd_report.c: `cellfit report SURF.igs POINTS --tol T [--png MAP.png]
- * [--json]`: signed normal distances of measured points to a surface
- * (projection, positive along Su x Sv), their statistics and histogram,
- * and a colour deviation map viewed on the points' best-fit plane. The
- * points are streamed (three passes with --png: plane, extent, deviations);
- * memory is fixed by the surface, the map raster and the histogram. */
+/* cmd_report.c: `cellfit report SURF POINTS --tol T [--png MAP.png]
+ * [--csv FILE] [--ply FILE] [--dfq FILE] [--json]`: signed normal distances
+ * of measured points to a surface (projection, positive along Su x Sv),
+ * their statistics and histogram, a colour deviation map viewed on the
+ * points' best-fit plane, the per-point deviations for a spreadsheet (CSV)
+ * and for CloudCompare (PLY coloured on the map's scale), and the figures
+ * for an SPC system (Q-DAS DFQ). The points are streamed (three passes with
+ * --png: plane, extent, deviations; one more for the PLY, whose colours
+ * need the scale); memory is fixed by the surface, the map raster and the
+ * histogram. */
 #include "cf_cli.h"
 #include "cf_devmap.h"
+#include "cf_dfq.h"
 #include "cf_iges.h"
 #include "cf_json.h"
 #include "cf_opt.h"
 #include "cf_points.h"
+#include "cf_ptsout.h"
 #include "cf_seedgrid.h"
 #include "cf_stats.h"
 #include "cf_surf.h"
 #include "cf_surfio.h"
 #include "cmd.h"
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #define RBATCH 4096
 
 typedef struct report_opts {
-    const char *surf, *points, *png;
-    double tol;
+    const char *surf, *points, *png, *csv, *ply, *dfq;
+    const char *part_number, *part_name, *part_id;
+    double tol, scale, within;
     int json;
     long entity;
 } report_opts_t;
@@ -41,6 +50,9 @@ static int positive(const char *v, void *dst)
 static int parse(int argc, char **argv, report_opts_t *o)
 {
     memset(o, 0, sizeof *o);
+    o->within = 99;
+    o->part_number = "";
+    o->part_name = "";
     const char *pos[2];
     const cf_opt_t opts[] = {
         {.name = "tol",
@@ -56,6 +68,52 @@ static int parse(int argc, char **argv, report_opts_t *o)
          .dst = &o->png,
          .arg = "MAP.png",
          .help = "write a colour deviation map on the points' best-fit plane"},
+        {.name = "scale",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->scale,
+         .arg = "MM",
+         .help = "fix the colour scale's ends at +/- MM (the map's and the PLY's)",
+         .lo = 1e-9,
+         .hi = 1e6,
+         .def = "from the data: symmetric, covering 99 % of |deviation|"},
+        {.name = "csv",
+         .kind = CF_OPT_STR,
+         .dst = &o->csv,
+         .arg = "FILE",
+         .help = "per-point deviations: x,y,z,u,v,deviation,in_tolerance with a header line"},
+        {.name = "ply",
+         .kind = CF_OPT_STR,
+         .dst = &o->ply,
+         .arg = "FILE",
+         .help = "the points as binary PLY, coloured on the map's scale (CloudCompare, MeshLab)"},
+        {.name = "dfq",
+         .kind = CF_OPT_STR,
+         .dst = &o->dfq,
+         .arg = "FILE",
+         .help = "the figures as a Q-DAS DFQ file (RMS, max, min, max |d|, share within "
+                 "tolerance, with limits: docs/formats.md)"},
+        {.name = "within",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->within,
+         .arg = "PCT",
+         .help = "the share of points that must lie within --tol (the DFQ's lower limit)",
+         .lo = 0,
+         .hi = 100},
+        {.name = "part-number",
+         .kind = CF_OPT_STR,
+         .dst = &o->part_number,
+         .arg = "TEXT",
+         .help = "the part number in the DFQ (K1001)"},
+        {.name = "part-name",
+         .kind = CF_OPT_STR,
+         .dst = &o->part_name,
+         .arg = "TEXT",
+         .help = "the part's name in the DFQ (K1002)"},
+        {.name = "part-id",
+         .kind = CF_OPT_STR,
+         .dst = &o->part_id,
+         .arg = "TEXT",
+         .help = "the part's serial or ident in the DFQ (K0014)"},
         {.name = "entity",
          .kind = CF_OPT_LONG,
          .dst = &o->entity,
@@ -71,8 +129,9 @@ static int parse(int argc, char **argv, report_opts_t *o)
                           .summary = "signed normal distances of POINTS to SURF (+ along Su x Sv): "
                                      "statistics, histogram, deviation map",
                           .descr = "POINTS is a file of x y z or u v x y z rows (the last three "
-                                   "columns are used); with --png it is read three times, so it "
-                                   "must be a file, not standard input.",
+                                   "columns are used), CSV with a header, or PLY; with --png or "
+                                   "--ply it is read more than once, so it must be a file, not "
+                                   "standard input. SURF is IGES or STEP (by extension).",
                           .opts = opts,
                           .min_pos = 2,
                           .max_pos = 2};
@@ -90,6 +149,71 @@ static const double *xyz_of(const double *buf, int cols, long k)
     return buf + (long)cols * k + (cols - 3);
 }
 
+/* The PLY's colours: the map's scale. */
+static void map_rgb(double d, void *ctx, unsigned char rgb[3])
+{
+    uint32_t c = cf_devmap_colour(ctx, d);
+    rgb[0] = (unsigned char)(c >> 16);
+    rgb[1] = (unsigned char)(c >> 8);
+    rgb[2] = (unsigned char)c;
+}
+
+/* One more pass for the PLY: the scale chosen from the data is known once
+ * the map has seen every deviation (cf_devmap_render). */
+static int write_ply(const report_opts_t *o, cf_devmap_t *map, const cf_stats_t *st,
+                     cf_points_t *pr, cf_seedgrid_t *sg, double *buf)
+{
+    char msg[512];
+    cf_image_t im;
+    if (!o->png) { /* the PNG's render fixed the scale already */
+        if (cf_devmap_render(map, st, &im, msg, sizeof msg))
+            return cli_error("report", CLI_FAIL, "%s", msg);
+        cf_image_free(&im);
+    }
+    cf_ptsout_t ply;
+    if (cf_points_rewind(pr) ||
+        cf_ptsout_open(&ply, NULL, o->ply, o->tol, 0, map_rgb, map, msg, sizeof msg))
+        return cli_error("report", CLI_FAIL, "%s: %s", o->ply, msg);
+    long got;
+    while ((got = cf_points_read(pr, buf, RBATCH, msg, sizeof msg)) > 0) {
+        const int cols = cf_points_cols(pr);
+        for (long k = 0; k < got; k++) {
+            const double *Q = xyz_of(buf, cols, k);
+            nf_proj_t pj;
+            cf_seedgrid_project(sg, Q, 1e-9, &pj);
+            cf_ptsout_pt_t p = {Q[0], Q[1], Q[2], pj.u, pj.v, pj.dist, NAN};
+            cf_ptsout_add(&ply, &p);
+        }
+    }
+    if (got < 0) {
+        cf_ptsout_abort(&ply);
+        return cli_error("report", CLI_USAGE, "%s", msg);
+    }
+    if (cf_ptsout_close(&ply, msg, sizeof msg))
+        return cli_error("report", CLI_FAIL, "%s", msg);
+    return CLI_OK;
+}
+
+/* The DFQ's characteristics: the report's figures with their limits. */
+static int write_dfq(const report_opts_t *o, const cf_stats_t *st)
+{
+    char msg[512];
+    const double t = o->tol;
+    const cf_dfq_char_t c[5] = {
+        {"RMS deviation", 0, NAN, t, "mm", cf_stats_rms(st), 4},
+        {"Max deviation", 0, -t, t, "mm", st->max, 4},
+        {"Min deviation", 0, -t, t, "mm", st->min, 4},
+        {"Max absolute deviation", 0, NAN, t, "mm", st->max_abs, 4},
+        {"Points within tolerance", 100, o->within, NAN, "%", cf_stats_within_pct(st), 2},
+    };
+    cf_dfq_part_t part = {o->part_number, o->part_name, o->part_id, (long long)time(NULL)};
+    if (!part.name[0])
+        part.name = o->surf;
+    if (cf_dfq_write(o->dfq, &part, c, 5, msg, sizeof msg))
+        return cli_error("report", CLI_FAIL, "%s", msg);
+    return CLI_OK;
+}
+
 int cmd_report(int argc, char **argv)
 {
     report_opts_t o;
@@ -105,6 +229,8 @@ int cmd_report(int argc, char **argv)
     cf_seedgrid_t sg;
     memset(&sg, 0, sizeof sg);
     cf_devmap_t *map = NULL;
+    cf_ptsout_t csv;
+    memset(&csv, 0, sizeof csv);
     cf_stats_t *st = malloc(sizeof *st);
     double *buf = malloc(sizeof(double) * 5 * RBATCH);
     int ec = CLI_OK;
@@ -118,7 +244,7 @@ int cmd_report(int argc, char **argv)
         ec = cli_error("report", CLI_USAGE, "%s", msg);
         goto done;
     }
-    if (o.png) {
+    if (o.png || o.ply) {
         /* Pass 1: the view plane; pass 2: the map's extent on it. */
         cf_planefit_t pf;
         cf_plane_t pl;
@@ -135,13 +261,14 @@ int cmd_report(int argc, char **argv)
         snprintf(title, sizeof title, "%s vs %s", o.surf, o.points);
         cf_devmap_opts_t mo = {o.tol, 0, CF_DEVMAP_MEAN, title};
         if (cf_devmap_plane_fit(&pf, &pl, sd, msg, sizeof msg) ||
-            cf_devmap_create(&map, &pl, &mo, msg, sizeof msg)) {
+            cf_devmap_create(&map, &pl, &mo, msg, sizeof msg) ||
+            (o.scale > 0 && cf_devmap_set_scale(map, o.scale, msg, sizeof msg))) {
             ec = cli_error("report", CLI_USAGE, "%s: %s", o.points, msg);
             goto done;
         }
         if (cf_points_rewind(pr)) {
             ec = cli_error("report", CLI_USAGE,
-                           "%s: --png reads the points three times: give a "
+                           "%s: --png and --ply read the points more than once: give a "
                            "file, not standard input",
                            o.points);
             goto done;
@@ -155,6 +282,10 @@ int cmd_report(int argc, char **argv)
         }
     }
     /* The deviations: project each point, add its signed distance. */
+    if (o.csv && cf_ptsout_open(&csv, o.csv, NULL, o.tol, 0, NULL, NULL, msg, sizeof msg)) {
+        ec = cli_error("report", CLI_FAIL, "%s", msg);
+        goto done;
+    }
     while ((got = cf_points_read(pr, buf, RBATCH, msg, sizeof msg)) > 0) {
         const int cols = cf_points_cols(pr);
         for (long k = 0; k < got; k++) {
@@ -165,6 +296,10 @@ int cmd_report(int argc, char **argv)
             cf_stats_add(st, pj.dist);
             if (map)
                 cf_devmap_add(map, Q, pj.dist);
+            if (o.csv) {
+                cf_ptsout_pt_t p = {Q[0], Q[1], Q[2], pj.u, pj.v, pj.dist, NAN};
+                cf_ptsout_add(&csv, &p);
+            }
         }
     }
     if (got < 0) {
@@ -175,10 +310,18 @@ int cmd_report(int argc, char **argv)
         ec = cli_error("report", CLI_USAGE, "%s: no points", o.points);
         goto done;
     }
-    if (map && cf_devmap_write_png(map, st, o.png, msg, sizeof msg)) {
+    if (o.png && cf_devmap_write_png(map, st, o.png, msg, sizeof msg)) {
         ec = cli_error("report", CLI_FAIL, "%s", msg);
         goto done;
     }
+    if (o.csv && cf_ptsout_close(&csv, msg, sizeof msg)) {
+        ec = cli_error("report", CLI_FAIL, "%s", msg);
+        goto done;
+    }
+    if (o.ply && (ec = write_ply(&o, map, st, pr, &sg, buf)) != CLI_OK)
+        goto done;
+    if (o.dfq && (ec = write_dfq(&o, st)) != CLI_OK)
+        goto done;
     if (o.json) {
         cf_json_t j;
         cf_json_begin(&j, stdout);
@@ -188,6 +331,14 @@ int cmd_report(int argc, char **argv)
         cf_json_int(&j, "boundary_feet", clamped);
         if (o.png)
             cf_json_str(&j, "png", o.png);
+        if (map)
+            cf_json_num(&j, "scale_end", cf_devmap_scale_end(map));
+        if (o.csv)
+            cf_json_str(&j, "csv", o.csv);
+        if (o.ply)
+            cf_json_str(&j, "ply", o.ply);
+        if (o.dfq)
+            cf_json_str(&j, "dfq", o.dfq);
         cf_json_num(&j, "seconds", cli_now() - t0);
         cf_json_end(&j);
     } else {
@@ -198,8 +349,17 @@ int cmd_report(int argc, char **argv)
             printf("  %ld points project onto the surface boundary\n", clamped);
         if (o.png)
             printf("  deviation map: %s\n", o.png);
+        if (o.csv)
+            printf("  per-point deviations (CSV): %s\n", o.csv);
+        if (o.ply)
+            printf("  coloured points (PLY, scale +/- %.4g mm): %s\n", cf_devmap_scale_end(map),
+                   o.ply);
+        if (o.dfq)
+            printf("  Q-DAS DFQ: %s\n", o.dfq);
     }
 done:
+    if (ec != CLI_OK && o.csv)
+        cf_ptsout_abort(&csv);
     cf_devmap_free(map);
     cf_points_close(pr);
     cf_seedgrid_free(&sg);

@@ -2,9 +2,9 @@
 #include "cf_dfq.h"
 #include "cf_atomic.h"
 #include "cf_err.h"
-#include "cf_fmt.h"
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -17,10 +17,16 @@ static void clean(char *dst, const char *s, size_t max)
     dst[n] = '\0';
 }
 
+/* The shortest decimal that reads back to v (0.05, not 0.050000000000000003):
+ * SPC systems show limits as written. */
 static void num(FILE *f, const char *key, int c, double v)
 {
     char b[40];
-    cf_fmt17(v, b, sizeof b);
+    for (int d = 1; d <= 17; d++) {
+        snprintf(b, sizeof b, "%.*g", d, v);
+        if (strtod(b, NULL) == v)
+            break;
+    }
     fprintf(f, "%s/%d %s\n", key, c, b);
 }
 
