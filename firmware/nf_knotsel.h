@@ -54,7 +54,7 @@
 #define NF_KNOTSEL_SHARE 0.8
 /* Data rows each new span must hold by default (lower bound from the
  * sub-bins: a sub-bin with points counts 1, with two distinct values 2). */
-#define NF_KNOTSEL_MIN_ROWS 2
+#define NF_KNOTSEL_MIN_ROWS 1
 
 typedef struct nf_knotsel {
     const nf_surf_t *s; /* the surface whose spans are counted (the fit) */

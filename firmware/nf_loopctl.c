@@ -12,9 +12,9 @@ static double spacing(const double *T, int n, int deg)
     return c > 0 ? (T[n + 1] - T[deg]) / c : 0.0;
 }
 
-double nf_loopctl_alpha(double alpha, const nf_surf_t *first, const nf_surf_t *cur)
+double nf_loopctl_alpha(double alpha, const nf_surf_t *first, const nf_surf_t *cur, double k)
 {
-    if (!first || !cur || !(alpha >= 0.0) || !isfinite(alpha))
+    if (!first || !cur || !(alpha >= 0.0) || !isfinite(alpha) || !isfinite(k))
         return alpha;
     double a0, a1, b0, b1, c0, c1, d0, d1;
     nf_surf_domain(first, &a0, &a1, &b0, &b1);
@@ -27,7 +27,7 @@ double nf_loopctl_alpha(double alpha, const nf_surf_t *first, const nf_surf_t *c
                  hv = spacing(cur->V, cur->nv - 1, cur->q);
     if (!(hu > 0.0) || !(hv > 0.0) || !(h0u > 0.0) || !(h0v > 0.0))
         return alpha;
-    return alpha * pow((h0u * h0v) / (hu * hv), NF_LOOPCTL_ALPHA_POW);
+    return alpha * pow((h0u * h0v) / (hu * hv), 0.5 * k);
 }
 
 const char *nf_loopctl_str(int st)
@@ -43,17 +43,26 @@ const char *nf_loopctl_str(int st)
     }
 }
 
-int nf_loopctl_verdict(double within_pct, double need_pct, double prev_pct, double min_gain,
+void nf_loopctl_init(nf_loopctl_t *c)
+{
+    c->best = -1.0;
+    c->stall = 0;
+}
+
+int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, double min_gain,
                        int round, int max_rounds, int chooser_status)
 {
     if (within_pct >= need_pct)
         return NF_LOOPCTL_MET;
     if (!(min_gain > 0.0))
         min_gain = NF_LOOPCTL_MIN_GAIN;
-    /* A round that helps less than min_gain points of the share will not
+    /* Rounds that help less than min_gain points of the share will not
      * reach the target within reason (issue 14: 95.56 -> 95.58 -> 95.63 %
      * at 767,849 control points). */
-    if (prev_pct >= 0.0 && within_pct - prev_pct < min_gain)
+    if (c->best >= 0.0)
+        c->stall = within_pct - c->best < min_gain ? c->stall + 1 : 0;
+    c->best = within_pct > c->best ? within_pct : c->best;
+    if (c->stall >= NF_LOOPCTL_PATIENCE)
         return NF_LOOPCTL_NO_PROGRESS;
     switch (chooser_status) {
     case NF_KNOTSEL_INSERT: break;

@@ -8,23 +8,30 @@
 #include "nf_knotsel.h"
 #include "nf_surf.h"
 
-/* alpha_level = alpha ((h0u h0v) / (hu hv))^NF_LOOPCTL_ALPHA_POW; see
- * nf_loopctl_alpha. */
-#define NF_LOOPCTL_ALPHA_POW 1.0
+/* Default exponent k of nf_loopctl_alpha: alpha follows the area of a
+ * control point's support, as the data term does (see there). */
+#define NF_LOOPCTL_ALPHA_K (-2.0)
 /* Default least gain of a round, in points of the percentage within. */
 #define NF_LOOPCTL_MIN_GAIN 0.1
 
-/* alpha for a net of knot spacing (hu, hv) when alpha was set for the
- * first net (h0u, h0v): alpha (h0u h0v / (hu hv))^NF_LOOPCTL_ALPHA_POW,
+/* alpha for the current net when alpha was set for the first one:
+ *   alpha_level = alpha (h0 / h)^k,  (h0 / h)^2 = (h0u h0v) / (hu hv),
  * h = the domain's width over its non-empty spans in that direction.
- * Why: alpha |(B - I) P|^2 (Eq. 7) is, per control point, a second
- * difference of the net, about h^2 times the surface's second derivative;
- * summed over the (area / (hu hv)) control points it is an energy
- * alpha h^2 |S''|^2 area that halving the spans would cut by 4: empty and
- * sparse spans would lose the smoothing they had at the first level. The
- * scale keeps that energy per area. A non-finite or negative alpha, or
- * nets with another domain, return alpha unchanged. */
-double nf_loopctl_alpha(double alpha, const nf_surf_t *first, const nf_surf_t *cur);
+ * alpha |(B - I) P|^2 (Eq. 7) is, per control point, a second difference
+ * of the net, about h^2 times the surface's second derivative, against a
+ * data term (R^T R)_ii that, for points spread evenly, falls with the area
+ * hu hv of the control point's support. k = -2 keeps the two in the same
+ * balance at every level: where data are, the Greville term stays as weak
+ * relative to them as at the first level (it does not flatten a feature the
+ * finer net was made for); where they are not (holes, gaps between rows),
+ * the control points are held by alpha and beta alone and follow the
+ * previous level's surface (P0 is the refined previous fit), which is
+ * smooth. k = 2 would keep the Greville energy alpha h^2 |S''|^2 per area
+ * instead; measured on the test fields (docs/loop.md) it smooths features
+ * away and needs more control points for the same share, so it is not the
+ * default. k = 0: alpha unchanged. A non-finite or negative alpha, or nets
+ * over different domains, return alpha unchanged. */
+double nf_loopctl_alpha(double alpha, const nf_surf_t *first, const nf_surf_t *cur, double k);
 
 /* The loop's verdict after a round's check pass. */
 typedef enum nf_loopctl_stat {
@@ -40,13 +47,28 @@ typedef enum nf_loopctl_stat {
  * "not_met_no_progress", "not_met_max_rounds". */
 const char *nf_loopctl_str(int st);
 
-/* Verdict of round `round` (0-based) with within_pct of the points within
- * tolerance (need_pct wanted), prev_pct the previous round's (< 0 on the
- * first round), min_gain the least gain a round must bring (<= 0:
+/* Rounds in a row that may gain less than min_gain before the loop stops:
+ * one round on a coarse net can lose share (a knot line moves the misfit
+ * before it removes it), two in a row say the rounds stopped helping. */
+#define NF_LOOPCTL_PATIENCE 2
+
+/* The loop's memory between rounds. */
+typedef struct nf_loopctl {
+    double best; /* best share within so far (percent), < 0 before the first round */
+    int stall;   /* rounds in a row that gained less than min_gain over best */
+} nf_loopctl_t;
+
+/* Before the first round. */
+void nf_loopctl_init(nf_loopctl_t *c);
+
+/* Verdict after the check pass of round `round` (0-based) with within_pct
+ * of the points within tolerance (need_pct wanted), min_gain the least gain
+ * over the best earlier round that counts as progress (<= 0:
  * NF_LOOPCTL_MIN_GAIN), max_rounds the limit, and the chooser's status for
- * the next round. Checked in this order: met; no progress; data limit or
- * half the points; max_cp; max rounds; else continue. */
-int nf_loopctl_verdict(double within_pct, double need_pct, double prev_pct, double min_gain,
+ * the next round. Checked in this order: met; no progress
+ * (NF_LOOPCTL_PATIENCE rounds in a row); data limit or half the points;
+ * max_cp; max rounds; else continue. Updates c. */
+int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, double min_gain,
                        int round, int max_rounds, int chooser_status);
 
 #endif

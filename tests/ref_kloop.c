@@ -97,12 +97,14 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
 {
     nf_surf_t cur, fit;
     int rc = NF_OK;
-    double prev = -1.0;
+    nf_loopctl_t lc;
+    nf_loopctl_init(&lc);
     memset(o, 0, sizeof *o);
     o->within_pct = -1.0;
     ref_kloop_copy(&cur, base);
     for (int round = 0;; round++) {
-        const double alpha = c->scale_alpha ? nf_loopctl_alpha(c->alpha, base, &cur) : c->alpha;
+        const double alpha =
+            c->scale_alpha ? nf_loopctl_alpha(c->alpha, base, &cur, c->alpha_k) : c->alpha;
         if ((rc = fit_once(&cur, pts, M, alpha, c->beta, &fit)) != NF_OK) {
             free(cur.U);
             return rc;
@@ -139,8 +141,10 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
             so.max_cp = c->max_cp;
             nf_knotsel_choose(&a, &so, cand, ncand, &n, &st);
         }
-        const int v = nf_loopctl_verdict(pct, c->within, c->progress ? prev : -1.0, c->min_gain,
-                                         round, c->max_rounds, st);
+        if (!c->progress)
+            nf_loopctl_init(&lc); /* never a previous round: no progress test */
+        const int v =
+            nf_loopctl_verdict(&lc, pct, c->within, c->min_gain, round, c->max_rounds, st);
         if (c->verbose)
             fprintf(stderr,
                     "  round %d: %d x %d, alpha %.3g, %.3f %% within, rms %.4g, max %.4g; %s, %d "
@@ -157,7 +161,6 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
             o->mx = mx;
             o->cp = (long)fit.nu * fit.nv;
         }
-        prev = pct;
         if (v == NF_LOOPCTL_CONTINUE)
             rc = refine(&fit, cand, n, c->uniform, &cur);
         free(mem);

@@ -15,7 +15,8 @@ typedef struct ref_kloop_cfg {
     double tol, within;    /* tolerance and the share within it wanted (percent) */
     double alpha, beta;    /* Eq. 7 at the first level */
     int uniform;           /* 1: every span halved each round (nf_refine_uniform) */
-    int scale_alpha;       /* 1: nf_loopctl_alpha at every level */
+    int scale_alpha;       /* 1: nf_loopctl_alpha at every level, exponent alpha_k */
+    double alpha_k;        /* its k (NF_LOOPCTL_ALPHA_K is the default) */
     int progress;          /* 1: stop when a round gains less than min_gain */
     double min_gain;       /* points of the share (<= 0: NF_LOOPCTL_MIN_GAIN) */
     long max_cp;           /* <= 0: NF_MAX_CP */
