@@ -196,7 +196,7 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
     if (!a || !out || !n || !status || cap < 0)
         return NF_EARG;
     const nf_surf_t *s = a->s;
-    nf_knotsel_opts_t o = {0, 0, 0, 0.0, 0.0, 0};
+    nf_knotsel_opts_t o = {0, 0, 0, 0.0, 0.0, 0, 0};
     if (opts)
         o = *opts;
     long max_cp = o.max_cp > 0 && o.max_cp < NF_MAX_CP ? o.max_cp : NF_MAX_CP;
@@ -255,6 +255,8 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
             capped = half <= max_cp ? NF_KNOTSEL_HALF_PTS : NF_KNOTSEL_MAX_CP;
             continue;
         }
+        if (k > 0 && o.max_add > 0 && nu * nv - (long)s->nu * s->nv > o.max_add)
+            continue; /* the round's budget: a cheaper line may still fit */
         out[k++] = c;
         r[c.dir]++;
         got[c.dir] += c.score * (c.dir ? s->nu : s->nv);

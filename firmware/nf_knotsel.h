@@ -86,6 +86,8 @@ typedef struct nf_knotsel_opts {
     double ratio;  /* <= 0: NF_KNOTSEL_RATIO */
     double share;  /* <= 0: NF_KNOTSEL_SHARE */
     int max_knots; /* knots a round may insert in all; <= 0: no limit */
+    long max_add;  /* control points a round may add (nf_loopctl_budget); <= 0: no limit;
+                      the best candidate is always taken */
 } nf_knotsel_opts_t;
 
 /* One knot line to insert. */

@@ -47,6 +47,34 @@ void nf_loopctl_init(nf_loopctl_t *c)
 {
     c->best = -1.0;
     c->stall = 0;
+    c->last_pct = -1.0;
+    c->last_cp = 0;
+    c->last_add = 0;
+}
+
+void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp)
+{
+    /* The gain of this round is (within_pct - last_pct) for (cp - last_cp)
+     * control points: keep the pair of the last two rounds. */
+    c->last_add = c->last_pct >= 0.0 ? cp - c->last_cp : 0;
+    c->gain = c->last_pct >= 0.0 ? within_pct - c->last_pct : 0.0;
+    c->last_pct = within_pct;
+    c->last_cp = cp;
+}
+
+long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line)
+{
+    if (c->last_add <= 0)
+        return 0;
+    const double added = (double)c->last_add, missing = need_pct - c->last_pct;
+    double b = 2.0 * added;
+    if (c->gain > 0.0) {
+        const double est = added * missing / c->gain;
+        b = est < b ? est : b;
+        b = b < 0.5 * added ? 0.5 * added : b;
+    }
+    b = b < (double)min_line ? (double)min_line : b;
+    return (long)ceil(b);
 }
 
 int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, double min_gain,

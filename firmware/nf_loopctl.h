@@ -54,8 +54,12 @@ const char *nf_loopctl_str(int st);
 
 /* The loop's memory between rounds. */
 typedef struct nf_loopctl {
-    double best; /* best share within so far (percent), < 0 before the first round */
-    int stall;   /* rounds in a row that gained less than min_gain over best */
+    double best;     /* best share within so far (percent), < 0 before the first round */
+    int stall;       /* rounds in a row that gained less than min_gain over best */
+    double last_pct; /* share of the last round (< 0: none) */
+    long last_cp;    /* its control points */
+    long last_add;   /* control points the last round had more than the one before (0: none) */
+    double gain;     /* points of share it gained over the one before */
 } nf_loopctl_t;
 
 /* Before the first round. */
@@ -70,5 +74,21 @@ void nf_loopctl_init(nf_loopctl_t *c);
  * max_cp; max rounds; else continue. Updates c. */
 int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, double min_gain,
                        int round, int max_rounds, int chooser_status);
+
+/* Control points the next round may add (nf_knotsel_opts_t.max_add), from
+ * the last round's gain, after nf_loopctl_verdict of a round with cp
+ * control points: FITPACK's way of sizing the next step (fpcurf/fpsurf
+ * extrapolate how many knots will bring the residual to s from what the
+ * last ones brought; Dierckx 1993, 5.2.2): est = added (need - within) /
+ * gained, then at least half and at most twice what the last round added
+ * (twice when it gained nothing), and never less than min_line (one knot
+ * line: min(Nu, Nv)). 0 (no limit) before two rounds have been seen.
+ * Near the target this keeps the last round from adding several times the
+ * control points the missing share needs. */
+long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line);
+
+/* Record a round for nf_loopctl_budget: its share within and its control
+ * points (once per round, before nf_loopctl_budget). */
+void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp);
 
 #endif

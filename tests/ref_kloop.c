@@ -139,12 +139,16 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
         } else {
             nf_knotsel_opts_t so = c->sel;
             so.max_cp = c->max_cp;
+            if (c->budget) {
+                nf_loopctl_record(&lc, pct, (long)fit.nu * fit.nv);
+                so.max_add = nf_loopctl_budget(&lc, c->within, fit.nu < fit.nv ? fit.nu : fit.nv);
+            }
             nf_knotsel_choose(&a, &so, cand, ncand, &n, &st);
         }
-        if (!c->progress)
-            nf_loopctl_init(&lc); /* never a previous round: no progress test */
-        const int v =
-            nf_loopctl_verdict(&lc, pct, c->within, c->min_gain, round, c->max_rounds, st);
+        nf_loopctl_t fresh; /* without the progress test: never a previous round */
+        nf_loopctl_init(&fresh);
+        const int v = nf_loopctl_verdict(c->progress ? &lc : &fresh, pct, c->within, c->min_gain,
+                                         round, c->max_rounds, st);
         if (c->verbose)
             fprintf(stderr,
                     "  round %d: %d x %d, alpha %.3g, %.3f %% within, rms %.4g, max %.4g; %s, %d "

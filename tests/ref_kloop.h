@@ -18,6 +18,7 @@ typedef struct ref_kloop_cfg {
     int scale_alpha;       /* 1: nf_loopctl_alpha at every level, exponent alpha_k */
     double alpha_k;        /* its k (NF_LOOPCTL_ALPHA_K is the default) */
     int progress;          /* 1: stop when a round gains less than min_gain */
+    int budget;            /* 1: nf_loopctl_budget caps the control points a round adds */
     double min_gain;       /* points of the share (<= 0: NF_LOOPCTL_MIN_GAIN) */
     long max_cp;           /* <= 0: NF_MAX_CP */
     int max_rounds;        /* round limit */

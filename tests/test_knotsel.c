@@ -192,7 +192,7 @@ static void test_rows(void **state)
     for (int k = 0; k < x.n; k++)
         assert_int_equal(x.c[k].dir, 0);
     /* ... unless u needs more points per new span than its spans hold. */
-    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0};
+    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0, 0};
     assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 0);
     assert_int_equal(x.st, NF_KNOTSEL_DATA);
@@ -212,7 +212,7 @@ static void test_rows(void **state)
             v = k;
     assert_true(v >= 0);
     assert_true(x.c[v].x > 0.40 && x.c[v].x < 0.43);
-    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0};
+    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0};
     assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
     for (int k = 0; k < x.n; k++)
         assert_int_equal(x.c[k].dir, 0);
@@ -236,7 +236,7 @@ static void test_gain_order(void **state)
             nf_knotsel_add(&x.a, 0.51 + 0.0005 * i, 0.52 + 0.0005 * i, d);
             g += d * d;
         }
-        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0};
+        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0, 0};
         assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
         assert_int_equal(x.n, 2);
         const int first = flip ? 1 : 0; /* the direction adding fewer control points */
@@ -272,8 +272,18 @@ static void test_caps(void **state)
         x.c[k].dir ? rv++ : ru++;
     assert_true((8L + ru) * (8 + rv) <= 85);
     assert_true(x.n >= 1);
+    /* The round budget: the best candidate always, then only what fits. */
+    for (long add = 1; add <= 16; add += 15) {
+        nf_knotsel_opts_t b = {0, 0, 0, 0.0, 0.0, 0, add};
+        assert_int_equal(nf_knotsel_choose(&x.a, &b, x.c, 64, &x.n, &x.st), NF_OK);
+        ru = rv = 0;
+        for (int k = 0; k < x.n; k++)
+            x.c[k].dir ? rv++ : ru++;
+        assert_int_equal(x.n, add == 1 ? 1 : 2);
+        assert_true(add == 1 || (8L + ru) * (8 + rv) - 64 <= add);
+    }
     /* max_cp below half the points binds instead. */
-    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0};
+    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0, 0};
     assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 0);
     assert_int_equal(x.st, NF_KNOTSEL_MAX_CP);
@@ -338,6 +348,28 @@ static void test_verdict(void **state)
     assert_string_equal(nf_loopctl_str(NF_LOOPCTL_NO_PROGRESS), "not_met_no_progress");
     assert_string_equal(nf_loopctl_str(NF_LOOPCTL_MAX_ROUNDS), "not_met_max_rounds");
     assert_string_equal(nf_loopctl_str(NF_LOOPCTL_CONTINUE), "continue");
+}
+
+/* The round budget, by hand: 100 control points more brought 4 points of
+ * share; 1 point is missing, so 25 more, within [50, 200] -> 50; a round
+ * that gained nothing may double; never under one knot line. */
+static void test_budget(void **state)
+{
+    (void)state;
+    nf_loopctl_t c;
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 0); /* no history: no limit */
+    nf_loopctl_record(&c, 94.0, 400);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 0);
+    nf_loopctl_record(&c, 98.0, 500);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 50);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 80), 80);
+    nf_loopctl_record(&c, 98.1, 550); /* 50 more for 0.1 point: est 450 -> 2 x 50 */
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 100);
+    nf_loopctl_record(&c, 97.0, 650); /* lost share: twice the last step */
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 200);
+    nf_loopctl_record(&c, 98.8, 700); /* 1.8 for 50, 0.2 missing: est 5.6 -> 25 */
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 25);
 }
 
 /* alpha per level: closed form on uniform nets, and the fit with the scaled
@@ -457,11 +489,13 @@ static void test_loop_bump(void **state)
     c.scale_alpha = 1;
     c.alpha_k = NF_LOOPCTL_ALPHA_K;
     c.progress = 1;
+    c.budget = 1;
     ref_kloop_out_t ours, uni;
     assert_int_equal(ref_kloop_run(&base, pts, M, &c, &ours), NF_OK);
     c.uniform = 1;
     c.scale_alpha = 0;
     c.progress = 0;
+    c.budget = 0;
     assert_int_equal(ref_kloop_run(&base, pts, M, &c, &uni), NF_OK);
     assert_int_equal(ours.verdict, NF_LOOPCTL_MET);
     assert_int_equal(uni.verdict, NF_LOOPCTL_MET);
@@ -495,10 +529,11 @@ static void test_loop_bump(void **state)
 int main(void)
 {
     const struct CMUnitTest t[] = {
-        cmocka_unit_test(test_counts), cmocka_unit_test(test_concentrated),
-        cmocka_unit_test(test_rows),   cmocka_unit_test(test_gain_order),
-        cmocka_unit_test(test_caps),   cmocka_unit_test(test_verdict),
-        cmocka_unit_test(test_alpha),  cmocka_unit_test(test_loop_bump),
+        cmocka_unit_test(test_counts),    cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_rows),      cmocka_unit_test(test_gain_order),
+        cmocka_unit_test(test_caps),      cmocka_unit_test(test_verdict),
+        cmocka_unit_test(test_budget),    cmocka_unit_test(test_alpha),
+        cmocka_unit_test(test_loop_bump),
     };
     return cmocka_run_group_tests(t, NULL, NULL);
 }
