@@ -2,11 +2,16 @@
  * tests/ref_kloop.c) on a height field file, for bench/loop_bench.py.
  *
  *   knotsel_loop FIT.xyz --tol T [--within PCT] [--k K] [--min-rows R]
- *                [--max-cp N] [--max-rounds R] [--holdout HOLD.xyz] [-v]
+ *                [--max-cp N] [--max-rounds R] [--reparam] [--no-budget]
+ *                [--holdout HOLD.xyz] [-v]
  *
  * Points are "x y z" lines; the parameters are x and y mapped to [0, 1]
- * over the fitted points' box (a height field's own parameters, kept fixed:
- * no reparameterisation), the base a bicubic plane with one span. Prints
+ * over the fitted points' box (a height field's own parameters), the base a
+ * bicubic plane with one span. Parameters stay fixed and d is |S(u, v) - Q|
+ * (about the vertical distance), or with --reparam each check pass projects
+ * the points onto the fit (nf_project from their last parameters): d is the
+ * normal distance, as `cellfit fit` measures it, and the next round fits at
+ * the new parameters. --no-budget: no nf_loopctl_budget. Prints
  * one JSON line: points, control points, net, share within T, rounds,
  * verdict, seconds, and with --holdout the held-out points' rms, p99 and
  * max distance. Measures, asserts nothing. */
@@ -102,6 +107,8 @@ int main(int argc, char **argv)
             c.max_rounds = atoi(v), i++;
         else if (!strcmp(a, "--holdout"))
             hold = v, i++;
+        else if (!strcmp(a, "--reparam"))
+            c.reparam = 1;
         else if (!strcmp(a, "--no-budget"))
             c.budget = 0;
         else if (!strcmp(a, "-v"))
@@ -111,7 +118,8 @@ int main(int argc, char **argv)
     }
     if (!file || !(c.tol > 0)) {
         fprintf(stderr, "usage: knotsel_loop FIT.xyz --tol T [--within PCT] [--k K] [--min-rows R] "
-                        "[--max-cp N] [--max-rounds R] [--holdout HOLD.xyz] [-v]\n");
+                        "[--max-cp N] [--max-rounds R] [--reparam] [--no-budget] "
+                        "[--holdout HOLD.xyz] [-v]\n");
         return 2;
     }
     double box[4] = {1, 0, 1, 0};
@@ -139,14 +147,15 @@ int main(int argc, char **argv)
     }
     printf("{\"points\": %ld, \"tol\": %.6g, \"control_points\": %ld, \"nu\": %d, \"nv\": %d, "
            "\"within_tol_pct\": %.4f, \"rms\": %.6g, \"max_abs\": %.6g, \"rounds\": %d, "
-           "\"fit_status\": \"%s\", \"alpha_k\": %g, \"seconds\": %.4f",
+           "\"fit_status\": \"%s\", \"alpha_k\": %g, \"reparam\": %d, \"seconds\": %.4f",
            m, c.tol, o.cp, o.fit.nu, o.fit.nv, o.within_pct, o.rms, o.mx, o.rounds,
-           nf_loopctl_str(o.verdict), c.alpha_k,
+           nf_loopctl_str(o.verdict), c.alpha_k, c.reparam,
            (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec));
     if (h > 0) {
         double *d = malloc(sizeof(double) * (size_t)h), ss = 0.0;
         for (long k = 0; k < h; k++) {
-            d[k] = ref_kloop_dist(&o.fit, hp + 5 * k);
+            d[k] = c.reparam ? ref_kloop_pdist(&o.fit, hp + 5 * k)
+                             : ref_kloop_dist(&o.fit, hp + 5 * k);
             ss += d[k] * d[k];
         }
         qsort(d, (size_t)h, sizeof(double), cmp_dbl);

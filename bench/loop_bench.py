@@ -4,7 +4,11 @@ asserts nothing.
 
   knotsel   build/knotsel_loop: the knot chooser (firmware/nf_knotsel.c,
             nf_loopctl.c) in the fit -> check -> insert loop at the firmware
-            level, parameters = x, y (fixed), alpha per level k = -2
+            level, parameters = x, y (fixed), d = |S(u, v) - Q| (about the
+            vertical distance: compare with surfit), alpha per level k = -2
+  knotsel+p the same with --reparam: each check pass projects the points
+            onto the fit (nf_project), d the normal distance (compare with
+            cellfit)
   cellfit   `cellfit fit --tol T --within 99 --refine residual` from a 4 x 4
             bicubic plane base (`cellfit base --method plane`), points
             projected (the current host loop)
@@ -21,8 +25,10 @@ a 1 mm ridge and a 3 mm bump), holes (hills with three holes of no data),
 scan (the cliffs field at random x, y). T = 0.75 % of the height range.
 Per data set and method: points fitted, T, control points, share within T,
 held-out p99 (|d| of the held-out rows), fit status and seconds.
-Distances: knotsel |S(u, v) - Q| at the points' (x, y) parameters, cellfit
-the projected (normal) distance, surfit |z - s(x, y)|.
+Distances: knotsel |S(u, v) - Q| at the points' (x, y) parameters, surfit
+|z - s(x, y)| (both about vertical); knotsel+p and cellfit the projected
+(normal) distance, smaller on slopes: on the cliff (slope about 2.5) a
+vertical T is about 2.7 normal T, so compare within pairs.
 
 Usage: /usr/bin/python3 bench/loop_bench.py --cellfit build/cellfit
            --knotsel build/knotsel_loop [--sizes 5000,20000,100000]
@@ -90,10 +96,10 @@ def p99(d):
     return float(d[max(0, int(math.ceil(0.99 * d.size)) - 1)]) if d.size else float("nan")
 
 
-def run_knotsel(exe, fit, hold, tol):
+def run_knotsel(exe, fit, hold, tol, extra=()):
     t = time.time()
-    out = subprocess.run([exe, fit, "--tol", repr(tol), "--within", "99", "--holdout", hold],
-                         capture_output=True, text=True, check=False)
+    out = subprocess.run([exe, fit, "--tol", repr(tol), "--within", "99", "--holdout", hold]
+                         + list(extra), capture_output=True, text=True, check=False)
     wall = time.time() - t
     try:
         r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -215,7 +221,8 @@ def main():
                 fit, hold = os.path.join(work, "fit.xyz"), os.path.join(work, "hold.xyz")
                 np.savetxt(fit, fit_pts, fmt="%.9g")
                 np.savetxt(hold, hold_pts, fmt="%.9g")
-                res = [("knotsel", run_knotsel(a.knotsel, fit, hold, tol))]
+                res = [("knotsel", run_knotsel(a.knotsel, fit, hold, tol)),
+                       ("knotsel+p", run_knotsel(a.knotsel, fit, hold, tol, ["--reparam"]))]
                 if a.cellfit and not a.no_cellfit:
                     res.append(("cellfit residual", run_cellfit(a.cellfit, fit, hold, tol, work)))
                 if not a.no_surfit:

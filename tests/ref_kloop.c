@@ -3,6 +3,7 @@
 #include "nf_budget.h"
 #include "nf_err.h"
 #include "nf_fit.h"
+#include "nf_project.h"
 #include "nf_refine.h"
 #include <math.h>
 #include <stdio.h>
@@ -31,6 +32,13 @@ double ref_kloop_dist(const nf_surf_t *s, const double *r)
     nf_surf_eval(s, r[0], r[1], S);
     return sqrt((S[0] - r[2]) * (S[0] - r[2]) + (S[1] - r[3]) * (S[1] - r[3]) +
                 (S[2] - r[4]) * (S[2] - r[4]));
+}
+
+double ref_kloop_pdist(const nf_surf_t *s, const double *r)
+{
+    nf_proj_t pr;
+    int rc = nf_project(s, r + 2, r[0], r[1], 1e-9, &pr);
+    return rc == NF_OK || rc == NF_ENOCONV ? fabs(pr.dist) : ref_kloop_dist(s, r);
 }
 
 /* Eq. 7 on the net of cur (its control points are P0), solved into fit. */
@@ -97,6 +105,12 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
 {
     nf_surf_t cur, fit;
     int rc = NF_OK;
+    double *w = NULL; /* the points at their current parameters (reparam) */
+    if (c->reparam) {
+        w = malloc(sizeof(double) * 5 * (size_t)M);
+        memcpy(w, pts, sizeof(double) * 5 * (size_t)M);
+        pts = w;
+    }
     nf_loopctl_t lc;
     nf_loopctl_init(&lc);
     memset(o, 0, sizeof *o);
@@ -107,6 +121,7 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
             c->scale_alpha ? nf_loopctl_alpha(c->alpha, base, &cur, c->alpha_k) : c->alpha;
         if ((rc = fit_once(&cur, pts, M, alpha, c->beta, &fit)) != NF_OK) {
             free(cur.U);
+            free(w);
             return rc;
         }
         free(cur.U);
@@ -121,7 +136,19 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
         long within = 0;
         double ss = 0.0, mx = 0.0;
         for (long k = 0; k < M; k++) {
-            const double d = ref_kloop_dist(&fit, pts + 5 * k);
+            double d;
+            if (w) {
+                nf_proj_t pr;
+                double *r = w + 5 * k;
+                int prc = nf_project(&fit, r + 2, r[0], r[1], 1e-9, &pr);
+                if (prc == NF_OK || prc == NF_ENOCONV) {
+                    r[0] = pr.u;
+                    r[1] = pr.v;
+                }
+                d = ref_kloop_dist(&fit, r);
+            } else {
+                d = ref_kloop_dist(&fit, pts + 5 * k);
+            }
             nf_knotsel_add(&a, pts[5 * k], pts[5 * k + 1], d);
             within += d <= c->tol;
             ss += d * d;
@@ -172,10 +199,12 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
         free(fit.U);
         if (v != NF_LOOPCTL_CONTINUE) {
             o->verdict = v;
+            free(w);
             return NF_OK;
         }
         if (rc) {
             free(cur.U);
+            free(w);
             return rc;
         }
     }

@@ -19,6 +19,9 @@ typedef struct ref_kloop_cfg {
     double alpha_k;        /* its k (NF_LOOPCTL_ALPHA_K is the default) */
     int progress;          /* 1: stop when a round gains less than min_gain */
     int budget;            /* 1: nf_loopctl_budget caps the control points a round adds */
+    int reparam;           /* 1: the check pass projects each point onto the fit (nf_project
+                              from its last parameters), d is the normal distance and the
+                              next round fits at the new parameters; 0: parameters fixed */
     double min_gain;       /* points of the share (<= 0: NF_LOOPCTL_MIN_GAIN) */
     long max_cp;           /* <= 0: NF_MAX_CP */
     int max_rounds;        /* round limit */
@@ -48,5 +51,9 @@ void ref_kloop_copy(nf_surf_t *dst, const nf_surf_t *src);
 
 /* Distance |S(u, v) - Q| of row r (u v x y z) to s. */
 double ref_kloop_dist(const nf_surf_t *s, const double *r);
+
+/* Distance of row r's point to s by projection from (u, v) of r (the
+ * normal distance; ref_kloop_dist's when the projection fails). */
+double ref_kloop_pdist(const nf_surf_t *s, const double *r);
 
 #endif

@@ -206,12 +206,11 @@ static void test_rows(void **state)
         nf_knotsel_add(&x.a, (i + 0.5) / 1000, 0.43, i % 7 == 0 ? 1.0 : 0.0);
     }
     assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
-    int v = -1;
+    double xv = -1.0; /* the v knot */
     for (int k = 0; k < x.n; k++)
         if (x.c[k].dir == 1)
-            v = k;
-    assert_true(v >= 0);
-    assert_true(x.c[v].x > 0.40 && x.c[v].x < 0.43);
+            xv = x.c[k].x;
+    assert_true(xv > 0.40 && xv < 0.43);
     nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0};
     assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
     for (int k = 0; k < x.n; k++)
@@ -465,7 +464,7 @@ static void test_loop_bump(void **state)
     (void)state;
     enum { G = 80, K = 5 };
     const double T = 0.01;
-    double *pts = malloc(sizeof(double) * 5 * G * G), *hold = malloc(sizeof(double) * 5 * G * G);
+    double *pts = calloc(5 * G * G, sizeof(double)), *hold = calloc(5 * G * G, sizeof(double));
     long M = 0, H = 0;
     for (int j = 0; j < G; j++)
         for (int i = 0; i < G; i++) {
