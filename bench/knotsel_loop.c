@@ -1,7 +1,7 @@
 /* bench/knotsel_loop.c: the knot chooser's loop (nf_knotsel + nf_loopctl,
  * tests/ref_kloop.c) on a height field file, for bench/loop_bench.py.
  *
- *   knotsel_loop FIT.xyz --tol T [--within PCT] [--k K] [--min-rows R]
+ *   knotsel_loop FIT.xyz --tol T [--within PCT] [--k K] [--min-rows R] [--ratio X] [--share X]
  *                [--max-cp N] [--max-rounds R] [--reparam] [--no-budget]
  *                [--holdout HOLD.xyz] [-v]
  *
@@ -101,6 +101,10 @@ int main(int argc, char **argv)
             c.alpha_k = atof(v), i++;
         else if (!strcmp(a, "--min-rows"))
             c.sel.min_rows = atoi(v), i++;
+        else if (!strcmp(a, "--ratio"))
+            c.sel.ratio = atof(v), i++;
+        else if (!strcmp(a, "--share"))
+            c.sel.share = atof(v), i++;
         else if (!strcmp(a, "--max-cp"))
             c.max_cp = atol(v), i++;
         else if (!strcmp(a, "--max-rounds"))
@@ -117,9 +121,10 @@ int main(int argc, char **argv)
             file = a;
     }
     if (!file || !(c.tol > 0)) {
-        fprintf(stderr, "usage: knotsel_loop FIT.xyz --tol T [--within PCT] [--k K] [--min-rows R] "
-                        "[--max-cp N] [--max-rounds R] [--reparam] [--no-budget] "
-                        "[--holdout HOLD.xyz] [-v]\n");
+        fprintf(stderr,
+                "usage: knotsel_loop FIT.xyz --tol T [--within PCT] [--k K] [--min-rows R] "
+                "[--ratio X] [--share X] [--max-cp N] [--max-rounds R] [--reparam] [--no-budget] "
+                "[--holdout HOLD.xyz] [-v]\n");
         return 2;
     }
     double box[4] = {1, 0, 1, 0};

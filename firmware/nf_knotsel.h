@@ -51,7 +51,7 @@
 #define NF_KNOTSEL_RATIO 0.25
 /* A direction stops taking knots this round once its picks hold this share
  * of its misfit. */
-#define NF_KNOTSEL_SHARE 0.8
+#define NF_KNOTSEL_SHARE 0.5
 /* Data rows each new span must hold by default (lower bound from the
  * sub-bins: a sub-bin with points counts 1, with two distinct values 2). */
 #define NF_KNOTSEL_MIN_ROWS 1
