@@ -1,0 +1,94 @@
+/* nf_loopctl.h: the rules of the fitting loop around the knot chooser
+ * (nf_knotsel.h): alpha scaled with the knot spacing at each refinement
+ * level (Eq. 7's Greville term), and the verdict after each round: met, or
+ * why the loop stops (issue 14: no progress, data limit, max_cp, rounds). */
+#ifndef NF_LOOPCTL_H
+#define NF_LOOPCTL_H
+
+#include "nf_knotsel.h"
+#include "nf_surf.h"
+
+/* Default exponent k of nf_loopctl_alpha: alpha follows the area of a
+ * control point's support, as the data term does (see there). */
+#define NF_LOOPCTL_ALPHA_K (-2.0)
+/* Default least gain of a round, in points of the percentage within. */
+#define NF_LOOPCTL_MIN_GAIN 0.1
+
+/* alpha for the current net when alpha was set for the first one:
+ *   alpha_level = alpha (h0 / h)^k,  (h0 / h)^2 = (h0u h0v) / (hu hv),
+ * h = the domain's width over its non-empty spans in that direction.
+ * alpha |(B - I) P|^2 (Eq. 7) is, per control point, a second difference
+ * of the net, about h^2 times the surface's second derivative, against a
+ * data term (R^T R)_ii that, for points spread evenly, falls with the area
+ * hu hv of the control point's support. k = -2 keeps the two in the same
+ * balance at every level: where data are, the Greville term stays as weak
+ * relative to them as at the first level (it does not flatten a feature the
+ * finer net was made for); where they are not (holes, gaps between rows),
+ * the control points are held by alpha and beta alone and follow the
+ * previous level's surface (P0 is the refined previous fit), which is
+ * smooth. k = 2 would keep the Greville energy alpha h^2 |S''|^2 per area
+ * instead; measured on the test fields (docs/loop.md) it smooths features
+ * away and needs more control points for the same share, so it is not the
+ * default. k = 0: alpha unchanged. A non-finite or negative alpha, or nets
+ * over different domains, return alpha unchanged. */
+double nf_loopctl_alpha(double alpha, const nf_surf_t *first, const nf_surf_t *cur, double k);
+
+/* The loop's verdict after a round's check pass. */
+typedef enum nf_loopctl_stat {
+    NF_LOOPCTL_CONTINUE = 0,    /* insert the chosen knots and fit again */
+    NF_LOOPCTL_MET = 1,         /* the share within tolerance reached */
+    NF_LOOPCTL_DATA_LIMIT = 2,  /* no split the data support (or half the points) */
+    NF_LOOPCTL_MAX_CP = 3,      /* the next net would exceed max_cp / the board */
+    NF_LOOPCTL_NO_PROGRESS = 4, /* the round gained less than min_gain points */
+    NF_LOOPCTL_MAX_ROUNDS = 5   /* the round limit */
+} nf_loopctl_stat_t;
+
+/* "continue", "met", "not_met_data_limit", "not_met_max_cp",
+ * "not_met_no_progress", "not_met_max_rounds". */
+const char *nf_loopctl_str(int st);
+
+/* Rounds in a row that may gain less than min_gain before the loop stops:
+ * one round on a coarse net can lose share (a knot line moves the misfit
+ * before it removes it), two in a row say the rounds stopped helping. */
+#define NF_LOOPCTL_PATIENCE 2
+
+/* The loop's memory between rounds. */
+typedef struct nf_loopctl {
+    double best;     /* best share within so far (percent), < 0 before the first round */
+    int stall;       /* rounds in a row that gained less than min_gain over best */
+    double last_pct; /* share of the last round (< 0: none) */
+    long last_cp;    /* its control points */
+    long last_add;   /* control points the last round had more than the one before (0: none) */
+    double gain;     /* points of share it gained over the one before */
+} nf_loopctl_t;
+
+/* Before the first round. */
+void nf_loopctl_init(nf_loopctl_t *c);
+
+/* Verdict after the check pass of round `round` (0-based) with within_pct
+ * of the points within tolerance (need_pct wanted), min_gain the least gain
+ * over the best earlier round that counts as progress (<= 0:
+ * NF_LOOPCTL_MIN_GAIN), max_rounds the limit, and the chooser's status for
+ * the next round. Checked in this order: met; no progress
+ * (NF_LOOPCTL_PATIENCE rounds in a row); data limit or half the points;
+ * max_cp; max rounds; else continue. Updates c. */
+int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, double min_gain,
+                       int round, int max_rounds, int chooser_status);
+
+/* Control points the next round may add (nf_knotsel_opts_t.max_add), from
+ * the last round's gain, after nf_loopctl_verdict of a round with cp
+ * control points: FITPACK's way of sizing the next step (fpcurf/fpsurf
+ * extrapolate how many knots will bring the residual to s from what the
+ * last ones brought; Dierckx 1993, 5.2.2): est = added (need - within) /
+ * gained, then at least half and at most twice what the last round added
+ * (twice when it gained nothing), and never less than min_line (one knot
+ * line: min(Nu, Nv)). 0 (no limit) before two rounds have been seen.
+ * Near the target this keeps the last round from adding several times the
+ * control points the missing share needs. */
+long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line);
+
+/* Record a round for nf_loopctl_budget: its share within and its control
+ * points (once per round, before nf_loopctl_budget). */
+void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp);
+
+#endif

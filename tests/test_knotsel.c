@@ -1,0 +1,538 @@
+/* test_knotsel.c: the knot chooser (nf_knotsel) and the loop's rules
+ * (nf_loopctl): per-span counts against a brute-force span search; knots
+ * where the misfit is, none where the data rows do not support a span,
+ * u against v by misfit per control point (closed form), the caps; alpha per
+ * level against a dense solve of Eq. 7 (ref_dense.c); and the whole loop on
+ * a narrow bump against uniform refinement and held-out rows. */
+#include "cf_test.h"
+#include "nf_basis.h"
+#include "nf_err.h"
+#include "nf_knotsel.h"
+#include "nf_loopctl.h"
+#include "nf_refine.h"
+#include "nf_surf.h"
+#include "ref_dense.h"
+#include "ref_kloop.h"
+#include <stdlib.h>
+#include <string.h>
+
+/* A bicubic plane x = u, y = v, z = 0 on [0,1]^2 with su x sv uniform
+ * spans: control points at the Greville abscissae (linear precision). */
+static void plane(nf_surf_t *s, int su, int sv)
+{
+    ref_kloop_surf(s, 3, 3, su + 3, sv + 3);
+    for (int i = 0; i < su + 7; i++)
+        s->U[i] = i < 4 ? 0.0 : (i > su + 2 ? 1.0 : (double)(i - 3) / su);
+    for (int i = 0; i < sv + 7; i++)
+        s->V[i] = i < 4 ? 0.0 : (i > sv + 2 ? 1.0 : (double)(i - 3) / sv);
+    for (int j = 0; j < s->nv; j++)
+        for (int i = 0; i < s->nu; i++) {
+            double *c = s->cp + 3 * (i + (long)j * s->nu);
+            c[0] = nf_greville(i, 3, s->U);
+            c[1] = nf_greville(j, 3, s->V);
+            c[2] = 0.0;
+        }
+    assert_int_equal(nf_surf_check(s), NF_OK);
+}
+
+/* Span slot of t by linear search (last span closed), independent of
+ * nf_find_span. */
+static int brute_slot(const double *T, int deg, int n, double t)
+{
+    int last = -1;
+    for (int i = deg; i < n; i++)
+        if (T[i] < T[i + 1]) {
+            last = i;
+            if (t >= T[i] && t < T[i + 1])
+                return i - deg;
+        }
+    return last - deg;
+}
+
+static void test_counts(void **state)
+{
+    (void)state;
+    ref_seed(5);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 2, 11, 9, 0.0, 2.0, -1.0, 1.0, 1.0, 1.0);
+    const int nsu = 8, nsv = 7;
+    double *mem = malloc(sizeof(double) * NF_KNOTSEL_DOUBLES(11, 9, 3, 2));
+    nf_knotsel_t a;
+    const double tol = 0.3;
+    assert_int_equal(nf_knotsel_init(&a, &s, 0.0, mem), NF_EARG);
+    assert_int_equal(nf_knotsel_init(&a, &s, tol, mem), NF_OK);
+    long nu[8] = {0}, nv[7] = {0}, out = 0;
+    double ru[8] = {0}, rv[7] = {0}, g = 0.0;
+    for (int k = 0; k < 5000; k++) {
+        double u = ref_rand(0.0, 2.0), v = ref_rand(-1.0, 1.0), d = ref_rand(-1.0, 1.0);
+        nf_knotsel_add(&a, u, v, d);
+        int i = brute_slot(s.U, 3, 11, u), j = brute_slot(s.V, 2, 9, v);
+        nu[i]++;
+        nv[j]++;
+        ru[i] += d * d;
+        rv[j] += d * d;
+        if (fabs(d) > tol) {
+            out++;
+            g += d * d;
+        }
+    }
+    nf_knotsel_add(&a, NAN, 0.5, 1.0); /* ignored */
+    assert_int_equal(a.n, 5000);
+    assert_int_equal(a.out, out);
+    assert_near(a.g, g, 1e-9 * g);
+    for (int i = 0; i < nsu; i++) {
+        assert_int_equal(nf_knotsel_span_points(&a, 0, i), nu[i]);
+        assert_near(nf_knotsel_span_rss(&a, 0, i), ru[i], 1e-9 * (1 + ru[i]));
+    }
+    for (int j = 0; j < nsv; j++) {
+        assert_int_equal(nf_knotsel_span_points(&a, 1, j), nv[j]);
+        assert_near(nf_knotsel_span_rss(&a, 1, j), rv[j], 1e-9 * (1 + rv[j]));
+    }
+    free(mem);
+    ref_surf_free(&s);
+}
+
+/* Grid of gx x gy points within tolerance (d = 0), rows at (i + 0.5)/gx. */
+static void grid(nf_knotsel_t *a, int gx, int gy)
+{
+    for (int j = 0; j < gy; j++)
+        for (int i = 0; i < gx; i++)
+            nf_knotsel_add(a, (i + 0.5) / gx, (j + 0.5) / gy, 0.0);
+}
+
+typedef struct sel {
+    nf_surf_t s;
+    double *mem;
+    nf_knotsel_t a;
+    nf_knotsel_cand_t c[64];
+    int n, st;
+} sel_t;
+
+static void sel_start(sel_t *x, int su, int sv, double tol)
+{
+    plane(&x->s, su, sv);
+    x->mem = malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(su + 3, sv + 3, 3, 3));
+    assert_int_equal(nf_knotsel_init(&x->a, &x->s, tol, x->mem), NF_OK);
+}
+
+static void sel_end(sel_t *x)
+{
+    free(x->mem);
+    free(x->s.U);
+}
+
+/* Misfit in one cell only: the first knot in each direction goes into
+ * that cell's spans, a quarter span or more from their ends, near the
+ * misfit's centre; nothing elsewhere. */
+static void test_concentrated(void **state)
+{
+    (void)state;
+    sel_t x;
+    sel_start(&x, 8, 8, 0.1);
+    grid(&x.a, 64, 64);
+    /* Misfit at u in [0.40, 0.45], v in [0.30, 0.35]: u span 3, v span 2. */
+    for (int j = 0; j < 6; j++)
+        for (int i = 0; i < 6; i++)
+            nf_knotsel_add(&x.a, 0.40 + 0.01 * i, 0.30 + 0.01 * j, 1.0);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.st, NF_KNOTSEL_INSERT);
+    assert_int_equal(x.n, 2); /* one per direction: the rest has no misfit */
+    int seen[2] = {0, 0};
+    for (int k = 0; k < x.n; k++) {
+        const int dir = x.c[k].dir, span = x.c[k].span;
+        assert_int_equal(span, dir ? 2 : 3);
+        const double t0 = span / 8.0, t1 = (span + 1) / 8.0, mid = dir ? 0.325 : 0.425;
+        assert_true(x.c[k].x >= t0 + 0.25 * (t1 - t0) && x.c[k].x <= t1 - 0.25 * (t1 - t0));
+        /* The nearest admissible sub-bin boundary to the misfit's centre. */
+        assert_true(fabs(x.c[k].x - mid) <= 0.5 * (t1 - t0) / NF_KNOTSEL_BINS + 1e-12);
+        seen[dir]++;
+    }
+    assert_int_equal(seen[0], 1);
+    assert_int_equal(seen[1], 1);
+    /* The knots split into ascending arrays for nf_refine_u / _v. */
+    double Xu[4], Xv[4];
+    int ru, rv;
+    assert_int_equal(nf_knotsel_split(x.c, x.n, Xu, 4, &ru, Xv, 4, &rv), NF_OK);
+    assert_int_equal(ru, 1);
+    assert_int_equal(rv, 1);
+    assert_int_equal(nf_knotsel_split(x.c, x.n, Xu, 0, &ru, Xv, 4, &rv), NF_EARG);
+    sel_end(&x);
+}
+
+/* Data rows at v = 0.05 + 0.1 j: each v span of width 1/16 holds one row
+ * at most, so no v knot may go in (it would leave a span without a row, or
+ * with one row for its new control points); u, densely sampled, gets its
+ * knot. With the misfit on a row spread across all u (a ridge along u),
+ * the only splittable direction is blocked: status data limit. */
+static void test_rows(void **state)
+{
+    (void)state;
+    sel_t x;
+    sel_start(&x, 16, 16, 0.1);
+    for (int j = 0; j < 10; j++)
+        for (int i = 0; i < 200; i++)
+            nf_knotsel_add(&x.a, (i + 0.5) / 200, 0.05 + 0.1 * j, 0.0);
+    for (int i = 0; i < 20; i++)
+        nf_knotsel_add(&x.a, 0.52 + 0.001 * i, 0.45, 1.0);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.st, NF_KNOTSEL_INSERT);
+    assert_int_equal(x.n, 1);
+    assert_int_equal(x.c[0].dir, 0);
+    sel_end(&x);
+
+    sel_start(&x, 16, 16, 0.1);
+    for (int j = 0; j < 10; j++)
+        for (int i = 0; i < 200; i++)
+            nf_knotsel_add(&x.a, (i + 0.5) / 200, 0.05 + 0.1 * j, 0.0);
+    /* Misfit all along the row v = 0.45, in every u span: u would split
+     * (scoring low per control point, but the only candidates) ... */
+    for (int i = 0; i < 200; i++)
+        nf_knotsel_add(&x.a, (i + 0.5) / 200, 0.45, 1.0);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    for (int k = 0; k < x.n; k++)
+        assert_int_equal(x.c[k].dir, 0);
+    /* ... unless u needs more points per new span than its spans hold. */
+    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0, 0};
+    assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 0);
+    assert_int_equal(x.st, NF_KNOTSEL_DATA);
+    sel_end(&x);
+
+    /* Two rows in a v span, 0.40 and 0.43 (span [0.375, 0.4375)): a
+     * boundary between them is admissible with min_rows 1, not with 2. */
+    sel_start(&x, 16, 16, 0.1);
+    for (int i = 0; i < 1000; i++) { /* 2000 points: half of them above the 380 control points */
+        nf_knotsel_add(&x.a, (i + 0.5) / 1000, 0.40, 0.0);
+        nf_knotsel_add(&x.a, (i + 0.5) / 1000, 0.43, i % 7 == 0 ? 1.0 : 0.0);
+    }
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    double xv = -1.0; /* the v knot */
+    for (int k = 0; k < x.n; k++)
+        if (x.c[k].dir == 1)
+            xv = x.c[k].x;
+    assert_true(xv > 0.40 && xv < 0.43);
+    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0};
+    assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
+    for (int k = 0; k < x.n; k++)
+        assert_int_equal(x.c[k].dir, 0);
+    sel_end(&x);
+}
+
+/* A misfit in one cell, on nets of 20 x 6 and 6 x 20 spans: a u knot adds
+ * Nv control points, a v knot Nu, so the direction with the smaller cost
+ * ranks first, with scores g / cost (g summed here by hand). */
+static void test_gain_order(void **state)
+{
+    (void)state;
+    for (int flip = 0; flip < 2; flip++) {
+        sel_t x;
+        const int su = flip ? 6 : 20, sv = flip ? 20 : 6;
+        sel_start(&x, su, sv, 0.1);
+        grid(&x.a, 200, 200);
+        double g = 0.0;
+        for (int i = 0; i < 40; i++) {
+            double d = 0.5 + 0.01 * i;
+            nf_knotsel_add(&x.a, 0.51 + 0.0005 * i, 0.52 + 0.0005 * i, d);
+            g += d * d;
+        }
+        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0, 0};
+        assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
+        assert_int_equal(x.n, 2);
+        const int first = flip ? 1 : 0; /* the direction adding fewer control points */
+        assert_int_equal(x.c[0].dir, first);
+        assert_near(x.c[0].score, g / (first ? su + 3 : sv + 3), 1e-9 * g);
+        assert_near(x.c[1].score, g / (first ? sv + 3 : su + 3), 1e-9 * g);
+        /* With the default ratio (0.25) the costlier line (9 vs 23: 0.39)
+         * still goes in; with ratio 0.5 it waits. */
+        o.ratio = 0.5;
+        assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
+        assert_int_equal(x.n, 1);
+        assert_int_equal(x.c[0].dir, first);
+        sel_end(&x);
+    }
+}
+
+/* The net never passes half the points seen, nor max_cp; when the first
+ * split would, the status says which cap. */
+static void test_caps(void **state)
+{
+    (void)state;
+    sel_t x;
+    sel_start(&x, 5, 5, 0.1); /* 8 x 8 = 64 control points */
+    /* 170 points: half is 85, so one knot line (72) fits, two (80) too,
+     * three (88 or 90) not. Misfit everywhere so that every span bids. */
+    for (int j = 0; j < 10; j++)
+        for (int i = 0; i < 17; i++)
+            nf_knotsel_add(&x.a, (i + 0.5) / 17, (j + 0.5) / 10, 1.0 + 0.01 * (i + j));
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.st, NF_KNOTSEL_INSERT);
+    int ru = 0, rv = 0;
+    for (int k = 0; k < x.n; k++)
+        x.c[k].dir ? rv++ : ru++;
+    assert_true((8L + ru) * (8 + rv) <= 85);
+    assert_true(x.n >= 1);
+    /* The round budget: the best candidate always, then only what fits. */
+    for (long add = 1; add <= 16; add += 15) {
+        nf_knotsel_opts_t b = {0, 0, 0, 0.0, 0.0, 0, add};
+        assert_int_equal(nf_knotsel_choose(&x.a, &b, x.c, 64, &x.n, &x.st), NF_OK);
+        ru = rv = 0;
+        for (int k = 0; k < x.n; k++)
+            x.c[k].dir ? rv++ : ru++;
+        assert_int_equal(x.n, add == 1 ? 1 : 2);
+        assert_true(add == 1 || (8L + ru) * (8 + rv) - 64 <= add);
+    }
+    /* max_cp below half the points binds instead. */
+    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0, 0};
+    assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 0);
+    assert_int_equal(x.st, NF_KNOTSEL_MAX_CP);
+    sel_end(&x);
+
+    sel_start(&x, 5, 5, 0.1);
+    for (int j = 0; j < 8; j++) /* 128 points: half is 64, the net already */
+        for (int i = 0; i < 16; i++)
+            nf_knotsel_add(&x.a, (i + 0.5) / 16, (j + 0.5) / 8, 1.0);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 0);
+    assert_int_equal(x.st, NF_KNOTSEL_HALF_PTS);
+    /* Nothing out of tolerance: nothing to do. */
+    assert_int_equal(nf_knotsel_init(&x.a, &x.s, 0.1, x.mem), NF_OK);
+    grid(&x.a, 16, 16);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.st, NF_KNOTSEL_NONE_OUT);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, -1, &x.n, &x.st), NF_EARG);
+    for (int st = 0; st <= NF_KNOTSEL_MAX_CP; st++)
+        assert_string_not_equal(nf_knotsel_status_str(st), "unknown status");
+    sel_end(&x);
+}
+
+/* The stop rules, round by round: the issue's 95.56 -> 95.58 -> 95.63 %
+ * stops for no progress (two rounds in a row under 0.1 point), a single
+ * lost round does not; then the chooser's status and the round limit. */
+static void test_verdict(void **state)
+{
+    (void)state;
+    nf_loopctl_t c;
+    const int ins = NF_KNOTSEL_INSERT;
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_verdict(&c, 95.56, 99.0, 0, 0, 12, ins), NF_LOOPCTL_CONTINUE);
+    assert_int_equal(nf_loopctl_verdict(&c, 95.58, 99.0, 0, 1, 12, ins), NF_LOOPCTL_CONTINUE);
+    assert_int_equal(nf_loopctl_verdict(&c, 95.63, 99.0, 0, 2, 12, ins), NF_LOOPCTL_NO_PROGRESS);
+    /* A coarse round that loses share, then one that gains: no stop. */
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_verdict(&c, 47.7, 99.0, 0, 0, 12, ins), NF_LOOPCTL_CONTINUE);
+    assert_int_equal(nf_loopctl_verdict(&c, 39.7, 99.0, 0, 1, 12, ins), NF_LOOPCTL_CONTINUE);
+    assert_int_equal(nf_loopctl_verdict(&c, 53.3, 99.0, 0, 2, 12, ins), NF_LOOPCTL_CONTINUE);
+    assert_near(c.best, 53.3, 0.0);
+    assert_int_equal(c.stall, 0);
+    /* min_gain given: 0.5 point; 53.7 and 53.9 are under it. */
+    assert_int_equal(nf_loopctl_verdict(&c, 53.7, 99.0, 0.5, 3, 12, ins), NF_LOOPCTL_CONTINUE);
+    assert_int_equal(nf_loopctl_verdict(&c, 53.9, 99.0, 0.5, 4, 12, ins), NF_LOOPCTL_NO_PROGRESS);
+    /* Met wins over everything. */
+    assert_int_equal(nf_loopctl_verdict(&c, 99.0, 99.0, 0, 5, 12, NF_KNOTSEL_DATA), NF_LOOPCTL_MET);
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_verdict(&c, 50.0, 99.0, 0, 0, 12, NF_KNOTSEL_DATA),
+                     NF_LOOPCTL_DATA_LIMIT);
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_verdict(&c, 50.0, 99.0, 0, 0, 12, NF_KNOTSEL_HALF_PTS),
+                     NF_LOOPCTL_DATA_LIMIT);
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_verdict(&c, 50.0, 99.0, 0, 0, 12, NF_KNOTSEL_MAX_CP),
+                     NF_LOOPCTL_MAX_CP);
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_verdict(&c, 50.0, 99.0, 0, 11, 12, ins), NF_LOOPCTL_MAX_ROUNDS);
+    assert_string_equal(nf_loopctl_str(NF_LOOPCTL_MET), "met");
+    assert_string_equal(nf_loopctl_str(NF_LOOPCTL_DATA_LIMIT), "not_met_data_limit");
+    assert_string_equal(nf_loopctl_str(NF_LOOPCTL_MAX_CP), "not_met_max_cp");
+    assert_string_equal(nf_loopctl_str(NF_LOOPCTL_NO_PROGRESS), "not_met_no_progress");
+    assert_string_equal(nf_loopctl_str(NF_LOOPCTL_MAX_ROUNDS), "not_met_max_rounds");
+    assert_string_equal(nf_loopctl_str(NF_LOOPCTL_CONTINUE), "continue");
+}
+
+/* The round budget, by hand: 100 control points more brought 4 points of
+ * share; 1 point is missing, so 25 more, within [50, 200] -> 50; a round
+ * that gained nothing may double; never under one knot line. */
+static void test_budget(void **state)
+{
+    (void)state;
+    nf_loopctl_t c;
+    nf_loopctl_init(&c);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 0); /* no history: no limit */
+    nf_loopctl_record(&c, 94.0, 400);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 0);
+    nf_loopctl_record(&c, 98.0, 500);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 50);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 80), 80);
+    nf_loopctl_record(&c, 98.1, 550); /* 50 more for 0.1 point: est 450 -> 2 x 50 */
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 100);
+    nf_loopctl_record(&c, 97.0, 650); /* lost share: twice the last step */
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 200);
+    nf_loopctl_record(&c, 98.8, 700); /* 1.8 for 50, 0.2 missing: est 5.6 -> 25 */
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 25);
+}
+
+/* alpha per level: closed form on uniform nets, and the fit with the scaled
+ * alpha equal to a dense solve of Eq. 7 with that alpha, on data with a
+ * hole (control points there held by alpha and beta alone). */
+static void test_alpha(void **state)
+{
+    (void)state;
+    nf_surf_t s0, s1;
+    plane(&s0, 2, 3);
+    plane(&s1, 8, 6);
+    /* Spacing 1/2 x 1/3 against 1/8 x 1/6: (h0 / h)^2 = 4 x 2. */
+    assert_near(nf_loopctl_alpha(0.1, &s0, &s1, 2.0), 0.1 * 4.0 * 2.0, 1e-15);
+    assert_near(nf_loopctl_alpha(0.1, &s0, &s1, -2.0), 0.1 / 8.0, 1e-15);
+    assert_near(nf_loopctl_alpha(0.1, &s0, &s1, 1.0), 0.1 * sqrt(8.0), 1e-15);
+    assert_near(nf_loopctl_alpha(0.1, &s0, &s1, 0.0), 0.1, 0.0);
+    assert_near(nf_loopctl_alpha(0.1, &s0, &s0, -2.0), 0.1, 0.0);
+    assert_true(isnan(nf_loopctl_alpha(NAN, &s0, &s1, 2.0)));
+    /* Local refinement: s1 with two knots more in u, spacing 1/10. */
+    nf_surf_t s2;
+    ref_kloop_surf(&s2, 3, 3, s1.nu + 2, s1.nv);
+    const double X[2] = {0.3, 0.7};
+    assert_int_equal(nf_refine_u(&s1, X, 2, &s2), NF_OK);
+    assert_near(nf_loopctl_alpha(0.1, &s0, &s2, 2.0), 0.1 * 5.0 * 2.0, 1e-14);
+
+    /* The dense reference: z = smooth field sampled outside a hole. */
+    enum { G = 30 };
+    double *pts = malloc(sizeof(double) * 5 * G * G);
+    long M = 0;
+    for (int j = 0; j < G; j++)
+        for (int i = 0; i < G; i++) {
+            double u = (i + 0.5) / G, v = (j + 0.5) / G;
+            if (fabs(u - 0.55) < 0.2 && fabs(v - 0.5) < 0.2)
+                continue;
+            double *r = pts + 5 * M++;
+            r[0] = u;
+            r[1] = v;
+            r[2] = u;
+            r[3] = v;
+            r[4] = sin(3 * u) * cos(2 * v);
+        }
+    const double alpha = nf_loopctl_alpha(0.1, &s0, &s2, NF_LOOPCTL_ALPHA_K);
+    ref_kloop_cfg_t c;
+    memset(&c, 0, sizeof c);
+    ref_kloop_out_t o;
+    c.tol = 1e9; /* one fit, met at once */
+    c.within = 100.0;
+    c.beta = 1e-3;
+    c.max_rounds = 1;
+    c.alpha = alpha; /* the level's alpha, given as is (no scaling from s2 itself) */
+    assert_int_equal(ref_kloop_run(&s2, pts, M, &c, &o), NF_OK);
+    const long N = (long)s2.nu * s2.nv;
+    double *A, *b, *x = malloc(sizeof(double) * 3 * (size_t)N);
+    ref_eq7(&s2, pts, M, alpha, 1e-3, &A, &b);
+    assert_int_equal(ref_solve(A, b, N, x), 0);
+    double err = 0.0, mag = 0.0;
+    for (long i = 0; i < 3 * N; i++) {
+        err = fmax(err, fabs(o.fit.cp[i] - x[i]));
+        mag = fmax(mag, fabs(x[i]));
+    }
+    assert_true(err <= 1e-8 * mag);
+    free(A);
+    free(b);
+    free(x);
+    free(pts);
+    ref_kloop_free(&o);
+    free(s0.U);
+    free(s1.U);
+    free(s2.U);
+}
+
+/* The height field of the loop test: a narrow bump (sigma 0.05 of the
+ * unit square) on a slope. */
+static double bump(double u, double v)
+{
+    const double du = u - 0.37, dv = v - 0.61;
+    return exp(-(du * du + dv * dv) / (2 * 0.05 * 0.05)) + 0.2 * u;
+}
+
+static int cmp_dbl(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The whole loop on an 80 x 80 grid with every 5th row held out (5120
+ * points fitted, 1280 held out), T = 0.01 (1 % of the height), 99 %
+ * within: the chooser meets it with fewer control points than uniform
+ * refinement needs for the same share, never more than half the points,
+ * and the held-out rows' 99th percentile stays within 2 T. */
+static void test_loop_bump(void **state)
+{
+    (void)state;
+    enum { G = 80, K = 5 };
+    const double T = 0.01;
+    double *pts = calloc(5 * G * G, sizeof(double)), *hold = calloc(5 * G * G, sizeof(double));
+    long M = 0, H = 0;
+    for (int j = 0; j < G; j++)
+        for (int i = 0; i < G; i++) {
+            const double u = (i + 0.5) / G, v = (j + 0.5) / G;
+            double *r = j % K == K / 2 ? hold + 5 * H++ : pts + 5 * M++;
+            r[0] = u;
+            r[1] = v;
+            r[2] = u;
+            r[3] = v;
+            r[4] = bump(u, v);
+        }
+    nf_surf_t base;
+    plane(&base, 1, 1);
+    ref_kloop_cfg_t c;
+    memset(&c, 0, sizeof c);
+    c.tol = T;
+    c.within = 99.0;
+    c.alpha = 0.1;
+    c.beta = 1e-3;
+    c.max_rounds = 30;
+    c.scale_alpha = 1;
+    c.alpha_k = NF_LOOPCTL_ALPHA_K;
+    c.progress = 1;
+    c.budget = 1;
+    ref_kloop_out_t ours, uni;
+    assert_int_equal(ref_kloop_run(&base, pts, M, &c, &ours), NF_OK);
+    c.uniform = 1;
+    c.scale_alpha = 0;
+    c.progress = 0;
+    c.budget = 0;
+    assert_int_equal(ref_kloop_run(&base, pts, M, &c, &uni), NF_OK);
+    assert_int_equal(ours.verdict, NF_LOOPCTL_MET);
+    assert_int_equal(uni.verdict, NF_LOOPCTL_MET);
+    assert_true(ours.within_pct >= 99.0);
+    /* The share within is recounted here on the returned fit. */
+    long in = 0;
+    for (long k = 0; k < M; k++)
+        in += ref_kloop_dist(&ours.fit, pts + 5 * k) <= T;
+    assert_near(100.0 * (double)in / (double)M, ours.within_pct, 1e-12);
+    assert_true(ours.cp == (long)ours.fit.nu * ours.fit.nv);
+    assert_true(ours.cp < uni.cp);
+    assert_true(2 * ours.cp <= M);
+    double *d = malloc(sizeof(double) * (size_t)H);
+    for (long k = 0; k < H; k++)
+        d[k] = ref_kloop_dist(&ours.fit, hold + 5 * k);
+    qsort(d, (size_t)H, sizeof(double), cmp_dbl);
+    const double p99 = d[(long)ceil(0.99 * (double)H) - 1]; /* nearest rank */
+    print_message("loop: %ld points, ours %ld control points (%d x %d, %.3f %% within, %d rounds), "
+                  "uniform %ld; held-out p99 %.4g (2T %.3g)\n",
+                  M, ours.cp, ours.fit.nu, ours.fit.nv, ours.within_pct, ours.rounds, uni.cp, p99,
+                  2 * T);
+    assert_true(p99 <= 2 * T);
+    free(d);
+    free(pts);
+    free(hold);
+    ref_kloop_free(&ours);
+    ref_kloop_free(&uni);
+    free(base.U);
+}
+
+int main(void)
+{
+    const struct CMUnitTest t[] = {
+        cmocka_unit_test(test_counts),    cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_rows),      cmocka_unit_test(test_gain_order),
+        cmocka_unit_test(test_caps),      cmocka_unit_test(test_verdict),
+        cmocka_unit_test(test_budget),    cmocka_unit_test(test_alpha),
+        cmocka_unit_test(test_loop_bump),
+    };
+    return cmocka_run_group_tests(t, NULL, NULL);
+}
