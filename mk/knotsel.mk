@@ -9,8 +9,8 @@ LOOP_BENCH_ARGS ?=
 .PHONY: knotsel-loop bench-loop
 knotsel-loop: $(KNOTSEL_LOOP)
 
-$(KNOTSEL_LOOP): bench/knotsel_loop.c tests/ref_kloop.c $(FW_OBJ) $(wildcard tests/*.h firmware/*.h)
-	$(CC) $(CFLAGS_ALL) -Itests -o $@ bench/knotsel_loop.c tests/ref_kloop.c $(FW_OBJ) -lm
+$(KNOTSEL_LOOP): bench/knotsel_loop.c tests/unit/ref_kloop.c $(FW_OBJ)
+	$(CC) $(CFLAGS_ALL) -o $@ bench/knotsel_loop.c tests/unit/ref_kloop.c $(FW_OBJ) -lm
 
 bench-loop: $(BUILD)/cellfit $(KNOTSEL_LOOP)
 	@sh scripts/deps.sh bench
