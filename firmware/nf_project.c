@@ -433,6 +433,106 @@ int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, doub
     return NF_ENOCONV;
 }
 
+/* ---- the true foot at the boundary (issue 14) ---- */
+
+/* Samples of the boundary curve per knot span, and in all at most. */
+#define EDGE_PER_SPAN 4
+#define EDGE_MAX_SAMPLES 256
+
+/* Keep p in *out when it is nearer (a start that did not converge still
+ * holds a point on the surface, and nearer is nearer). */
+static void keep_nearer(const nf_proj_t *p, nf_proj_t *out)
+{
+    if (fabs(p->dist) < fabs(out->dist))
+        *out = *p;
+}
+
+/* Newton from (u, v), kept in *out when nearer; only argument errors stop. */
+static int try_start(const nf_surf_t *s, const double Q[3], double u, double v, double tol,
+                     nf_proj_t *out)
+{
+    nf_proj_t p;
+    const int r = nf_project(s, Q, u, v, tol, &p);
+    if (r != NF_OK && r != NF_ENOCONV)
+        return r;
+    keep_nearer(&p, out);
+    return NF_OK;
+}
+
+/* Knot spans (non-empty) of K over the domain. */
+static int span_count(const double *K, int n, int p)
+{
+    int c = 0;
+    for (int i = p; i <= n; i++)
+        c += K[i] < K[i + 1];
+    return c > 0 ? c : 1;
+}
+
+/* Newton from every local minimum of the distance over samples of the
+ * iso-parameter curve x = e (dir 0: u = e, the curve runs in v; dir 1:
+ * v = e), EDGE_PER_SPAN per knot span along it (EDGE_MAX_SAMPLES at most),
+ * the nearest foot kept in out. A sliding window of three samples finds
+ * the minima; the ends count as minima when they are below their one
+ * neighbour. */
+static int curve_minima(const nf_surf_t *s, const double Q[3], int dir, double e, double tol,
+                        const double dom[4], nf_proj_t *out)
+{
+    const double *K = dir == 0 ? s->V : s->U;
+    const int n = dir == 0 ? s->nv - 1 : s->nu - 1, p = dir == 0 ? s->q : s->p;
+    const double a = dom[2 - 2 * dir], b = dom[3 - 2 * dir];
+    int ns = EDGE_PER_SPAN * span_count(K, n, p) + 1;
+    ns = ns > EDGE_MAX_SAMPLES ? EDGE_MAX_SAMPLES : ns;
+    double dprev = INFINITY, dcur = INFINITY, xcur = a;
+    for (int i = 0; i <= ns; i++) {
+        double dnext = INFINITY, x = 0.0;
+        if (i < ns) {
+            x = i == ns - 1 ? b : a + (b - a) * i / (ns - 1);
+            double P[3];
+            nf_surf_eval(s, dir == 0 ? e : x, dir == 0 ? x : e, P);
+            const double dx = P[0] - Q[0], dy = P[1] - Q[1], dz = P[2] - Q[2];
+            dnext = dx * dx + dy * dy + dz * dz;
+        }
+        if (i > 0 && dcur <= dprev && dcur <= dnext) {
+            const int r = try_start(s, Q, dir == 0 ? e : xcur, dir == 0 ? xcur : e, tol, out);
+            if (r != NF_OK)
+                return r;
+        }
+        dprev = dcur;
+        dcur = dnext;
+        xcur = x;
+    }
+    return NF_OK;
+}
+
+int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out)
+{
+    if (!s || !Q || !out || !s->U || !s->V || !s->cp || !(tol > 0.0 && tol < 1.0))
+        return NF_EARG;
+    if (!out->clamped)
+        return NF_OK;
+    double dom[4];
+    nf_surf_domain(s, &dom[0], &dom[1], &dom[2], &dom[3]);
+    const nf_proj_t first = *out;
+    for (int dir = 0; dir < 2; dir++) {
+        const double x = dir == 0 ? first.u : first.v;
+        const double lo = dom[2 * dir], hi = dom[2 * dir + 1];
+        if (x != lo && x != hi)
+            continue;
+        /* (a) the boundary curve the foot lies on: its other minima (held
+         * on the edge, Newton is the 1-D Newton along it; where the
+         * distance falls inward it leaves the edge into that valley). */
+        int r = curve_minima(s, Q, dir, x, tol, dom, out);
+        /* (b) the curve across the edge through the foot: the interior
+         * valleys beside the edge, also those a fold puts near in space but
+         * far in parameter (a hem's plate under its free edge). */
+        if (r == NF_OK)
+            r = curve_minima(s, Q, 1 - dir, dir == 0 ? first.v : first.u, tol, dom, out);
+        if (r != NF_OK)
+            return r;
+    }
+    return NF_OK;
+}
+
 /* Parameter of sample i of n over [a, b]: uniform, both ends exact. */
 static double sample_at(int i, int n, double a, double b)
 {
@@ -726,6 +826,13 @@ int nf_project_seeded(const nf_seed_t *g, const double Q[3], double tol, nf_proj
         if (r != NF_OK && r != NF_ENOCONV)
             return r;
         keep_best(&p, r, out, &rc, t == 0);
+    }
+    /* A boundary foot is compared with the edge's other minima and the
+     * interior valleys beside it (the true foot, issue 14). */
+    if (out->clamped) {
+        const int r = nf_project_edge(s, Q, tol, out);
+        if (r != NF_OK)
+            return r;
     }
     /* A foot within a sample spacing of a crease: over a valley crease the
      * distance has a minimum on each side, and the samples (a spacing

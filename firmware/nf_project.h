@@ -89,11 +89,25 @@ void nf_seed_start(const nf_seed_t *g, const double Q[3], double *u0, double *v0
 #define NF_SEED_MAX_STARTS 4
 int nf_seed_starts(const nf_seed_t *g, const double Q[3], int k, double *u0, double *v0);
 
+/* The true foot at the boundary: out holds a projection of Q (from
+ * nf_project or any caller's start); when its foot is held on a bound
+ * (out->clamped), Newton restarts from every local minimum of the distance
+ * over samples (4 per knot span, at most 256) of two curves: the boundary
+ * curve the foot lies on (its other minima: 1-D Newton along it, or into
+ * the interior where the distance falls inward), and the iso-parameter
+ * curve across the edge through the foot (interior valleys beside the
+ * edge, and those a fold brings near in space though far in parameter).
+ * The nearest foot is kept in out (a start that does not converge still
+ * gives a point of the surface, kept if nearer). Nothing is done for an
+ * interior foot. NF_EARG for null pointers or tol not in (0, 1). */
+int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out);
+
 /* The projection cellfit uses: nf_project from each of NF_PROJ_STARTS
  * starts of nf_seed_starts (only those within reach of the nearest
  * sample's distance), and once more across a crease within a sample
  * spacing of the foot (over a valley crease there is a minimum on each
- * side); the nearest converged foot is kept. Errors as nf_project
+ * side); a boundary foot is checked by nf_project_edge; the nearest
+ * converged foot is kept. Errors as nf_project
  * (NF_ENOCONV only if no start converged; out then holds the nearest point
  * found). */
 #define NF_PROJ_STARTS 3
