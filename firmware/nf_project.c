@@ -369,15 +369,11 @@ static int line_search(const nf_surf_t *s, const double Q[3], const double dom[4
     }
 }
 
-int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, double tol,
-               nf_proj_t *out)
+/* Newton from (u0, v0) within the domain: the local minimum of the
+ * distance in the valley of the start (arguments checked by the callers). */
+static int newton(const nf_surf_t *s, const double Q[3], double u0, double v0, double tol,
+                  nf_proj_t *out)
 {
-    if (!s || !Q || !out || !s->U || !s->V || !s->cp)
-        return NF_EARG;
-    if (!(tol > 0.0 && tol < 1.0) || !(u0 - u0 == 0.0) || !(v0 - v0 == 0.0))
-        return NF_EARG;
-    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
-        return NF_ENONFINITE;
     double dom[4];
     nf_surf_domain(s, &dom[0], &dom[1], &dom[2], &dom[3]);
     const double tu = tol * (dom[1] - dom[0]), tv = tol * (dom[3] - dom[2]);
@@ -439,23 +435,17 @@ int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, doub
 #define EDGE_PER_SPAN 4
 #define EDGE_MAX_SAMPLES 256
 
-/* Keep p in *out when it is nearer (a start that did not converge still
- * holds a point on the surface, and nearer is nearer). */
-static void keep_nearer(const nf_proj_t *p, nf_proj_t *out)
-{
-    if (fabs(p->dist) < fabs(out->dist))
-        *out = *p;
-}
-
-/* Newton from (u, v), kept in *out when nearer; only argument errors stop. */
+/* Newton from (u, v), its foot kept in *out when it converged and is
+ * nearer; only argument errors stop. */
 static int try_start(const nf_surf_t *s, const double Q[3], double u, double v, double tol,
                      nf_proj_t *out)
 {
     nf_proj_t p;
-    const int r = nf_project(s, Q, u, v, tol, &p);
+    const int r = newton(s, Q, u, v, tol, &p);
     if (r != NF_OK && r != NF_ENOCONV)
         return r;
-    keep_nearer(&p, out);
+    if (r == NF_OK && fabs(p.dist) < fabs(out->dist))
+        *out = p;
     return NF_OK;
 }
 
@@ -504,10 +494,8 @@ static int curve_minima(const nf_surf_t *s, const double Q[3], int dir, double e
     return NF_OK;
 }
 
-int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out)
+static int edge_check(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out)
 {
-    if (!s || !Q || !out || !s->U || !s->V || !s->cp || !(tol > 0.0 && tol < 1.0))
-        return NF_EARG;
     if (!out->clamped)
         return NF_OK;
     double dom[4];
@@ -531,6 +519,42 @@ int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t
             return r;
     }
     return NF_OK;
+}
+
+int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out)
+{
+    if (!s || !Q || !out || !s->U || !s->V || !s->cp || !(tol > 0.0 && tol < 1.0))
+        return NF_EARG;
+    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
+        return NF_ENONFINITE;
+    return edge_check(s, Q, tol, out);
+}
+
+/* Newton from the start, and a boundary foot checked against the edge's
+ * other minima and the valleys beside it (the true foot, issue 14). A
+ * start whose Newton did not converge keeps NF_ENOCONV unless the check
+ * found a nearer foot (restarts keep converged feet only). */
+int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, double tol,
+               nf_proj_t *out)
+{
+    if (!s || !Q || !out || !s->U || !s->V || !s->cp)
+        return NF_EARG;
+    if (!(tol > 0.0 && tol < 1.0) || !(u0 - u0 == 0.0) || !(v0 - v0 == 0.0))
+        return NF_EARG;
+    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
+        return NF_ENONFINITE;
+    int rc = newton(s, Q, u0, v0, tol, out);
+    if (rc != NF_OK && rc != NF_ENOCONV)
+        return rc;
+    if (out->clamped) {
+        const nf_proj_t first = *out;
+        const int r = edge_check(s, Q, tol, out);
+        if (r != NF_OK)
+            return r;
+        if (fabs(out->dist) < fabs(first.dist))
+            rc = NF_OK; /* a restart's converged foot */
+    }
+    return rc;
 }
 
 /* Parameter of sample i of n over [a, b]: uniform, both ends exact. */
@@ -826,13 +850,6 @@ int nf_project_seeded(const nf_seed_t *g, const double Q[3], double tol, nf_proj
         if (r != NF_OK && r != NF_ENOCONV)
             return r;
         keep_best(&p, r, out, &rc, t == 0);
-    }
-    /* A boundary foot is compared with the edge's other minima and the
-     * interior valleys beside it (the true foot, issue 14). */
-    if (out->clamped) {
-        const int r = nf_project_edge(s, Q, tol, out);
-        if (r != NF_OK)
-            return r;
     }
     /* A foot within a sample spacing of a crease: over a valley crease the
      * distance has a minimum on each side, and the samples (a spacing

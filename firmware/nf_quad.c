@@ -1129,13 +1129,6 @@ int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out)
         if (rc != NF_OK && rc != NF_ENOCONV)
             return rc;
     }
-    /* A boundary foot against the edge's other minima and the interior
-     * valleys beside it (the true foot, issue 14). */
-    if (out->clamped) {
-        const int r = nf_project_edge(q->s, Q, tol, out);
-        if (r != NF_OK)
-            return r;
-    }
     q->n_clamped += out->clamped != 0;
     if (fabs(out->dist) > q->limit) {
         q->n_far++;

@@ -94,8 +94,7 @@ long nf_quad_count(const nf_quad_t *q); /* quadrilaterals */
 void nf_quad_start(const nf_quad_t *q, const double Q[3], double *u0, double *v0);
 
 /* Projection of Q: nf_quad_start, then Newton to tol of the domain (inline
- * for interior feet, nf_project otherwise); a boundary foot is checked by
- * nf_project_edge. Counts clamped, far and slow
+ * for interior feet, nf_project otherwise). Counts clamped, far and slow
  * points in q. Returns nf_project's codes, or NF_QUAD_DROPPED. */
 int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out);
 
