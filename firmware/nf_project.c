@@ -478,6 +478,7 @@ typedef struct iso {
     int l;   /* span along whose curve points are in C (-1: none) */
     int far; /* span l is beyond the band */
     double C[NF_MAX_ORDER][4];
+    double recip[NF_RECIP_LEN]; /* of span l: its basis without a division */
 } iso_t;
 
 static void iso_init(iso_t *c, const nf_surf_t *s, const double Q[3], int dir, double e)
@@ -498,12 +499,17 @@ static void iso_init(iso_t *c, const nf_surf_t *s, const double Q[3], int dir, d
 }
 
 /* S at parameter x along the curve into P and 1, or 0 (P untouched) when
- * x's span is beyond the band around distance d. */
+ * x's span is beyond the band around distance d. Calls come with x
+ * increasing (the span is searched forward from the last one). */
 static int iso_eval(iso_t *c, double x, double d, double P[3])
 {
     const nf_surf_t *s = c->s;
-    const int l = nf_find_span(c->nvv - 1, c->pv, x, c->Kv);
+    /* Samples come in increasing x: the span only moves forward. */
+    int l = c->l < 0 ? nf_find_span(c->nvv - 1, c->pv, x, c->Kv) : c->l;
+    while (l < c->nvv - 1 && x >= c->Kv[l + 1])
+        l++;
     if (l != c->l) {
+        nf_basis_recip(l, c->pv, c->Kv, c->recip);
         double ctr[3] = {0.0, 0.0, 0.0};
         for (int a = 0; a <= c->pv; a++) {
             double h[4] = {0.0, 0.0, 0.0, 0.0};
@@ -537,12 +543,13 @@ static int iso_eval(iso_t *c, double x, double d, double P[3])
     if (c->far)
         return 0;
     double N[NF_MAX_ORDER], h[4] = {0.0, 0.0, 0.0, 0.0};
-    nf_basis_funs(l, x, c->pv, c->Kv, N);
+    nf_basis_funs_r(l, x, c->pv, c->Kv, c->recip, N);
     for (int a = 0; a <= c->pv; a++)
         for (int m = 0; m < 4; m++)
             h[m] += N[a] * c->C[a][m];
+    const double iw = 1.0 / h[3];
     for (int m = 0; m < 3; m++)
-        P[m] = h[m] / h[3];
+        P[m] = h[m] * iw;
     return 1;
 }
 
