@@ -254,6 +254,35 @@ static double gap_in(const nf_footprint_t *fp, cell_sel_t sel, const nf_surf_t *
     return g;
 }
 
+/* Largest excursion of a's z beyond the interval between n's and t's z
+ * (all three share x, y up to the fit: the parts are height fields) over a
+ * 9 x 9 grid in each cell for which sel() holds: 0 for a blend between the
+ * nominal and the part, > 0 for an overshoot (an extrapolation). */
+static double overshoot_in(const nf_footprint_t *fp, cell_sel_t sel, const nf_surf_t *a,
+                           const nf_surf_t *n, const nf_surf_t *t)
+{
+    double g = 0.0;
+    for (int j = 0; j < fp->cv; j++)
+        for (int i = 0; i < fp->cu; i++) {
+            if (!sel(fp, i, j))
+                continue;
+            double box[4];
+            nf_footprint_cell_box(fp, i, j, box);
+            for (int y = 0; y <= 8; y++)
+                for (int x = 0; x <= 8; x++) {
+                    const double u = box[0] + (box[1] - box[0]) * x / 8.0,
+                                 v = box[2] + (box[3] - box[2]) * y / 8.0;
+                    double A[3], N[3], T[3];
+                    nf_surf_eval(a, u, v, A);
+                    nf_surf_eval(n, u, v, N);
+                    nf_surf_eval(t, u, v, T);
+                    const double lo = fmin(N[2], T[2]), hi = fmax(N[2], T[2]);
+                    g = fmax(g, fmax(lo - A[2], A[2] - hi));
+                }
+        }
+    return g;
+}
+
 /* Inside: a cell with data whose 4-neighbours all hold data too. */
 static int sel_inside(const nf_footprint_t *fp, int i, int j)
 {
@@ -268,10 +297,17 @@ static int sel_inside(const nf_footprint_t *fp, int i, int j)
     return 1;
 }
 
+/* The band between: no data, but some control point of the cell bears data. */
+static int sel_band(const nf_footprint_t *fp, int i, int j)
+{
+    return !nf_footprint_cell(fp, i, j) && !nf_footprint_cell_pinned(fp, i, j);
+}
+
 /* A part measured over u < 0.45 only, differing from its nominal by 0.5 to
  * 2 mm everywhere: where every control point is pinned the fit stays at
  * the nominal within the noise sigma, inside the footprint it follows the
- * part within 3 sigma; without the pins the unmeasured side moves away from
+ * part within 3 sigma, and between the two it blends from one to the other
+ * without overshooting either; without the pins the unmeasured side moves away from
  * the nominal (the extrapolation of issue 14). */
 static void test_honest_edges(void **state)
 {
@@ -298,9 +334,18 @@ static void test_honest_edges(void **state)
     fit(&nom, pts, M, NULL, 0.0, NF_SOLVER_CHOL, P);
     const double out_free = gap_in(&fp, nf_footprint_cell_pinned, &fitted, &nom, &nout);
     const double in_free = gap_in(&fp, sel_inside, &fitted, &truth, &nin);
+    const double band_over_free = overshoot_in(&fp, sel_band, &fitted, &nom, &truth);
     fit(&nom, pts, M, fp.pin, NF_FOOTPRINT_BETA, NF_SOLVER_CHOL, P);
     const double out_pin = gap_in(&fp, nf_footprint_cell_pinned, &fitted, &nom, &nout);
     const double in_pin = gap_in(&fp, sel_inside, &fitted, &truth, &nin);
+    long nband;
+    const double band_nom = gap_in(&fp, sel_band, &fitted, &nom, &nband);
+    const double band_part = gap_in(&fp, sel_band, &fitted, &truth, &nband);
+    const double band_over = overshoot_in(&fp, sel_band, &fitted, &nom, &truth);
+    print_message("honest edges: the band between (%ld no-data cells within reach of data-bearing "
+                  "control points): up to %.3g mm from the nominal, %.3g mm from the part, "
+                  "%.3g mm beyond the two in z (%.3g without the pins)\n",
+                  nband, band_nom, band_part, band_over, band_over_free);
     print_message("honest edges: %ld cells (%ld filled, %ld no data, %ld outline), %ld of %ld "
                   "control points pinned; outside (%ld cells) the fit is %.3g mm from the nominal "
                   "(%.3g without the pins), inside (%ld cells) %.3g mm from the part (%.3g without "
@@ -314,6 +359,9 @@ static void test_honest_edges(void **state)
      * is further still, by its extrapolating edge control points). */
     assert_true(in_pin <= 3.0 * sigma);
     assert_true(out_free > 10.0 * sigma); /* the pins are what keeps it there */
+    /* Between the data and the pinned side the surface blends from the
+     * part to the nominal: it never leaves the interval between them. */
+    assert_true(band_over <= sigma);
     free(P);
     free(m);
     free(pts);
