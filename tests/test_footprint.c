@@ -307,8 +307,8 @@ static int sel_band(const nf_footprint_t *fp, int i, int j)
  * 2 mm everywhere: where every control point is pinned the fit stays at
  * the nominal within the noise sigma, inside the footprint it follows the
  * part within 3 sigma, and between the two it blends from one to the other
- * without overshooting either; without the pins the unmeasured side moves away from
- * the nominal (the extrapolation of issue 14). */
+ * without overshooting either; without the pins the unmeasured side moves
+ * away from the nominal (the extrapolation of issue 14). */
 static void test_honest_edges(void **state)
 {
     (void)state;
