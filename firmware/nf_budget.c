@@ -36,6 +36,15 @@ long nf_fit_shard_bytes(int nu, int nv, int p, int q)
     return b > (double)LONG_MAX ? -1 : (long)b;
 }
 
+long nf_footprint_bytes(int nu, int nv, int p, int q)
+{
+    if (p < 0 || q < 0 || nu <= p || nv <= q)
+        return -1;
+    const double b = 4.0 * NF_FP_SUB * NF_FP_SUB * ((double)nu - p) * ((double)nv - q) +
+                     (double)nu * nv + NF_ARENA_ALIGN;
+    return b > (double)LONG_MAX ? -1 : (long)b;
+}
+
 nf_solver_t nf_solver_pick(int nu, int nv, int p, int q)
 {
     double n = (double)nu * nv, bw = (double)q * nu + p;

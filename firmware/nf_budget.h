@@ -16,6 +16,9 @@
  *   shard  = 8 N (K + 3) + 4 NF_ARENA_ALIGN  each further accumulator (a second
  *                                          core's stripes and R^T Q, summed
  *                                          into the job's at the end)
+ *   footprint = 4 NF_FP_SUB^2 (Nu - p)(Nv - q) + N + NF_ARENA_ALIGN
+ *                                          the data footprint's cell counts and
+ *                                          pin flags (caller storage, optional)
  * The raster row buffers (10 Nu doubles per accumulator) are lent from the
  * solver term, idle while points stream in: they add nothing.
  */
@@ -44,6 +47,15 @@ typedef enum nf_solver {
 #define NF_BYTES_SHARD(n, p, q)                                                                    \
     (8L * (long)(n) * (NF_STRIPE_SLOTS(p, q) + 3L) + 4L * NF_ARENA_ALIGN)
 
+/* The data footprint (nf_footprint.h): NF_FP_SUB x NF_FP_SUB cells per knot
+ * span pair, a 32-bit count each, and one flag byte per control point,
+ *   footprint = 4 NF_FP_SUB^2 (Nu - p)(Nv - q) + N + NF_ARENA_ALIGN
+ * (the last for the alignment of the flags after the counts). */
+#define NF_FP_SUB 2
+#define NF_BYTES_FOOTPRINT(nu, nv, p, q)                                                           \
+    (4L * NF_FP_SUB * NF_FP_SUB * ((long)(nu) - (p)) * ((long)(nv) - (q)) +                        \
+     (long)(nu) * (long)(nv) + NF_ARENA_ALIGN)
+
 /* The board's arena must hold the largest net it advertises, at its design
  * degree, with the iterative solvers (Cholesky is refused when it would not fit). */
 _Static_assert(NF_ARENA_BYTES >= NF_BYTES_PCG(NF_MAX_CP, NF_DESIGN_DEGREE, NF_DESIGN_DEGREE),
@@ -57,6 +69,10 @@ long nf_fit_bytes(int nu, int nv, int p, int q, nf_solver_t solver);
 /* Bytes of one further accumulator (nf_fit_shard_init), or -1 on overflow:
  * a job accumulating on T cores needs nf_fit_bytes + (T - 1) of these. */
 long nf_fit_shard_bytes(int nu, int nv, int p, int q);
+
+/* Bytes of the data footprint of this net (NF_BYTES_FOOTPRINT), or -1 for
+ * sizes that are invalid or overflow. */
+long nf_footprint_bytes(int nu, int nv, int p, int q);
 
 /* The solver AUTO resolves to: Cholesky when its band fits the board and its
  * cost N (q Nu + p)^2 stays small, otherwise PCG. */

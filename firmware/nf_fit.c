@@ -587,6 +587,19 @@ int nf_fit_finish(nf_fit_t *f)
     return NF_OK;
 }
 
+int nf_fit_pin(nf_fit_t *f, long i, double beta)
+{
+    if (!f->finished || f->shard)
+        return NF_ESTATE;
+    if (i < 0 || i >= f->n || !(beta >= 0.0) || beta - beta != 0.0)
+        return NF_EARG;
+    const double *P0 = f->base->cp;
+    f->A.S[i * f->A.K] += beta;
+    for (int c = 0; c < 3; c++)
+        f->rhs[3 * i + c] += beta * P0[3 * i + c];
+    return NF_OK;
+}
+
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st)
 {
     if (!f->finished || f->shard)

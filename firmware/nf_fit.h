@@ -97,6 +97,14 @@ int nf_fit_shard_merge(nf_fit_t *f, nf_fit_t *sh);
  * when alpha = beta = 0 and a control point has no data under it. */
 int nf_fit_finish(nf_fit_t *f);
 
+/* A per-control-point beta (issue 14, honest edges): after nf_fit_finish
+ * and before nf_fit_solve, add beta to the diagonal of control point i and
+ * beta P0_i to its right-hand side, i.e. beta_i in the beta I term of
+ * Eq. 7, so that a control point no data determine follows the nominal
+ * (nf_footprint_pin, NF_FOOTPRINT_BETA). NF_ESTATE before nf_fit_finish or
+ * on a shard, NF_EARG for i outside the net or beta < 0 / not finite. */
+int nf_fit_pin(nf_fit_t *f, long i, double beta);
+
 /* Solve Eq. 7 into f->P. NF_ESINGULAR / NF_ENOCONV leave no answer. */
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st);
 

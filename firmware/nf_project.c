@@ -369,15 +369,11 @@ static int line_search(const nf_surf_t *s, const double Q[3], const double dom[4
     }
 }
 
-int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, double tol,
-               nf_proj_t *out)
+/* Newton from (u0, v0) within the domain: the local minimum of the
+ * distance in the valley of the start (arguments checked by the callers). */
+static int newton(const nf_surf_t *s, const double Q[3], double u0, double v0, double tol,
+                  nf_proj_t *out)
 {
-    if (!s || !Q || !out || !s->U || !s->V || !s->cp)
-        return NF_EARG;
-    if (!(tol > 0.0 && tol < 1.0) || !(u0 - u0 == 0.0) || !(v0 - v0 == 0.0))
-        return NF_EARG;
-    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
-        return NF_ENONFINITE;
     double dom[4];
     nf_surf_domain(s, &dom[0], &dom[1], &dom[2], &dom[3]);
     const double tu = tol * (dom[1] - dom[0]), tv = tol * (dom[3] - dom[2]);
@@ -431,6 +427,271 @@ int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, doub
     }
     finish(s, Q, &cur, NF_PROJ_MAX_ITERS, out);
     return NF_ENOCONV;
+}
+
+/* ---- the true foot at the boundary (issue 14) ---- */
+
+/* Samples of the boundary curve per knot span, and in all at most. */
+#define EDGE_PER_SPAN 4
+#define EDGE_MAX_SAMPLES 256
+
+/* Newton from (u, v), its foot kept in *out when it converged and is
+ * nearer; only argument errors stop. */
+static int try_start(const nf_surf_t *s, const double Q[3], double u, double v, double tol,
+                     nf_proj_t *out)
+{
+    nf_proj_t p;
+    const int r = newton(s, Q, u, v, tol, &p);
+    if (r != NF_OK && r != NF_ENOCONV)
+        return r;
+    if (r == NF_OK && fabs(p.dist) < fabs(out->dist))
+        *out = p;
+    return NF_OK;
+}
+
+/* Knot spans (non-empty) of K over the domain. */
+static int span_count(const double *K, int n, int p)
+{
+    int c = 0;
+    for (int i = p; i <= n; i++)
+        c += K[i] < K[i + 1];
+    return c > 0 ? c : 1;
+}
+
+/* Samples of an iso-parameter curve, cheaply: the basis across it is fixed
+ * (computed once), and on each knot span along it the p + 1 control points
+ * of the curve (homogeneous: weight in the fourth lane) are formed once, so
+ * that a sample costs one 1-D basis and p + 1 four-wide sums instead of a
+ * surface evaluation. A span whose curve piece provably lies far from Q is
+ * not sampled at all: the piece lies in the convex hull of its control
+ * points (weights positive), so within the sphere around their centre that
+ * holds them, and a sphere further than the band (out's distance plus two
+ * radii, as generous as the band of the samples) holds no start. */
+typedef struct iso {
+    const nf_surf_t *s;
+    const double *Q;
+    int dir;          /* 0: u fixed, the curve runs in v; 1: v fixed */
+    int pf, pv, nvv;  /* degree across, degree along, control points along */
+    const double *Kv; /* knots along */
+    int kf;           /* span across */
+    double Nf[NF_MAX_ORDER];
+    int l;   /* span along whose curve points are in C (-1: none) */
+    int far; /* span l is beyond the band */
+    double C[NF_MAX_ORDER][4];
+    double recip[NF_RECIP_LEN]; /* of span l: its basis without a division */
+} iso_t;
+
+static void iso_init(iso_t *c, const nf_surf_t *s, const double Q[3], int dir, double e)
+{
+    c->s = s;
+    c->Q = Q;
+    c->dir = dir;
+    const double *Kf = dir == 0 ? s->U : s->V;
+    const int nf = dir == 0 ? s->nu : s->nv;
+    c->pf = dir == 0 ? s->p : s->q;
+    c->pv = dir == 0 ? s->q : s->p;
+    c->nvv = dir == 0 ? s->nv : s->nu;
+    c->Kv = dir == 0 ? s->V : s->U;
+    c->kf = nf_find_span(nf - 1, c->pf, e, Kf);
+    nf_basis_funs(c->kf, e, c->pf, Kf, c->Nf);
+    c->l = -1;
+    c->far = 0;
+}
+
+/* S at parameter x along the curve into P and 1, or 0 (P untouched) when
+ * x's span is beyond the band around distance d. Calls come with x
+ * increasing (the span is searched forward from the last one). */
+static int iso_eval(iso_t *c, double x, double d, double P[3])
+{
+    const nf_surf_t *s = c->s;
+    /* Samples come in increasing x: the span only moves forward. */
+    int l = c->l < 0 ? nf_find_span(c->nvv - 1, c->pv, x, c->Kv) : c->l;
+    while (l < c->nvv - 1 && x >= c->Kv[l + 1])
+        l++;
+    if (l != c->l) {
+        nf_basis_recip(l, c->pv, c->Kv, c->recip);
+        double ctr[3] = {0.0, 0.0, 0.0};
+        for (int a = 0; a <= c->pv; a++) {
+            double h[4] = {0.0, 0.0, 0.0, 0.0};
+            for (int b = 0; b <= c->pf; b++) {
+                const int ia = l - c->pv + a, ib = c->kf - c->pf + b;
+                const long k = c->dir == 0 ? ib + (long)ia * s->nu : ia + (long)ib * s->nu;
+                const double w = s->w ? s->w[k] : 1.0, f = c->Nf[b] * w;
+                h[0] += f * s->cp[3 * k];
+                h[1] += f * s->cp[3 * k + 1];
+                h[2] += f * s->cp[3 * k + 2];
+                h[3] += f;
+            }
+            for (int m = 0; m < 4; m++)
+                c->C[a][m] = h[m];
+            for (int m = 0; m < 3; m++)
+                ctr[m] += h[m] / h[3] / (c->pv + 1);
+        }
+        double r2 = 0.0;
+        for (int a = 0; a <= c->pv; a++) {
+            double e2 = 0.0;
+            for (int m = 0; m < 3; m++)
+                e2 += (c->C[a][m] / c->C[a][3] - ctr[m]) * (c->C[a][m] / c->C[a][3] - ctr[m]);
+            r2 = fmax(r2, e2);
+        }
+        const double dq =
+            sqrt((ctr[0] - c->Q[0]) * (ctr[0] - c->Q[0]) + (ctr[1] - c->Q[1]) * (ctr[1] - c->Q[1]) +
+                 (ctr[2] - c->Q[2]) * (ctr[2] - c->Q[2]));
+        c->far = dq - sqrt(r2) > d + 2.0 * sqrt(r2);
+        c->l = l;
+    }
+    if (c->far)
+        return 0;
+    double N[NF_MAX_ORDER], h[4] = {0.0, 0.0, 0.0, 0.0};
+    nf_basis_funs_r(l, x, c->pv, c->Kv, c->recip, N);
+    for (int a = 0; a <= c->pv; a++)
+        for (int m = 0; m < 4; m++)
+            h[m] += N[a] * c->C[a][m];
+    const double iw = 1.0 / h[3];
+    for (int m = 0; m < 3; m++)
+        P[m] = h[m] * iw;
+    return 1;
+}
+
+/* Local minima of the samples kept per curve (the nearest ones). */
+#define EDGE_MAX_STARTS 8
+
+/* Newton from the local minima of the distance over samples of the
+ * iso-parameter curve x = e (dir 0: u = e, the curve runs in v; dir 1:
+ * v = e), EDGE_PER_SPAN per knot span along it (EDGE_MAX_SAMPLES at most),
+ * the nearest converged foot kept in out. The curve passes through out's
+ * foot at parameter f along it: the minimum within a sample spacing of it
+ * is the foot's own valley and gets no restart. The others only when
+ * within two chords (the longest between neighbouring samples) of out's
+ * distance: a valley whose samples all lie further cannot be nearer
+ * (the band of nf_seed_starts). Three samples in a sliding window find
+ * the minima, the ends counting when below their one neighbour. */
+static int curve_minima(const nf_surf_t *s, const double Q[3], int dir, double e, double f,
+                        double tol, const double dom[4], nf_proj_t *out)
+{
+    const double *K = dir == 0 ? s->V : s->U;
+    const int n = dir == 0 ? s->nv - 1 : s->nu - 1, p = dir == 0 ? s->q : s->p;
+    const double a = dom[2 - 2 * dir], b = dom[3 - 2 * dir];
+    int ns = EDGE_PER_SPAN * span_count(K, n, p) + 1;
+    ns = ns > EDGE_MAX_SAMPLES ? EDGE_MAX_SAMPLES : ns;
+    const double h = (b - a) / (ns - 1);
+    double dprev = INFINITY, dcur = INFINITY, xcur = a, chord = 0.0, Pp[3] = {0, 0, 0};
+    int havep = 0;
+    double sd[EDGE_MAX_STARTS], sx[EDGE_MAX_STARTS];
+    int nst = 0;
+    iso_t iso;
+    iso_init(&iso, s, Q, dir, e);
+    const double d0 = fabs(out->dist);
+    for (int i = 0; i <= ns; i++) {
+        double dnext = INFINITY, x = 0.0;
+        if (i < ns) {
+            x = i == ns - 1 ? b : a + h * i;
+            double P[3];
+            if (iso_eval(&iso, x, d0, P)) {
+                const double dx = P[0] - Q[0], dy = P[1] - Q[1], dz = P[2] - Q[2];
+                dnext = dx * dx + dy * dy + dz * dz;
+                if (havep) {
+                    const double cx = P[0] - Pp[0], cy = P[1] - Pp[1], cz = P[2] - Pp[2];
+                    chord = fmax(chord, cx * cx + cy * cy + cz * cz);
+                }
+                Pp[0] = P[0];
+                Pp[1] = P[1];
+                Pp[2] = P[2];
+                havep = 1;
+            } else {
+                havep = 0; /* a span beyond the band: no sample, no start */
+            }
+        }
+        if (i > 0 && dcur < INFINITY && dcur <= dprev && dcur <= dnext && fabs(xcur - f) > h) {
+            /* Keep the EDGE_MAX_STARTS nearest minima, sorted. */
+            int t = nst < EDGE_MAX_STARTS
+                        ? nst++
+                        : (dcur < sd[EDGE_MAX_STARTS - 1] ? EDGE_MAX_STARTS - 1 : -1);
+            for (; t > 0 && sd[t - 1] > dcur; t--) {
+                sd[t] = sd[t - 1];
+                sx[t] = sx[t - 1];
+            }
+            if (t >= 0) {
+                sd[t] = dcur;
+                sx[t] = xcur;
+            }
+        }
+        dprev = dcur;
+        dcur = dnext;
+        xcur = x;
+    }
+    const double c2 = 2.0 * sqrt(chord);
+    for (int t = 0; t < nst; t++) {
+        if (!(sqrt(sd[t]) < fabs(out->dist) + c2))
+            break; /* sorted: the rest are further still */
+        const int r = try_start(s, Q, dir == 0 ? e : sx[t], dir == 0 ? sx[t] : e, tol, out);
+        if (r != NF_OK)
+            return r;
+    }
+    return NF_OK;
+}
+
+static int edge_check(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out)
+{
+    if (!out->clamped)
+        return NF_OK;
+    double dom[4];
+    nf_surf_domain(s, &dom[0], &dom[1], &dom[2], &dom[3]);
+    const nf_proj_t first = *out;
+    for (int dir = 0; dir < 2; dir++) {
+        const double x = dir == 0 ? first.u : first.v;
+        const double lo = dom[2 * dir], hi = dom[2 * dir + 1];
+        if (x != lo && x != hi)
+            continue;
+        /* (a) the boundary curve the foot lies on: its other minima (held
+         * on the edge, Newton is the 1-D Newton along it; where the
+         * distance falls inward it leaves the edge into that valley). */
+        int r = curve_minima(s, Q, dir, x, dir == 0 ? first.v : first.u, tol, dom, out);
+        /* (b) the curve across the edge through the foot: the interior
+         * valleys beside the edge, also those a fold puts near in space but
+         * far in parameter (a hem's plate under its free edge). */
+        if (r == NF_OK)
+            r = curve_minima(s, Q, 1 - dir, dir == 0 ? first.v : first.u, x, tol, dom, out);
+        if (r != NF_OK)
+            return r;
+    }
+    return NF_OK;
+}
+
+int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out)
+{
+    if (!s || !Q || !out || !s->U || !s->V || !s->cp || !(tol > 0.0 && tol < 1.0))
+        return NF_EARG;
+    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
+        return NF_ENONFINITE;
+    return edge_check(s, Q, tol, out);
+}
+
+/* Newton from the start, and a boundary foot checked against the edge's
+ * other minima and the valleys beside it (the true foot, issue 14). A
+ * start whose Newton did not converge keeps NF_ENOCONV unless the check
+ * found a nearer foot (restarts keep converged feet only). */
+int nf_project(const nf_surf_t *s, const double Q[3], double u0, double v0, double tol,
+               nf_proj_t *out)
+{
+    if (!s || !Q || !out || !s->U || !s->V || !s->cp)
+        return NF_EARG;
+    if (!(tol > 0.0 && tol < 1.0) || !(u0 - u0 == 0.0) || !(v0 - v0 == 0.0))
+        return NF_EARG;
+    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
+        return NF_ENONFINITE;
+    int rc = newton(s, Q, u0, v0, tol, out);
+    if (rc != NF_OK && rc != NF_ENOCONV)
+        return rc;
+    if (out->clamped) {
+        const nf_proj_t first = *out;
+        const int r = edge_check(s, Q, tol, out);
+        if (r != NF_OK)
+            return r;
+        if (fabs(out->dist) < fabs(first.dist))
+            rc = NF_OK; /* a restart's converged foot */
+    }
+    return rc;
 }
 
 /* Parameter of sample i of n over [a, b]: uniform, both ends exact. */

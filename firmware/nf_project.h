@@ -34,7 +34,11 @@ typedef struct nf_proj {
  * knot lines: steps stop on them, and a minimum on one is found exactly),
  * collapsed edges (poles: left by the steepest way out), and directions
  * where |S - Q|^2 is lost in rounding (thin surfaces: the tangential
- * residual decides). s must have passed nf_surf_check (not repeated here:
+ * residual decides), and feet held on a bound (the true foot: nf_project_edge
+ * compares them with the edge's other minima and the valleys beside it, at
+ * the cost of a few hundred evaluations for such a point only; the result
+ * may then lie in another valley than the start's). s must have passed
+ * nf_surf_check (not repeated here:
  * it costs O(N) per point). NF_EARG for a null pointer, tol not in (0, 1)
  * or a non-finite start; NF_ENONFINITE for a non-finite Q. A start outside
  * the domain is clamped to it. */
@@ -88,6 +92,20 @@ void nf_seed_start(const nf_seed_t *g, const double Q[3], double *u0, double *v0
  * crease of the surface has one local minimum per side). */
 #define NF_SEED_MAX_STARTS 4
 int nf_seed_starts(const nf_seed_t *g, const double Q[3], int k, double *u0, double *v0);
+
+/* The true foot at the boundary (nf_project runs it on every foot it
+ * holds on a bound; public for callers with a Newton of their own): when
+ * out's foot is held on a bound (out->clamped), Newton restarts from every
+ * local minimum of the distance over samples (4 per knot span, at most 256)
+ * of two curves: the boundary curve the foot lies on (its other minima:
+ * 1-D Newton along it, or into the interior where the distance falls
+ * inward), and the iso-parameter curve across the edge through the foot
+ * (interior valleys beside the edge, and those a fold brings near in space
+ * though far in parameter: a hem's plate under its free edge). A converged
+ * foot nearer than out's replaces it. Nothing is done for an interior
+ * foot. NF_EARG for null pointers or tol not in (0, 1), NF_ENONFINITE for
+ * a non-finite Q. */
+int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t *out);
 
 /* The projection cellfit uses: nf_project from each of NF_PROJ_STARTS
  * starts of nf_seed_starts (only those within reach of the nearest

@@ -1,5 +1,6 @@
-/* nf_robust.c: |residual| histogram, MAD scale and Tukey weights. */
+/* nf_robust.c: |residual| histogram, MAD scale with a floor, Tukey weights. */
 #include "nf_robust.h"
+#include "nf_err.h"
 #include <math.h>
 #include <string.h>
 
@@ -61,4 +62,45 @@ double nf_tukey(double r, double c)
         return 0.0;
     t = 1.0 - t * t;
     return t * t;
+}
+
+int nf_robust_init(nf_robust_t *rb, const nf_rhist_t *h, double floor)
+{
+    if (!rb || !h || !(floor >= 0.0) || !isfinite(floor))
+        return NF_EARG;
+    memset(rb, 0, sizeof *rb);
+    rb->sigma = nf_rhist_sigma(h);
+    rb->floor = floor;
+    rb->scale = rb->sigma > floor ? rb->sigma : floor;
+    rb->inner = NF_ROBUST_INNER * rb->scale;
+    rb->cut = NF_ROBUST_CUT * rb->scale;
+    return NF_OK;
+}
+
+double nf_robust_weight(nf_robust_t *rb, double r)
+{
+    rb->n++;
+    if (!(rb->scale > 0.0)) /* an exact fit: nothing to reweight */
+        return 1.0;
+    const double a = fabs(r);
+    if (a <= rb->inner)
+        return 1.0;
+    if (!(a < rb->cut)) { /* also NaN */
+        rb->flagged++;
+        return 0.0;
+    }
+    rb->partial++;
+    double t = (a - rb->inner) / (rb->cut - rb->inner);
+    t = 1.0 - t * t;
+    return t * t;
+}
+
+double nf_robust_share(const nf_robust_t *rb)
+{
+    return rb->n > 0 ? (double)rb->flagged / (double)rb->n : 0.0;
+}
+
+int nf_robust_warn(const nf_robust_t *rb)
+{
+    return nf_robust_share(rb) > NF_ROBUST_WARN_SHARE;
 }

@@ -1,0 +1,132 @@
+/* nf_footprint.c: occupancy of the parameter domain by the data, and the
+ * control points no data determine (issue 14, honest edges). */
+#include "nf_footprint.h"
+#include "nf_basis.h"
+#include "nf_err.h"
+#include <string.h>
+
+int nf_footprint_init(nf_footprint_t *fp, const nf_surf_t *s, void *mem, size_t bytes)
+{
+    if (!fp || !s || !mem || !s->U || !s->V)
+        return NF_EARG;
+    const long need = nf_footprint_bytes(s->nu, s->nv, s->p, s->q);
+    if (need < 0)
+        return NF_ESIZE;
+    if ((size_t)need > bytes)
+        return NF_EARENA;
+    memset(mem, 0, (size_t)need);
+    fp->s = s;
+    fp->cu = NF_FP_SUB * (s->nu - s->p);
+    fp->cv = NF_FP_SUB * (s->nv - s->q);
+    fp->count = mem;
+    fp->pin = (unsigned char *)mem + 4L * fp->cu * fp->cv;
+    fp->points = 0;
+    return NF_OK;
+}
+
+/* Cell index along one direction: the knot span (0-based from the first of
+ * the domain) times NF_FP_SUB plus the sub-cell within it. */
+static int cell_of(const double *K, int n, int p, double x)
+{
+    const int l = nf_find_span(n, p, x, K);
+    int sub = (int)(NF_FP_SUB * (x - K[l]) / (K[l + 1] - K[l]));
+    sub = sub < 0 ? 0 : (sub >= NF_FP_SUB ? NF_FP_SUB - 1 : sub);
+    return (l - p) * NF_FP_SUB + sub;
+}
+
+int nf_footprint_add(nf_footprint_t *fp, double u, double v)
+{
+    const nf_surf_t *s = fp->s;
+    if (!(u - u == 0.0 && v - v == 0.0))
+        return NF_ENONFINITE;
+    if (u < s->U[s->p] || u > s->U[s->nu] || v < s->V[s->q] || v > s->V[s->nv])
+        return NF_EDOMAIN;
+    const int i = cell_of(s->U, s->nu - 1, s->p, u), j = cell_of(s->V, s->nv - 1, s->q, v);
+    uint32_t *c = fp->count + i + (long)j * fp->cu;
+    *c += *c < UINT32_MAX; /* saturates: a count only needs to say "enough" */
+    fp->points++;
+    return NF_OK;
+}
+
+long nf_footprint_cell(const nf_footprint_t *fp, int i, int j)
+{
+    return (long)fp->count[i + (long)j * fp->cu];
+}
+
+void nf_footprint_cell_box(const nf_footprint_t *fp, int i, int j, double box[4])
+{
+    const nf_surf_t *s = fp->s;
+    const int l = s->p + i / NF_FP_SUB, k = s->q + j / NF_FP_SUB;
+    const double du = (s->U[l + 1] - s->U[l]) / NF_FP_SUB, dv = (s->V[k + 1] - s->V[k]) / NF_FP_SUB;
+    box[0] = s->U[l] + du * (i % NF_FP_SUB);
+    box[1] = box[0] + du;
+    box[2] = s->V[k] + dv * (j % NF_FP_SUB);
+    box[3] = box[2] + dv;
+}
+
+/* Cells of an empty knot span (repeated knots) cover nothing. */
+static int cell_real(const nf_footprint_t *fp, int i, int j)
+{
+    const nf_surf_t *s = fp->s;
+    const int l = s->p + i / NF_FP_SUB, k = s->q + j / NF_FP_SUB;
+    return s->U[l] < s->U[l + 1] && s->V[k] < s->V[k + 1];
+}
+
+long nf_footprint_pin(nf_footprint_t *fp, long min_points)
+{
+    const nf_surf_t *s = fp->s;
+    long pinned = 0;
+    for (int b = 0; b < s->nv; b++)
+        for (int a = 0; a < s->nu; a++) {
+            /* Control point (a, b) is non-zero on spans a..a+p x b..b+q
+             * (NURBS Book P2.1), those of the domain: p..nu-1, q..nv-1. */
+            const int l0 = a > s->p ? a : s->p, l1 = a + s->p < s->nu - 1 ? a + s->p : s->nu - 1;
+            const int k0 = b > s->q ? b : s->q, k1 = b + s->q < s->nv - 1 ? b + s->q : s->nv - 1;
+            long n = 0;
+            for (int j = (k0 - s->q) * NF_FP_SUB; j < (k1 - s->q + 1) * NF_FP_SUB; j++)
+                for (int i = (l0 - s->p) * NF_FP_SUB; i < (l1 - s->p + 1) * NF_FP_SUB; i++)
+                    n += fp->count[i + (long)j * fp->cu];
+            const int pin = n < min_points;
+            fp->pin[a + (long)b * s->nu] = (unsigned char)pin;
+            pinned += pin;
+        }
+    return pinned;
+}
+
+int nf_footprint_cell_pinned(const nf_footprint_t *fp, int i, int j)
+{
+    const nf_surf_t *s = fp->s;
+    const int l = s->p + i / NF_FP_SUB, k = s->q + j / NF_FP_SUB;
+    for (int b = k - s->q; b <= k; b++)
+        for (int a = l - s->p; a <= l; a++)
+            if (!fp->pin[a + (long)b * s->nu])
+                return 0;
+    return 1;
+}
+
+void nf_footprint_stats(const nf_footprint_t *fp, nf_footprint_stats_t *st)
+{
+    memset(st, 0, sizeof *st);
+    for (int j = 0; j < fp->cv; j++)
+        for (int i = 0; i < fp->cu; i++) {
+            if (!cell_real(fp, i, j))
+                continue;
+            st->cells++;
+            if (!nf_footprint_cell(fp, i, j)) {
+                st->empty++;
+                continue;
+            }
+            st->filled++;
+            const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+            for (int t = 0; t < 4; t++) {
+                const int a = nb[t][0], b = nb[t][1];
+                if (a >= 0 && a < fp->cu && b >= 0 && b < fp->cv && cell_real(fp, a, b) &&
+                    !nf_footprint_cell(fp, a, b)) {
+                    st->outline++;
+                    break;
+                }
+            }
+        }
+    for (long k = 0; k < (long)fp->s->nu * fp->s->nv; k++)
+        st->pinned += fp->pin[k];
+}

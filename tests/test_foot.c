@@ -1,0 +1,448 @@
+/* test_foot.c: the true foot (issue 14): projection onto a thin, strongly
+ * twisted strip and onto a plate folded back over itself near an edge, 10^4
+ * random points within 3 mm of each, against an independent brute force
+ * (a dense parameter grid, every local minimum of it near the best refined
+ * by a shrinking pattern search). Every foot's distance must equal the
+ * brute-force minimum, and no point may get a boundary foot where an
+ * interior foot is nearer. */
+
+#include "cf_test.h"
+#include "nf_err.h"
+#include "nf_project.h"
+#include "nf_quad.h"
+#include "nf_surf.h"
+#include "ref_dense.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#define TOL 1e-9
+#define NPTS 10000
+#define REACH 3.0 /* mm: how far points lie from the surface */
+
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static double dist3(const double *a, const double *b)
+{
+    const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(dot3(d, d));
+}
+
+/* Clamped uniform knots of degree p for n + 1 control points on [0, 1]. */
+static void uniform_knots(double *K, int n, int p)
+{
+    for (int i = 0; i <= n + p + 1; i++) {
+        const int k = i - p;
+        K[i] = k <= 0 ? 0.0 : (i > n ? 1.0 : (double)k / (n - p + 1));
+    }
+}
+
+/* Greville abscissa of control point i (knot average). */
+static double greville(const double *K, int i, int p)
+{
+    double g = 0.0;
+    for (int k = 1; k <= p; k++)
+        g += K[i + k];
+    return g / p;
+}
+
+static double *surf_new(nf_surf_t *s, int nu, int nv)
+{
+    double *mem = calloc((size_t)NF_SURF_DOUBLES(nu, nv, 3, 3), sizeof(double));
+    assert_non_null(mem);
+    nf_surf_wire(s, 3, 3, nu, nv, mem);
+    uniform_knots(s->U, nu - 1, 3);
+    uniform_knots(s->V, nv - 1, 3);
+    s->w = NULL;
+    return mem;
+}
+
+/* A strip 100 x 5 mm, its cross-section turned by 90 degrees from one end
+ * to the other (a helicoid's piece): P = (x, w cos t, w sin t). */
+static double *make_twisted(nf_surf_t *s)
+{
+    const int nu = 12, nv = 4;
+    double *mem = surf_new(s, nu, nv);
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++) {
+            const double a = greville(s->U, i, 3), b = greville(s->V, j, 3);
+            const double t = 0.5 * 3.14159265358979323846 * a, w = 5.0 * (b - 0.5);
+            double *P = s->cp + 3 * (i + j * nu);
+            P[0] = 100.0 * a;
+            P[1] = w * cos(t);
+            P[2] = w * sin(t);
+        }
+    return mem;
+}
+
+/* A plate 60 x 26 mm whose edge v = 1 is folded back over it (a hem): the
+ * cross-section runs along y, turns up and round at y ~ 27 and returns
+ * 4 mm above the plate to end at y = 16. */
+static double *make_folded(nf_surf_t *s)
+{
+    static const double yz[][2] = {{0, 0},  {8, 0},  {16, 0}, {22, 0},  {27, 0},
+                                   {29, 2}, {27, 4}, {22, 4}, {16, 4.2}};
+    const int nu = 6, nv = (int)(sizeof yz / sizeof yz[0]);
+    double *mem = surf_new(s, nu, nv);
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++) {
+            const double a = greville(s->U, i, 3);
+            double *P = s->cp + 3 * (i + j * nu);
+            P[0] = 60.0 * a;
+            P[1] = yz[j][0] + 0.5 * sin(3.0 * a); /* not quite a cylinder */
+            P[2] = yz[j][1];
+        }
+    return mem;
+}
+
+/* ---- brute force, independent of nf_project ---- */
+
+/* Samples per side of a block: each block keeps a bounding sphere of its
+ * samples, so that a block provably too far is skipped unread (the search
+ * stays exhaustive: a skipped block holds no sample within the band). */
+#define BLK 8
+
+typedef struct brute {
+    const nf_surf_t *s;
+    int nu, nv;
+    double *P;
+    double h;   /* longest chord between neighbouring samples */
+    int bu, bv; /* blocks */
+    double *bc; /* per block: centre x y z and radius */
+} brute_t;
+
+static void brute_init(brute_t *b, const nf_surf_t *s, int nu, int nv)
+{
+    b->s = s;
+    b->nu = nu;
+    b->nv = nv;
+    b->P = malloc(sizeof(double) * 3 * (size_t)nu * (size_t)nv);
+    assert_non_null(b->P);
+    b->h = 0.0;
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++) {
+            double *P = b->P + 3 * (i + (long)j * nu);
+            nf_surf_eval(s, (double)i / (nu - 1), (double)j / (nv - 1), P);
+            if (i > 0)
+                b->h = fmax(b->h, dist3(P, P - 3));
+            if (j > 0)
+                b->h = fmax(b->h, dist3(P, P - 3 * nu));
+        }
+    b->bu = (nu + BLK - 1) / BLK;
+    b->bv = (nv + BLK - 1) / BLK;
+    b->bc = malloc(sizeof(double) * 4 * (size_t)b->bu * (size_t)b->bv);
+    assert_non_null(b->bc);
+    for (int bj = 0; bj < b->bv; bj++)
+        for (int bi = 0; bi < b->bu; bi++) {
+            double *c = b->bc + 4 * (bi + (long)bj * b->bu);
+            const int ci = bi * BLK + BLK / 2 < nu ? bi * BLK + BLK / 2 : nu - 1;
+            const int cj = bj * BLK + BLK / 2 < nv ? bj * BLK + BLK / 2 : nv - 1;
+            for (int k = 0; k < 3; k++)
+                c[k] = b->P[3 * (ci + (long)cj * nu) + k];
+            c[3] = 0.0;
+            for (int j = bj * BLK; j < bj * BLK + BLK && j < nv; j++)
+                for (int i = bi * BLK; i < bi * BLK + BLK && i < nu; i++)
+                    c[3] = fmax(c[3], dist3(c, b->P + 3 * (i + (long)j * nu)));
+        }
+}
+
+/* Pattern search from (u, v): a 5 x 5 pattern over a window of 2 sample
+ * spacings, recentred on its best and halved, until the window is far
+ * below rounding of the parameters. */
+static double zoom(const brute_t *b, const double Q[3], double *u, double *v)
+{
+    double P[3];
+    nf_surf_eval(b->s, *u, *v, P);
+    double best = dist3(P, Q), hu = 2.0 / (b->nu - 1), hv = 2.0 / (b->nv - 1);
+    for (int round = 0; round < 52; round++) {
+        const double cu = *u, cv = *v;
+        for (int j = -2; j <= 2; j++)
+            for (int i = -2; i <= 2; i++) {
+                const double tu = fmin(fmax(cu + hu * i / 2.0, 0.0), 1.0);
+                const double tv = fmin(fmax(cv + hv * j / 2.0, 0.0), 1.0);
+                nf_surf_eval(b->s, tu, tv, P);
+                const double d = dist3(P, Q);
+                if (d < best) {
+                    best = d;
+                    *u = tu;
+                    *v = tv;
+                }
+            }
+        hu *= 0.5;
+        hv *= 0.5;
+    }
+    return best;
+}
+
+/* The nearest point: every grid sample that is a local minimum of the
+ * distance over its 8 neighbours and within 2 h of the nearest sample (a
+ * valley holding the true minimum has a sample that near) is refined; the
+ * best refined distance, its parameters, and the best refined distance of
+ * an interior foot (parameters off the bounds) in *dint. */
+static double brute(const brute_t *b, const double Q[3], double *ub, double *vb, double *dint)
+{
+    /* The nearest sample: an upper bound from the blocks' spheres first,
+     * then every sample of every block that can hold a nearer one. */
+    const long nb = (long)b->bu * b->bv;
+    double up = INFINITY;
+    for (long k = 0; k < nb; k++)
+        up = fmin(up, dist3(b->bc + 4 * k, Q) + b->bc[4 * k + 3]);
+    double dmin2 = INFINITY;
+    for (long k = 0; k < nb; k++) {
+        if (dist3(b->bc + 4 * k, Q) - b->bc[4 * k + 3] > up)
+            continue;
+        const int bi = (int)(k % b->bu), bj = (int)(k / b->bu);
+        for (int j = bj * BLK; j < bj * BLK + BLK && j < b->nv; j++)
+            for (int i = bi * BLK; i < bi * BLK + BLK && i < b->nu; i++) {
+                const double *P = b->P + 3 * (i + (long)j * b->nu);
+                const double dx = P[0] - Q[0], dy = P[1] - Q[1], dz = P[2] - Q[2];
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                dmin2 = d2 < dmin2 ? d2 : dmin2;
+            }
+    }
+    const double dmin = sqrt(dmin2), reach = dmin + 2.0 * b->h, band = reach * reach;
+    double best = INFINITY;
+    *dint = INFINITY;
+    for (long k = 0; k < nb; k++) {
+        if (dist3(b->bc + 4 * k, Q) - b->bc[4 * k + 3] > reach)
+            continue;
+        const int bi = (int)(k % b->bu), bj = (int)(k / b->bu);
+        for (int j = bj * BLK; j < bj * BLK + BLK && j < b->nv; j++)
+            for (int i = bi * BLK; i < bi * BLK + BLK && i < b->nu; i++) {
+                const double *P = b->P + 3 * (i + (long)j * b->nu);
+                const double dx = P[0] - Q[0], dy = P[1] - Q[1], dz = P[2] - Q[2];
+                if (!(dx * dx + dy * dy + dz * dz <= band))
+                    continue;
+                const double d = sqrt(dx * dx + dy * dy + dz * dz);
+                int lmin = 1;
+                for (int dj = -1; dj <= 1 && lmin; dj++)
+                    for (int di = -1; di <= 1; di++) {
+                        const int ii = i + di, jj = j + dj;
+                        if ((di || dj) && ii >= 0 && ii < b->nu && jj >= 0 && jj < b->nv &&
+                            dist3(b->P + 3 * (ii + (long)jj * b->nu), Q) < d) {
+                            lmin = 0;
+                            break;
+                        }
+                    }
+                if (!lmin)
+                    continue;
+                double u = (double)i / (b->nu - 1), v = (double)j / (b->nv - 1);
+                const double dr = zoom(b, Q, &u, &v);
+                if (u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0)
+                    *dint = fmin(*dint, dr);
+                if (dr < best) {
+                    best = dr;
+                    *ub = u;
+                    *vb = v;
+                }
+            }
+    }
+    return best;
+}
+
+/* ---- the projections under test ---- */
+
+/* Random points within REACH of s: a surface point plus a vector uniform in
+ * the ball of radius REACH. */
+static void random_point(const nf_surf_t *s, double Q[3])
+{
+    double S[3], e[3];
+    nf_surf_eval(s, ref_rand(0.0, 1.0), ref_rand(0.0, 1.0), S);
+    do
+        for (int c = 0; c < 3; c++)
+            e[c] = ref_rand(-1.0, 1.0);
+    while (dot3(e, e) > 1.0);
+    for (int c = 0; c < 3; c++)
+        Q[c] = S[c] + REACH * e[c];
+}
+
+/* The projections cellfit uses: nf_project_seeded over the seed grid
+ * nf_seed_size sizes (cellfit project); nf_quad_project (cellfit fit, where
+ * the surface does not fold over in the maximum-area plane); and over a
+ * fold, the square grid of host/cf_seedgrid.c (8 samples per span of the
+ * longer direction, 16..1024), where the fit took the nearest sample and
+ * nf_project from it (16 of the folded part's 10^4 feet in the wrong
+ * valley, up to 5.8 % too far) and should take nf_project_seeded's starts. */
+enum { BY_SEEDED, BY_QUAD, BY_SQUARE, N_BY };
+static const char *by_name[N_BY] = {"nf_project_seeded", "nf_quad_project",
+                                    "nf_project_seeded, cf_seedgrid's square grid"};
+
+typedef struct tally {
+    long wrong;        /* distance not the brute-force minimum */
+    long edge_wrong;   /* of them: a boundary foot where an interior one is nearer */
+    long clamped;      /* boundary feet */
+    double worst;      /* largest (ours - brute) / max(1, brute) */
+    double worst_edge; /* largest (ours - interior) of edge_wrong */
+} tally_t;
+
+static void check(const char *part, int by, const nf_proj_t *pr, const double Q[3], double db,
+                  double dint, tally_t *t)
+{
+    const double ours = fabs(pr->dist), scale = fmax(1.0, db);
+    assert_near(ours, dist3(pr->foot, Q), 1e-12 * scale);
+    t->clamped += pr->clamped != 0;
+    /* Never nearer than brute force beyond its own rounding: that would
+     * make brute force, not the projection, the thing under test. */
+    if (ours < db - 1e-9 * scale)
+        fail_msg("%s: brute force %.17g missed the foot %.17g of %s at (%.17g, %.17g)", part, db,
+                 ours, by_name[by], pr->u, pr->v);
+    const double ex = (ours - db) / scale;
+    t->worst = fmax(t->worst, ex);
+    if (ex > TOL) {
+        t->wrong++;
+        if (pr->clamped && dint < ours - TOL * scale) {
+            t->edge_wrong++;
+            t->worst_edge = fmax(t->worst_edge, ours - dint);
+        }
+        if (t->wrong <= 3)
+            print_message("%s, %s: Q (%.6f, %.6f, %.6f) foot (%.9f, %.9f)%s at %.9f, brute "
+                          "force %.9f\n",
+                          part, by_name[by], Q[0], Q[1], Q[2], pr->u, pr->v,
+                          pr->clamped ? " clamped" : "", ours, db);
+    }
+}
+
+static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
+                     unsigned long long seed)
+{
+    assert_int_equal(nf_surf_check(s), NF_OK);
+    brute_t b;
+    brute_init(&b, s, bnu, bnv);
+    /* The seed grid as cellfit sizes it. */
+    int nsu, nsv;
+    nf_seed_size(s, 65536L, &nsu, &nsv);
+    double *spts = malloc(sizeof(double) * (size_t)NF_SEED_DOUBLES(nsu, nsv));
+    assert_non_null(spts);
+    nf_seed_t g;
+    nf_seed_init_uv(&g, s, nsu, nsv, spts);
+    const int spans = s->nu - s->p > s->nv - s->q ? s->nu - s->p : s->nv - s->q;
+    int ns = 8 * spans + 1;
+    ns = ns > 1024 ? 1024 : (ns < 16 ? 16 : ns);
+    double *sq = malloc(sizeof(double) * (size_t)NF_SEED_DOUBLES(ns, ns));
+    assert_non_null(sq);
+    nf_seed_t g2;
+    nf_seed_init(&g2, s, ns, sq);
+    /* The quadrilaterals, as cellfit's fit uses them where the surface does
+     * not fold over in the maximum-area plane. */
+    const long maxq = 65536L;
+    const size_t qb = NF_QUAD_BYTES(maxq, s->nu, s->nv);
+    void *qmem = malloc(qb);
+    assert_non_null(qmem);
+    nf_quad_t quad;
+    const nf_quad_params_t prm = {NF_QUAD_SEED_TOL, 1e9, 0};
+    const int have_quad = nf_quad_init(&quad, s, &prm, maxq, qmem, qb) == NF_OK && !quad.folded;
+    tally_t t[N_BY] = {{0}};
+    long interior_best = 0;
+    ref_seed(seed);
+    for (int k = 0; k < NPTS; k++) {
+        double Q[3], ub = 0, vb = 0, dint;
+        random_point(s, Q);
+        const double db = brute(&b, Q, &ub, &vb, &dint);
+        interior_best += dint <= db;
+        nf_proj_t pr;
+        assert_int_equal(nf_project_seeded(&g, Q, TOL, &pr), NF_OK);
+        check(part, BY_SEEDED, &pr, Q, db, dint, &t[BY_SEEDED]);
+        if (have_quad) {
+            int rc = nf_quad_project(&quad, Q, TOL, &pr);
+            assert_true(rc == NF_OK);
+            check(part, BY_QUAD, &pr, Q, db, dint, &t[BY_QUAD]);
+        }
+        assert_int_equal(nf_project_seeded(&g2, Q, TOL, &pr), NF_OK);
+        check(part, BY_SQUARE, &pr, Q, db, dint, &t[BY_SQUARE]);
+    }
+    long wrong = 0;
+    for (int by = 0; by < N_BY; by++) {
+        if (by == BY_QUAD && !have_quad)
+            continue;
+        print_message("%s (%ld points, %ld with an interior foot), %s: %ld feet not the nearest "
+                      "(%ld a boundary foot with an interior one nearer, by up to %.3g mm), "
+                      "%ld on the boundary, worst excess %.3g (relative)\n",
+                      part, (long)NPTS, interior_best, by_name[by], t[by].wrong, t[by].edge_wrong,
+                      t[by].worst_edge, t[by].clamped, t[by].worst);
+        wrong += t[by].wrong;
+    }
+    free(qmem);
+    free(sq);
+    free(spts);
+    free(b.bc);
+    free(b.P);
+    assert_int_equal(wrong, 0);
+}
+
+static void test_twisted_strip(void **state)
+{
+    (void)state;
+    nf_surf_t s;
+    double *mem = make_twisted(&s);
+    run_part("twisted strip", &s, 1001, 51, 1401);
+    free(mem);
+}
+
+static void test_folded_edge(void **state)
+{
+    (void)state;
+    nf_surf_t s;
+    double *mem = make_folded(&s);
+    run_part("folded edge", &s, 401, 301, 1402);
+    free(mem);
+}
+
+/* A point under the hem's free edge (v = 1, at y = 16, z = 4.2), nearer
+ * the plate below it: Newton started on the hem near its edge walks to the
+ * edge and would hold there (a boundary foot 2.66 mm away where the plate
+ * is 2 mm away: what nf_project returned before issue 14, for all 40
+ * starts); the projection must give the plate's foot, as brute force. */
+static void test_edge_restart(void **state)
+{
+    (void)state;
+    nf_surf_t s;
+    double *mem = make_folded(&s);
+    brute_t b;
+    brute_init(&b, &s, 401, 301);
+    double worst = 0.0, edge_gap = INFINITY;
+    for (int k = 0; k < 40; k++) {
+        const double u = 0.1 + 0.02 * k;
+        double E[3];
+        nf_surf_eval(&s, u, 1.0, E);
+        /* 1.5 mm beyond the edge, 2.2 below it. */
+        const double Q[3] = {E[0], E[1] - 1.5, E[2] - 2.2};
+        double ub, vb, dint;
+        const double db = brute(&b, Q, &ub, &vb, &dint);
+        /* The case: the foot is on the plate (interior), and the edge curve's
+         * nearest point (sampled finely) is well beyond it. */
+        double de = INFINITY;
+        for (int i = 0; i <= 6000; i++) {
+            double P[3];
+            nf_surf_eval(&s, i / 6000.0, 1.0, P);
+            de = fmin(de, dist3(P, Q));
+        }
+        assert_true(vb > 0.0 && vb < 0.5 && dint == db);
+        edge_gap = fmin(edge_gap, de - db);
+        nf_proj_t pr;
+        assert_int_equal(nf_project(&s, Q, u, 0.97, TOL, &pr), NF_OK);
+        assert_int_equal(pr.clamped, 0);
+        assert_near(fabs(pr.dist), db, TOL * fmax(1.0, db));
+        worst = fmax(worst, fabs(pr.dist) - db);
+    }
+    print_message("hem edge: 40 starts on the hem beside its free edge, the edge at least %.3g mm "
+                  "further than the plate's foot: every foot on the plate (|dist| - brute force "
+                  "<= %.3g)\n",
+                  edge_gap, worst);
+    assert_true(edge_gap > 0.1);
+    free(b.bc);
+    free(b.P);
+    free(mem);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_twisted_strip),
+        cmocka_unit_test(test_folded_edge),
+        cmocka_unit_test(test_edge_restart),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
