@@ -5,7 +5,9 @@
  * stay on one path; nf_isa.c defines the plain names, which forward. The
  * list here and NF_ISA_LIST in nf_isa.c name the same functions (a name
  * missing from either fails to link). NF_ISA_COLD is 1 in the pass that
- * compiles a module's other functions (once, under their own names). */
+ * compiles a module's other functions (once, under their own names): a new
+ * external function of these modules goes into both lists (hot) or inside
+ * #if NF_ISA_COLD (cold); elsewhere it is defined twice and the link fails. */
 #ifndef NF_ISA_PASS_H
 #define NF_ISA_PASS_H
 
