@@ -591,6 +591,7 @@ int nf_fit_finish(nf_fit_t *f)
     return NF_OK;
 }
 
+#if NF_ISA_COLD /* not hot: one copy in the dispatched build (nf_isa_pass.h) */
 int nf_fit_pin(nf_fit_t *f, long i, double beta)
 {
     if (!f->finished || f->shard)
@@ -603,6 +604,7 @@ int nf_fit_pin(nf_fit_t *f, long i, double beta)
         f->rhs[3 * i + c] += beta * P0[3 * i + c];
     return NF_OK;
 }
+#endif
 
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st)
 {

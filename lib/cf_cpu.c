@@ -31,9 +31,3 @@ int cf_cpu_from_env(void)
         fprintf(stderr, "cellfit: CELLFIT_CPU=%s: %s\n", v, msg);
     return rc;
 }
-
-/* Before main, so that every tool honours it without knowing of it. */
-__attribute__((constructor)) static void cf_cpu_init(void)
-{
-    (void)cf_cpu_from_env();
-}

@@ -13,8 +13,8 @@
 int cf_cpu_apply(const char *value, char *msg, size_t len);
 
 /* cf_cpu_apply(getenv("CELLFIT_CPU")), a refusal printed to stderr as
- * "cellfit: CELLFIT_CPU=...: reason". Every program that links this file
- * runs it before main (a constructor); a main() may call it again. */
+ * "cellfit: CELLFIT_CPU=...: reason". Called first in cellfit's and
+ * cellsim's main() (a constructor would be dropped from a static archive). */
 int cf_cpu_from_env(void);
 
 #endif
