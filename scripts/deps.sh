@@ -13,9 +13,10 @@ test_pkgs="$rig_pkgs libcmocka-dev clang libclang-rt-14-dev cppcheck clang-forma
 demo_pkgs="$rig_pkgs"
 # Other CPUs (mk/arch.mk): qemu-user runs the build on a CPU without AVX
 # (qemu-x86_64 -cpu Westmere) and the aarch64 cross build (qemu-aarch64);
-# the cross compiler and the arm64 libraries (multiarch, below) build it.
+# the cross compiler and the arm64 libraries (multiarch, below) build it;
+# without Aravis for arm64 there, its GigE Vision profiler is "unsupported".
 arch_pkgs="qemu-user gcc-aarch64-linux-gnu libc6-dev-arm64-cross"
-arch_arm64_pkgs="libmodbus-dev:arm64 libserialport-dev:arm64 libusb-1.0-0-dev:arm64 libcmocka-dev:arm64"
+arch_arm64_pkgs="libmodbus-dev:arm64 libserialport-dev:arm64 libusb-1.0-0-dev:arm64 libcmocka-dev:arm64 zlib1g-dev:arm64"
 bench_pkgs="libsuitesparse-dev python3-scipy python3-numpy"
 
 what="${1:-build}"
