@@ -1,0 +1,15 @@
+# mk/plant.mk: results at the cell (SQLite) and for the plant (PostgreSQL
+# through libpq, MQTT through libmosquitto): host/cell/cf_resdb.c,
+# cf_forward.c, cf_record.c and `cellfit results`. The libraries reach
+# cellfit and the unit tests only; cellsim stays free of them.
+PLANT_PKGS := sqlite3 libpq libmosquitto
+PLANT_CFLAGS := $(shell pkg-config --cflags $(PLANT_PKGS) 2>/dev/null)
+PLANT_LIBS := $(shell pkg-config --libs $(PLANT_PKGS) 2>/dev/null)
+$(BUILD)/host/cell/%.o $(BUILD)/host/cmd/%.o $(BUILD)/tests/%.o: CFLAGS += $(PLANT_CFLAGS)
+$(BUILD)/cellfit: LIBS += $(PLANT_LIBS)
+$(TEST_BIN): LIBS += $(PLANT_LIBS)
+
+.PHONY: test-plant plant-demo
+# tests/cli/plant.sh also runs with test-cli (every tests/cli script).
+test-plant: all
+	sh tests/cli/plant.sh $(BUILD)/cellfit
