@@ -17,5 +17,6 @@ int cmd_rig(int argc, char **argv);
 int cmd_ports(int argc, char **argv);
 int cmd_thin(int argc, char **argv);
 int cmd_serve(int argc, char **argv);
+int cmd_results(int argc, char **argv);
 
 #endif

@@ -9,6 +9,7 @@
 #include "cf_conf.h"
 #include "cf_err.h"
 #include "cf_log.h"
+#include "cf_plant.h"
 #include "cf_plcdoc.h"
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
@@ -33,6 +34,7 @@ typedef struct serve_conf {
     double tol, alpha, beta;
     const char *port_file, *stage, *probe, *board;
     cf_plcrun_t run;
+    cf_plant_t plant;           /* results.db and the plant (cf_plant.h) */
     char *strs[SERVE_MAX_STRS]; /* copies of string values, freed at the end */
     int nstrs, lost;
 } serve_conf_t;
@@ -104,6 +106,9 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
     serve_conf_t *c = ctx;
     cf_plcrun_t *r = &c->run;
     long idx;
+    int pr = cf_plant_apply(&c->plant, k, v, msg, ml); /* results and plant keys */
+    if (pr <= 0)
+        return pr ? CF_EARG : 0;
     if (!strcmp(k, "plc")) {
         if (parse_plc(c, v))
             return cf_fail(msg, ml, CF_EARG, "plc '%s': need tcp:ADDR:PORT (IPv4, port 0..65535)",
@@ -204,7 +209,7 @@ static int serve_usage(void)
                      "[--port-file F] [--max-clients N] [--log-level L] [--syslog] [--board B] "
                      "[--stage URI --probe URI | --sim [--sim-args ARGS]] [--journal-dir D] "
                      "[--z0 MM] [--cal CX,CY,CZ] [--allow ADDR[/BITS],...] [--max-rate R] "
-                     "[--print-map]");
+                     "[--print-map] " CF_PLANT_USAGE);
 }
 
 static volatile sig_atomic_t stop_flag;
@@ -261,6 +266,7 @@ int cmd_serve(int argc, char **argv)
 {
     serve_conf_t c;
     memset(&c, 0, sizeof c);
+    cf_plant_init(&c.plant);
     c.port = -1;
     c.max_clients = 8;
     c.level = CF_LOG_INFO;
@@ -327,6 +333,11 @@ int cmd_serve(int argc, char **argv)
     }
     cf_runner_t runner;
     cf_plcrun_init(&c.run, &runner);
+    if (cf_plant_start(&c.plant, &c.run, c.run.results_dir[0], &runner, &runner, msg, sizeof msg)) {
+        ec = cli_error("serve", CLI_FAIL, "results: %s", msg);
+        cf_plcrun_free(&c.run);
+        goto done_rig;
+    }
     cf_plcsrv_opts_t so = c.so;
     so.addr = c.addr;
     so.port = (int)c.port;
@@ -342,7 +353,9 @@ int cmd_serve(int argc, char **argv)
            c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
            c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
+    cf_plant_stop(&c.plant);
     cf_plcrun_free(&c.run);
+done_rig:
     if (c.run.rig)
         hal_rig_close(c.run.rig);
 done_sim:
@@ -355,6 +368,7 @@ done_sim:
 done_log:
     cf_log_close();
 done:
+    cf_plant_stop(&c.plant);
     for (int i = 0; i < c.nstrs; i++)
         free(c.strs[i]);
     return ec;
