@@ -52,7 +52,7 @@ cleanup() {
     [ -n "${SUBPID:-}" ] && kill -TERM "$SUBPID" 2>/dev/null
     mq_stop
     pg_stop
-    rm -rf "$T"
+    [ -n "${CF_KEEP:-}" ] && echo "plant: kept $T" || rm -rf "$T"
 }
 trap cleanup EXIT
 trap 'exit 1' INT TERM
@@ -63,16 +63,16 @@ PGPORT=$(freeport)
 MQPORT=$(freeport)
 # PostgreSQL: a cluster of the test's own, TCP on 127.0.0.1 with passwords
 # (scram), the socket in its folder for the set-up.
-mkdir -p "$PGD" && chown postgres "$PGD"
+mkdir -p "$PGD" "$T/pglog" && chown postgres "$PGD" "$T/pglog"
 echo "cellpw-$$-secret" >"$T/pw"
 runuser -u postgres -- "$PGBIN/initdb" -D "$PGD" -U postgres --auth-local=trust \
     --auth-host=scram-sha-256 >"$T/initdb.log" 2>&1 && ok "initdb: a cluster in $PGD" ||
     { no "initdb"; tail -5 "$T/initdb.log"; exit 1; }
 pg_start() {
-    runuser -u postgres -- "$PGBIN/pg_ctl" -D "$PGD" -l "$T/pg.log" -w \
+    runuser -u postgres -- "$PGBIN/pg_ctl" -D "$PGD" -l "$T/pglog/pg.log" -w \
         -o "-p $PGPORT -k $PGD -c listen_addresses=127.0.0.1" start >/dev/null 2>&1
 }
-pg_start && ok "PostgreSQL on 127.0.0.1:$PGPORT" || { no "PostgreSQL start"; tail -5 "$T/pg.log"; exit 1; }
+pg_start && ok "PostgreSQL on 127.0.0.1:$PGPORT" || { no "PostgreSQL start"; tail -5 "$T/pglog/pg.log"; exit 1; }
 psql_admin() { runuser -u postgres -- psql -h "$PGD" -p "$PGPORT" -U postgres -v ON_ERROR_STOP=1 -qAt "$@"; }
 psql_admin -c "CREATE ROLE cell LOGIN PASSWORD '$(cat "$T/pw")'" -c "CREATE DATABASE plant OWNER cell" &&
     ok "role cell with a password, database plant" || no "create role and database"
@@ -87,6 +87,8 @@ persistence true
 persistence_location $T/mq/
 CONF
 mkdir -p "$T/mq"
+# Started as root, mosquitto drops to its own user: the folder is its.
+id mosquitto >/dev/null 2>&1 && chown mosquitto "$T/mq"
 mq_start() {
     mosquitto -c "$T/mosquitto.conf" >>"$T/mq.log" 2>&1 &
     MQPID=$!
@@ -158,6 +160,7 @@ done
 [ $i -lt 300 ] && ok "outbox drained $((i / 10)).$((i % 10)) s after the last job" ||
     no "outbox not drained: $(sqlite3 "$T/results/results.db" 'SELECT target, attempts, last_error FROM outbox' | head -3)"
 sleep 1 # the last messages to the subscriber
+kill -0 "$SUBPID" 2>/dev/null && ok "subscriber alive" || no "subscriber died: $(cat "$T/sub.err")"
 py verify "$J" "$T/results/results.db" "$PSQL" "$T/mqtt.out"
 grep -q "cellpw-$$-secret" "$T"/a.log "$T"/b.log && no "the password appears in serve's log" ||
     ok "the password never appears in serve's log"
