@@ -13,3 +13,11 @@ $(TEST_BIN): LIBS += $(PLANT_LIBS)
 # tests/cli/plant.sh also runs with test-cli (every tests/cli script).
 test-plant: all
 	sh tests/cli/plant.sh $(BUILD)/cellfit
+
+# A plant on one machine: 4 cells, one broker, one database, an outage in
+# the middle (scripts/plant_demo.sh; PLANT_SECONDS, default 120).
+PLANT_SECONDS ?= 120
+plant-demo:
+	@sh scripts/deps.sh demo
+	$(MAKE) all
+	@sh scripts/plant_demo.sh $(BUILD)/cellfit $(PLANT_SECONDS)
