@@ -8,6 +8,8 @@ PLANT_LIBS := $(shell pkg-config --libs $(PLANT_PKGS) 2>/dev/null)
 $(BUILD)/host/cell/%.o $(BUILD)/host/cmd/%.o $(BUILD)/tests/%.o: CFLAGS += $(PLANT_CFLAGS)
 $(BUILD)/cellfit: LIBS += $(PLANT_LIBS)
 $(TEST_BIN): LIBS += $(PLANT_LIBS)
+# The fuzz targets (mk/fuzz.mk) link every host object, serve's included.
+$(FUZZ_BIN): LIBS += $(PLANT_LIBS)
 
 .PHONY: test-plant plant-demo
 # tests/cli/plant.sh also runs with test-cli (every tests/cli script).

@@ -162,6 +162,20 @@ done
 sleep 1 # the last messages to the subscriber
 kill -0 "$SUBPID" 2>/dev/null && ok "subscriber alive" || no "subscriber died: $(cat "$T/sub.err")"
 py verify "$J" "$T/results/results.db" "$PSQL" "$T/mqtt.out"
+# cellfit results against the sqlite3 CLI's own count.
+DB="$T/results/results.db"
+n=$("$CF" results list --db "$DB" --part 1002 | wc -l)
+[ "$n" -eq 2 ] && ok "results list --part 1002: 2 jobs (FIT, EXPORT)" || no "results list --part: $n"
+n=$("$CF" results export --db "$DB" | wc -l)
+[ "$n" -eq "$(($(sqlite3 "$DB" 'SELECT count(*) FROM jobs') + 1))" ] &&
+    ok "results export: a header and every row ($n lines)" || no "results export: $n lines"
+u=$(sqlite3 "$DB" "SELECT job_uuid FROM jobs WHERE command = 'export' LIMIT 1")
+"$CF" results show "$u" --db "$DB" --json >"$T/show.json"
+[ "$(json "$T/show.json" job_uuid)" = "$u" ] && [ "$(json "$T/show.json" report_sha256)" = \
+    "$(sqlite3 "$DB" "SELECT report_sha256 FROM jobs WHERE job_uuid = '$u'")" ] &&
+    ok "results show UUID --json: the row" || no "results show: $(cat "$T/show.json")"
+n=$("$CF" results list --db "$DB" --since 2999-01-01 | wc -l)
+[ "$n" -eq 0 ] && ok "results list --since the future: nothing" || no "results --since: $n"
 grep -q "cellpw-$$-secret" "$T"/a.log "$T"/b.log && no "the password appears in serve's log" ||
     ok "the password never appears in serve's log"
 grep -q "plant database unavailable" "$T/a.log" && ok "the outage is logged (WARN)" || no "outage not logged"
