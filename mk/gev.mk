@@ -35,10 +35,10 @@ $(BUILD)/tools/%.o: bench/%.c
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_ALL) $(HAL_CFLAGS) $(GEV_CFLAGS) -c $< -o $@
 
-$(BUILD)/gev-check: $(BUILD)/tools/gev_check.o $(GEV_SIMPART) $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+$(BUILD)/gev-check: $(BUILD)/tools/gev_check.o $(GEV_SIMPART) $(A_HOST) $(A_LIB) $(A_HAL) $(A_FW)
 	$(CC) $(LDSAN) -o $@ $^ $(LIBS)
 
-$(BUILD)/scan-bench: $(BUILD)/tools/scan_bench.o $(GEV_SIMPART) $(HOST_OBJ) $(HAL_OBJ) $(FW_OBJ)
+$(BUILD)/scan-bench: $(BUILD)/tools/scan_bench.o $(GEV_SIMPART) $(A_HOST) $(A_LIB) $(A_HAL) $(A_FW)
 	$(CC) $(LDSAN) -o $@ $^ $(LIBS)
 
 test-profiler: $(BUILD)/gev-check $(BUILD)/cellsim

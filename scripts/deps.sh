@@ -7,10 +7,14 @@ set -eu
 # The rig's libraries are build dependencies: cellfit talks to devices.
 # libaravis-dev: the GigE Vision profiler (hal/hal_gev.c) and its simulator (sim/sim_gev.c).
 build_pkgs="gcc make libc6-dev pkg-config zlib1g-dev libmodbus-dev libserialport-dev libusb-1.0-0-dev libaravis-dev"
+# Results at the cell and for the plant (mk/plant.mk): SQLite, libpq, libmosquitto.
+build_pkgs="$build_pkgs libsqlite3-dev libpq-dev libmosquitto-dev"
 # The simulated rig's wiring and the third-party peers the tests use.
 rig_pkgs="socat mbpoll python3-pymodbus python3-serial python3-serial-asyncio umockdev libumockdev-dev"
-test_pkgs="$rig_pkgs libcmocka-dev clang libclang-rt-14-dev cppcheck clang-format valgrind python3 libocct-data-exchange-dev libocct-foundation-dev libocct-modeling-data-dev g++ gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm"
-demo_pkgs="$rig_pkgs"
+# The real engines tests/cli/plant.sh and make plant-demo start, and their clients.
+plant_pkgs="postgresql mosquitto mosquitto-clients sqlite3"
+test_pkgs="$rig_pkgs $plant_pkgs libcmocka-dev clang libclang-rt-14-dev cppcheck clang-format valgrind python3 libocct-data-exchange-dev libocct-foundation-dev libocct-modeling-data-dev g++ gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm"
+demo_pkgs="$rig_pkgs $plant_pkgs"
 # Other CPUs (mk/arch.mk): qemu-user runs the build on a CPU without AVX
 # (qemu-x86_64 -cpu Westmere) and the aarch64 cross build (qemu-aarch64);
 # the cross compiler and the arm64 libraries (multiarch, below) build it;

@@ -18,5 +18,6 @@ int cmd_ports(int argc, char **argv);
 int cmd_thin(int argc, char **argv);
 int cmd_serve(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
+int cmd_results(int argc, char **argv);
 
 #endif

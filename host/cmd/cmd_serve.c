@@ -11,6 +11,7 @@
 #include "cf_err.h"
 #include "cf_log.h"
 #include "cf_opt.h"
+#include "cf_plant.h"
 #include "cf_plcdoc.h"
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
@@ -35,6 +36,7 @@ typedef struct serve_conf {
     double tol, alpha, beta;
     const char *port_file, *stage, *probe, *board;
     cf_plcrun_t run;
+    cf_plant_t plant;           /* results.db and the plant (cf_plant.h) */
     char *strs[SERVE_MAX_STRS]; /* copies of string values, freed at the end */
     int nstrs, lost;
 } serve_conf_t;
@@ -106,6 +108,9 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
     serve_conf_t *c = ctx;
     cf_plcrun_t *r = &c->run;
     long idx;
+    int pr = cf_plant_apply(&c->plant, k, v, msg, ml); /* results and plant keys */
+    if (pr <= 0)
+        return pr ? CF_EARG : 0;
     if (!strcmp(k, "plc")) {
         if (parse_plc(c, v))
             return cf_fail(msg, ml, CF_EARG, "plc '%s': need tcp:ADDR:PORT (IPv4, port 0..65535)",
@@ -259,6 +264,23 @@ static const serve_key_t keys[] = {
     {"cal", "CX,CY,CZ", "the probe's calibration offset, mm", "0,0,0"},
     {"allow", "ADDR[/BITS],...", "client addresses allowed (IPv4, up to 16)", "any"},
     {"max_rate", "R", "requests a second per client, 0 no limit", "1000"},
+    {"results_db", "FILE", "the cell's SQLite database of every job (docs/plant.md)",
+     "results.db in results folder 0"},
+    {"cell_id", "NAME", "this cell's name in the results, topics and plant database", "cell"},
+    {"plant_db", "URL",
+     "forward every job to PostgreSQL: postgresql://USER@HOST:PORT/DB (the "
+     "password from the config's plant_db_password or PGPASSWORD)",
+     NULL},
+    {"mqtt", "URL",
+     "publish every job and the cell's state: mqtt://HOST:PORT/PREFIX (the "
+     "password from the config's mqtt_password)",
+     NULL},
+    {"mqtt_username", "USER", "the MQTT user", NULL},
+    {"mqtt_cafile", "FILE", "MQTT over TLS: the CA certificate", NULL},
+    {"mqtt_certfile", "FILE", "MQTT over TLS: the client certificate", NULL},
+    {"mqtt_keyfile", "FILE", "MQTT over TLS: the client key", NULL},
+    {"outbox_max", "N", "outbox entries kept at most (the oldest dropped and counted)", NULL},
+    {"forward_backoff_max", "S", "longest wait between forwarding retries, seconds", NULL},
 };
 #define NKEYS ((int)(sizeof keys / sizeof keys[0]))
 
@@ -328,6 +350,7 @@ int cmd_serve(int argc, char **argv)
 {
     serve_conf_t c;
     memset(&c, 0, sizeof c);
+    cf_plant_init(&c.plant);
     c.port = -1;
     c.max_clients = 8;
     c.level = CF_LOG_INFO;
@@ -397,6 +420,11 @@ int cmd_serve(int argc, char **argv)
     }
     cf_runner_t runner;
     cf_plcrun_init(&c.run, &runner);
+    if (cf_plant_start(&c.plant, &c.run, c.run.results_dir[0], &runner, &runner, msg, sizeof msg)) {
+        ec = cli_error("serve", CLI_FAIL, "results: %s", msg);
+        cf_plcrun_free(&c.run);
+        goto done_rig;
+    }
     cf_plcsrv_opts_t so = c.so;
     so.addr = c.addr;
     so.port = (int)c.port;
@@ -416,7 +444,9 @@ int cmd_serve(int argc, char **argv)
            fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : "",
            fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
+    cf_plant_stop(&c.plant);
     cf_plcrun_free(&c.run);
+done_rig:
     if (c.run.rig)
         hal_rig_close(c.run.rig);
 done_sim:
@@ -429,6 +459,7 @@ done_sim:
 done_log:
     cf_log_close();
 done:
+    cf_plant_stop(&c.plant);
     for (int i = 0; i < c.nstrs; i++)
         free(c.strs[i]);
     return ec;

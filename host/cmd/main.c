@@ -28,6 +28,7 @@ static const cmd_entry_t cmds[] = {
     {"rig", cmd_rig, "the stage and probe by hand: status, home, move, probe, reset, stop"},
     {"ports", cmd_ports, "serial ports, the laser probe, the USB trigger box"},
     {"serve", cmd_serve, "the cell headless, driven by a PLC over Modbus TCP"},
+    {"results", cmd_results, "the jobs in the cell's results database, and its outbox"},
     {"bench", cmd_bench, "benchmarks on generated data"},
 };
 #define NCMDS (sizeof cmds / sizeof cmds[0])
