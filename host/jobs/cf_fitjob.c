@@ -202,13 +202,14 @@ static int buffers(cf_fitjob_t *j, long n)
         return 0;
     free(j->buf), free(j->rows), free(j->src);
     j->buf = malloc(sizeof(double) * 5 * (size_t)n);
-    j->rows = malloc(sizeof(double) * 6 * (size_t)n); /* u v x y z w */
+    size_t cols = j->o.robust ? 6 : 5; /* u v x y z, and w for robust passes */
+    j->rows = malloc(sizeof(double) * cols * (size_t)n);
     j->src = malloc(sizeof(long) * (size_t)n);
     j->cap = j->buf && j->rows && j->src ? n : 0;
     if (!j->cap)
         return CF_ENOMEM;
     touch(j->buf, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
-    touch(j->rows, sizeof(double) * 6 * (size_t)n);
+    touch(j->rows, sizeof(double) * cols * (size_t)n);
     touch(j->src, sizeof(long) * (size_t)n);
     return 0;
 }
