@@ -17,6 +17,7 @@
 #include "rig_err.h"
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,6 +33,7 @@ struct cellfit_fit {
     cf_fitpass_t fp;  /* the fitter, its arena the end of the block */
     cf_seedgrid_t pj; /* x y z points: allocated on first use */
     int have_pj, solved, own;
+    void *block; /* the block the handle lies in (the caller's or ours) */
     long bytes;
     char msg[512];
 };
@@ -135,6 +137,14 @@ static size_t up(size_t n)
     return (n + API_ALIGN - 1) / API_ALIGN * API_ALIGN;
 }
 
+#define HANDLE_ALIGN _Alignof(cellfit_fit_t)
+
+/* The handle and the padding that aligns it in a block aligned to 16. */
+static size_t handle_bytes(void)
+{
+    return up(sizeof(cellfit_fit_t) + (HANDLE_ALIGN > API_ALIGN ? HANDLE_ALIGN - API_ALIGN : 0));
+}
+
 static nf_solver_t api_solver(const cellfit_params_t *prm)
 {
     static const nf_solver_t map[] = {NF_SOLVER_AUTO, NF_SOLVER_GS, NF_SOLVER_CHOL, NF_SOLVER_PCG};
@@ -166,7 +176,7 @@ long cellfit_fit_bytes(const cellfit_surface_t *nominal, const cellfit_params_t 
     long fb = cf_fitpass_bytes(&s, api_solver(prm), 1);
     if (fb < 0)
         return CELLFIT_EBUDGET;
-    return (long)up(sizeof(cellfit_fit_t)) + 2 * surf_bytes(nominal) + fb;
+    return (long)handle_bytes() + 2 * surf_bytes(nominal) + fb;
 }
 
 static void copy_surf(nf_surf_t *dst, const cellfit_surface_t *src, double *mem)
@@ -191,7 +201,7 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
     long need = cellfit_fit_bytes(nominal, prm);
     if (need < 0)
         return (int)need;
-    if (need > NF_ARENA_BYTES + (long)up(sizeof(cellfit_fit_t)) + 2 * surf_bytes(nominal))
+    if (need > NF_ARENA_BYTES + (long)handle_bytes() + 2 * surf_bytes(nominal))
         return CELLFIT_EBUDGET; /* the board's budget, as for every job */
     int own = !mem;
     if (own) {
@@ -201,9 +211,13 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
     } else if (mem_bytes < (size_t)need || ((size_t)mem % API_ALIGN)) {
         return mem_bytes < (size_t)need ? CELLFIT_EBUDGET : CELLFIT_EARG;
     }
-    memset(mem, 0, sizeof(cellfit_fit_t));
-    cellfit_fit_t *f = mem;
-    char *p = (char *)mem + up(sizeof *f);
+    /* The handle at its own alignment (the accumulator's vectors may want
+     * 32) inside the first handle_bytes() of a block aligned to 16. */
+    uintptr_t at = ((uintptr_t)mem + HANDLE_ALIGN - 1) & ~(uintptr_t)(HANDLE_ALIGN - 1);
+    cellfit_fit_t *f = (cellfit_fit_t *)at;
+    memset(f, 0, sizeof *f);
+    f->block = mem;
+    char *p = (char *)mem + handle_bytes();
     long sb = surf_bytes(nominal);
     copy_surf(&f->nominal, nominal, (double *)(void *)p);
     copy_surf(&f->fitted, nominal, (double *)(void *)(p + sb));
@@ -220,7 +234,7 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
         cellfit_fit_close(f);
         return CELLFIT_EARG;
     }
-    size_t off = up(sizeof *f) + 2 * (size_t)sb;
+    size_t off = handle_bytes() + 2 * (size_t)sb;
     int rc = cf_fitpass_begin(&f->fp, (char *)mem + off, (size_t)need - off, &f->nominal, f->alpha,
                               f->beta, f->solver, 1, "points", f->msg, sizeof f->msg);
     if (rc) {
@@ -384,7 +398,7 @@ void cellfit_fit_close(cellfit_fit_t *f)
     if (f->have_pj)
         cf_seedgrid_free(&f->pj);
     if (f->own)
-        free(f);
+        free(f->block);
 }
 
 int cellfit_surface_eval(const cellfit_surface_t *s, double u, double v, double xyz[3])

@@ -7,7 +7,13 @@
 #include "cf_cli.h"
 #include "cf_err.h"
 #include "nf_err.h"
+#include <stdint.h>
 #include <string.h>
+
+/* The second core's nf_fit_t at the start of the block, at its own
+ * alignment (32 where the accumulator keeps vectors) in a block aligned to
+ * 16: room for the padding too. */
+#define SHARD_STATE ((sizeof(nf_fit_t) + _Alignof(nf_fit_t) - 1 + 15) / 16 * 16)
 
 long cf_fitpass_bytes(const nf_surf_t *s, nf_solver_t solver, int threads)
 {
@@ -15,7 +21,7 @@ long cf_fitpass_bytes(const nf_surf_t *s, nf_solver_t solver, int threads)
     if (need < 0 || threads < 2)
         return need;
     long sh = nf_fit_shard_bytes(s->nu, s->nv, s->p, s->q);
-    return sh < 0 ? sh : need + sh;
+    return sh < 0 ? sh : (long)SHARD_STATE + need + sh;
 }
 
 /* Eq. 7's refusals in words: the control point left free, the bytes. */
@@ -55,11 +61,20 @@ int cf_fitpass_begin(cf_fitpass_t *ps, void *block, size_t bytes, const nf_surf_
     ps->s = s;
     ps->threads = threads > 1 ? 2 : 1;
     ps->t0 = cli_now();
+    if (ps->threads > 1) {
+        if (bytes < SHARD_STATE)
+            return fit_error(NF_EARENA, ps, name, msg, ml);
+        uintptr_t a =
+            ((uintptr_t)block + _Alignof(nf_fit_t) - 1) & ~(uintptr_t)(_Alignof(nf_fit_t) - 1);
+        ps->sh = (nf_fit_t *)a;
+        block = (char *)block + SHARD_STATE;
+        bytes -= SHARD_STATE;
+    }
     nf_arena_init(&ps->ar, block, bytes);
     nf_fit_params_t prm = {alpha, beta, solver};
     int rc = nf_fit_init(&ps->f, s, &prm, &ps->ar);
     if (!rc && ps->threads > 1)
-        rc = nf_fit_shard_init(&ps->sh, &ps->f, &ps->ar);
+        rc = nf_fit_shard_init(ps->sh, &ps->f, &ps->ar);
     return rc ? fit_error(rc, ps, name, msg, ml) : 0;
 }
 
@@ -69,7 +84,7 @@ int cf_fitpass_rows(cf_fitpass_t *ps, const double *rows, long n, int cols, long
     int rc = 0;
     long b = -1;
     if (cols == 5)
-        rc = cf_accum_rows(&ps->f, ps->threads > 1 ? &ps->sh : NULL, rows, n, &b);
+        rc = cf_accum_rows(&ps->f, ps->threads > 1 ? ps->sh : NULL, rows, n, &b);
     else
         for (long k = 0; k < n && !rc; k++) {
             const double *q = rows + 6 * k;
@@ -106,7 +121,7 @@ int cf_fitpass_solve(cf_fitpass_t *ps, const nf_solve_opts_t *so, nf_surf_t *out
     double t1 = cli_now();
     int rc = 0;
     if (ps->threads > 1) { /* Eq. 9: the sums over points, in any grouping */
-        rc = nf_fit_shard_merge(&ps->f, &ps->sh);
+        rc = nf_fit_shard_merge(&ps->f, ps->sh);
         ps->threads = 1;
         ps->t_merge = cli_now() - t1;
         ps->t_rows += ps->t_merge;
@@ -126,7 +141,7 @@ int cf_fitpass_solve(cf_fitpass_t *ps, const nf_solve_opts_t *so, nf_surf_t *out
 
 long cf_fitpass_points(const cf_fitpass_t *ps)
 {
-    return ps->f.npoints + (ps->threads > 1 ? ps->sh.npoints : 0);
+    return ps->f.npoints + (ps->threads > 1 ? ps->sh->npoints : 0);
 }
 
 long cf_fitpass_store_bytes(const cf_fitpass_t *ps)

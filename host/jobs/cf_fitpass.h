@@ -17,7 +17,8 @@
 typedef struct cf_fitpass {
     nf_arena_t ar;
     nf_fit_t f;
-    nf_fit_t sh; /* threads 2: the second core's accumulator (cf_accum) */
+    nf_fit_t *sh; /* threads 2: the second core's accumulator (cf_accum), its
+                   * state at the start of the block */
     int threads;
     const nf_surf_t *s; /* the space fitted in (names control points in messages) */
     long rejected;      /* rows of weight 0, left out */
@@ -29,13 +30,14 @@ typedef struct cf_fitpass {
     double t_solve;
 } cf_fitpass_t;
 
-/* Bytes of the block for a pass on s's space with solver (and a second
- * accumulator when threads is 2): nf_fit_bytes (+ nf_fit_shard_bytes), the
- * firmware's public formula. Negative when the net has no formula. */
+/* Bytes of the block for a pass on s's space with solver: nf_fit_bytes,
+ * the firmware's public formula; with threads 2 also a second
+ * accumulator, its state and nf_fit_shard_bytes. Negative when the net
+ * has no formula. */
 long cf_fitpass_bytes(const nf_surf_t *s, nf_solver_t solver, int threads);
 
 /* A pass on s's space (s stays the caller's until solve) in block (bytes
- * long, at least cf_fitpass_bytes), threads 1 or 2. 0, or an nf_err_t
+ * long, at least cf_fitpass_bytes, aligned to 16), threads 1 or 2. 0, or an nf_err_t
  * with msg: NF_EBUDGET with the bytes needed and allowed, NF_EARENA,
  * NF_EDEGREE, NF_EKNOTS, ... name is the data's name in messages. */
 int cf_fitpass_begin(cf_fitpass_t *ps, void *block, size_t bytes, const nf_surf_t *s, double alpha,
