@@ -49,7 +49,8 @@ typedef struct cf_fitjob_opts {
     double solve_tol; /* relative residual of the iterative solvers */
     long max_iter;
     int probe;        /* 1: the iterative solvers check that the data determine the net */
-    int threads;      /* accumulating cores: 1, or 2 (a second accumulator, cf_accum) */
+    int threads;      /* accumulating cores: 1, or 2 (a second accumulator, cf_accum; its
+                       * bytes checked at open and per pass, not by the loop's max_cp) */
     int net_u, net_v; /* 0: the base's net; else the base refined to it first */
     long reparam;     /* reprojection passes per round (Section 2.2) */
     double far;       /* projected points farther than this are counted (mm; 0: 5 % of the net) */
