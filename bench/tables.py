@@ -240,7 +240,8 @@ def fitpack(out):
     print("Same random points and height field, bicubic, same uniform knots. FITPACK fits z "
           "only; cellfit fits x, y and z (3 right-hand sides) with Eq. 7's regularisation. "
           "FITPACK: the LSQBivariateSpline call (Givens QR of the observation matrix, no "
-          "normal equations); cellfit: `bench fit` accumulate + solve. N = 1,024 = 2^10: "
+          "normal equations); cellfit: `bench fit` accumulate + solve (the fit job, whose "
+          "check pass over the points is not timed). N = 1,024 = 2^10: "
           "FITPACK runs several times slower there than at N = 961 (and about 30 s at "
           "N = 4,096), presumably cache-set conflicts from a power-of-two stride in its band "
           "array; both are shown.\n")

@@ -1,6 +1,7 @@
 #!/bin/sh
 # scripts/lint.sh: clang-format (the project's .clang-format) and cppcheck on
-# every C file we own. Fails on any difference or finding.
+# every C file we own, and no include arrow running up (scripts/arrows.sh).
+# Fails on any difference or finding.
 set -eu
 files=$(ls firmware/*.[ch] lib/*.[ch] include/*.h examples/*.c host/*/*.[ch] hal/*.[ch] sim/*.[ch] tests/unit/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
 bad=0
@@ -22,5 +23,7 @@ cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --i
 cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --inline-suppr \
     --suppress=missingIncludeSystem -Iboards/mps2-an500 -Iboards/common -Ifirmware --std=c11 \
     -D__GNUC__ boards/common boards/mps2-an500 boards/nucleo-h743zi || bad=1
+# Include arrows between folders run one way (README, Layout).
+sh scripts/arrows.sh || bad=1
 [ $bad -eq 0 ] && echo "lint: clang-format and cppcheck clean ($(echo $files | wc -w) files)"
 exit $bad

@@ -1,10 +1,12 @@
-/* cellfit_api.c: libcellfit's public API (include/cellfit.h) over the
- * firmware fitter (nf_fit: Eq. 7 in stripe storage), the projection start
- * grid (cf_seedgrid) and the IGES and journal readers. One block holds the
- * handle, both surfaces and the fitter's arena, so a caller's memory is
- * enough; cellfit_fit_bytes() is that block's size. */
+/* cellfit_api.c: libcellfit's public API (include/cellfit.h) over the fit
+ * job's pass of Eq. 7 (cf_fitpass: the firmware fitter in stripe storage,
+ * in a block it is given), the projection start grid (cf_seedgrid) and the
+ * IGES and journal readers. One block holds the handle, both surfaces and
+ * the fitter's arena, so a caller's memory is enough; cellfit_fit_bytes()
+ * is that block's size. */
 #include "cellfit.h"
 #include "cf_err.h"
+#include "cf_fitpass.h"
 #include "cf_iges.h"
 #include "cf_seedgrid.h"
 #include "cf_store_file.h"
@@ -13,26 +15,27 @@
 #include "cf_version.h"
 #include "jnl.h"
 #include "nf_err.h"
-#include "nf_fit.h"
 #include "rig_err.h"
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define API_PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain (as cellfit fit) */
 #define API_ALIGN 16
+#define API_ROWS 64 /* x y z points projected before they are added */
 
 struct cellfit_fit {
     nf_surf_t nominal, fitted; /* arrays inside the block */
-    nf_fit_params_t prm;
-    nf_arena_t ar;
-    nf_fit_t f;
+    double alpha, beta;
+    nf_solver_t solver;
+    cf_fitpass_t fp;  /* the fitter, its arena the end of the block */
     cf_seedgrid_t pj; /* x y z points: allocated on first use */
     int have_pj, solved, own;
+    void *block; /* the block the handle lies in (the caller's or ours) */
     long bytes;
-    nf_solve_stats_t st;
     char msg[512];
 };
 
@@ -135,6 +138,14 @@ static size_t up(size_t n)
     return (n + API_ALIGN - 1) / API_ALIGN * API_ALIGN;
 }
 
+#define HANDLE_ALIGN _Alignof(cellfit_fit_t)
+
+/* The handle and the padding that aligns it in a block aligned to 16. */
+static size_t handle_bytes(void)
+{
+    return up(sizeof(cellfit_fit_t) + (HANDLE_ALIGN > API_ALIGN ? HANDLE_ALIGN - API_ALIGN : 0));
+}
+
 static nf_solver_t api_solver(const cellfit_params_t *prm)
 {
     static const nf_solver_t map[] = {NF_SOLVER_AUTO, NF_SOLVER_GS, NF_SOLVER_CHOL, NF_SOLVER_PCG};
@@ -163,10 +174,10 @@ long cellfit_fit_bytes(const cellfit_surface_t *nominal, const cellfit_params_t 
     int rc = nf_surf_check(&s);
     if (rc)
         return api_code(rc);
-    long fb = nf_fit_bytes(s.nu, s.nv, s.p, s.q, api_solver(prm));
+    long fb = cf_fitpass_bytes(&s, api_solver(prm), 1);
     if (fb < 0)
         return CELLFIT_EBUDGET;
-    return (long)up(sizeof(cellfit_fit_t)) + 2 * surf_bytes(nominal) + fb;
+    return (long)handle_bytes() + 2 * surf_bytes(nominal) + fb;
 }
 
 static void copy_surf(nf_surf_t *dst, const cellfit_surface_t *src, double *mem)
@@ -191,7 +202,7 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
     long need = cellfit_fit_bytes(nominal, prm);
     if (need < 0)
         return (int)need;
-    if (need > NF_ARENA_BYTES + (long)up(sizeof(cellfit_fit_t)) + 2 * surf_bytes(nominal))
+    if (need > NF_ARENA_BYTES + (long)handle_bytes() + 2 * surf_bytes(nominal))
         return CELLFIT_EBUDGET; /* the board's budget, as for every job */
     int own = !mem;
     if (own) {
@@ -201,9 +212,13 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
     } else if (mem_bytes < (size_t)need || ((size_t)mem % API_ALIGN)) {
         return mem_bytes < (size_t)need ? CELLFIT_EBUDGET : CELLFIT_EARG;
     }
-    memset(mem, 0, sizeof(cellfit_fit_t));
-    cellfit_fit_t *f = mem;
-    char *p = (char *)mem + up(sizeof *f);
+    /* The handle at its own alignment (the accumulator's vectors may want
+     * 32) inside the first handle_bytes() of a block aligned to 16. */
+    uintptr_t at = ((uintptr_t)mem + HANDLE_ALIGN - 1) & ~(uintptr_t)(HANDLE_ALIGN - 1);
+    cellfit_fit_t *f = (cellfit_fit_t *)at;
+    memset(f, 0, sizeof *f);
+    f->block = mem;
+    char *p = (char *)mem + handle_bytes();
     long sb = surf_bytes(nominal);
     copy_surf(&f->nominal, nominal, (double *)(void *)p);
     copy_surf(&f->fitted, nominal, (double *)(void *)(p + sb));
@@ -213,16 +228,16 @@ int cellfit_fit_open(cellfit_fit_t **fit, const cellfit_surface_t *nominal,
     cellfit_params_default(&d);
     if (!prm)
         prm = &d;
-    f->prm.alpha = prm->alpha;
-    f->prm.beta = prm->beta;
-    f->prm.solver = api_solver(prm);
-    if (!(f->prm.alpha >= 0) || !(f->prm.beta >= 0) || !isfinite(f->prm.alpha + f->prm.beta)) {
+    f->alpha = prm->alpha;
+    f->beta = prm->beta;
+    f->solver = api_solver(prm);
+    if (!(f->alpha >= 0) || !(f->beta >= 0) || !isfinite(f->alpha + f->beta)) {
         cellfit_fit_close(f);
         return CELLFIT_EARG;
     }
-    size_t off = up(sizeof *f) + 2 * (size_t)sb;
-    nf_arena_init(&f->ar, (char *)mem + off, (size_t)need - off);
-    int rc = nf_fit_init(&f->f, &f->nominal, &f->prm, &f->ar);
+    size_t off = handle_bytes() + 2 * (size_t)sb;
+    int rc = cf_fitpass_begin(&f->fp, (char *)mem + off, (size_t)need - off, &f->nominal, f->alpha,
+                              f->beta, f->solver, 1, "points", f->msg, sizeof f->msg);
     if (rc) {
         cellfit_fit_close(f);
         return api_code(rc);
@@ -253,12 +268,16 @@ int cellfit_fit_open_file(cellfit_fit_t **fit, const char *path, const cellfit_p
     return rc;
 }
 
-static int add_one(cellfit_fit_t *f, double u, double v, const double xyz[3], size_t i)
+/* n rows u v x y z into the pass; i0 numbers the first in messages. */
+static int add_rows(cellfit_fit_t *f, const double *rows, size_t n, size_t i0)
 {
-    int rc = nf_fit_add(&f->f, u, v, xyz, 1.0);
-    if (rc)
-        return api_fail(f, api_code(rc), "point %zu (u %.17g, v %.17g): %s", i, u, v,
-                        nf_strerror(rc));
+    long b = 0;
+    int rc = cf_fitpass_rows(&f->fp, rows, (long)n, 5, &b);
+    if (rc) {
+        const double *r = rows + 5 * b;
+        return api_fail(f, api_code(rc), "point %zu (u %.17g, v %.17g): %s", i0 + (size_t)b, r[0],
+                        r[1], nf_strerror(rc));
+    }
     return CELLFIT_OK;
 }
 
@@ -268,13 +287,7 @@ int cellfit_fit_add_uvxyz(cellfit_fit_t *f, const double *uvxyz, size_t n)
         return CELLFIT_EARG;
     if (f->solved)
         return api_fail(f, CELLFIT_ESTATE, "points added after cellfit_fit_solve");
-    for (size_t i = 0; i < n; i++) {
-        const double *r = uvxyz + 5 * i;
-        int rc = add_one(f, r[0], r[1], r + 2, i);
-        if (rc)
-            return rc;
-    }
-    return CELLFIT_OK;
+    return n ? add_rows(f, uvxyz, n, 0) : CELLFIT_OK;
 }
 
 int cellfit_fit_add_xyz(cellfit_fit_t *f, const double *xyz, size_t n)
@@ -288,6 +301,8 @@ int cellfit_fit_add_xyz(cellfit_fit_t *f, const double *xyz, size_t n)
             return api_fail(f, CELLFIT_ENOMEM, "no memory for the projection start grid");
         f->have_pj = 1;
     }
+    double rows[5 * API_ROWS]; /* projected rows go in API_ROWS at a time */
+    size_t m = 0, i0 = 0;
     for (size_t i = 0; i < n; i++) {
         const double *q = xyz + 3 * i;
         if (!isfinite(q[0] + q[1] + q[2]))
@@ -296,9 +311,14 @@ int cellfit_fit_add_xyz(cellfit_fit_t *f, const double *xyz, size_t n)
         int rc = cf_seedgrid_project(&f->pj, q, API_PROJ_TOL, &pr);
         if (rc && rc != NF_ENOCONV) /* the best point is kept on ENOCONV, as cellfit fit */
             return api_fail(f, api_code(rc), "point %zu: projection: %s", i, nf_strerror(rc));
-        rc = add_one(f, pr.u, pr.v, q, i);
-        if (rc)
-            return rc;
+        double *r = rows + 5 * m++;
+        r[0] = pr.u, r[1] = pr.v, r[2] = q[0], r[3] = q[1], r[4] = q[2];
+        if (m == API_ROWS || i + 1 == n) {
+            if ((rc = add_rows(f, rows, m, i0)))
+                return rc;
+            i0 = i + 1;
+            m = 0;
+        }
     }
     return CELLFIT_OK;
 }
@@ -309,21 +329,10 @@ int cellfit_fit_solve(cellfit_fit_t *f)
         return CELLFIT_EARG;
     if (f->solved)
         return api_fail(f, CELLFIT_ESTATE, "already solved");
-    int rc = nf_fit_finish(&f->f);
     nf_solve_opts_t so = NF_SOLVE_OPTS_DEFAULT;
-    if (!rc)
-        rc = nf_fit_solve(&f->f, f->prm.solver, &so, &f->st);
-    if (rc) {
-        long b = f->f.bad_index;
-        if (rc == NF_ENODATA || rc == NF_ESINGULAR)
-            return api_fail(f, api_code(rc),
-                            "control point (%ld, %ld) is left free: %s (give alpha or beta > 0, "
-                            "or measure there)",
-                            b >= 0 ? b % f->nominal.nu : -1L, b >= 0 ? b / f->nominal.nu : -1L,
-                            nf_strerror(rc));
-        return api_fail(f, api_code(rc), "%s", nf_strerror(rc));
-    }
-    memcpy(f->fitted.cp, f->f.P, sizeof(double) * 3 * (size_t)f->f.n);
+    int rc = cf_fitpass_solve(&f->fp, &so, &f->fitted, "points", f->msg, sizeof f->msg);
+    if (rc)
+        return api_code(rc);
     f->solved = 1;
     f->msg[0] = '\0';
     return CELLFIT_OK;
@@ -334,17 +343,18 @@ int cellfit_fit_stats(const cellfit_fit_t *f, cellfit_stats_t *st)
     if (!f || !st)
         return CELLFIT_EARG;
     memset(st, 0, sizeof *st);
-    st->points = f->f.npoints;
-    st->control_points = f->f.n;
+    st->points = cf_fitpass_points(&f->fp);
+    st->control_points = (long)f->nominal.nu * f->nominal.nv;
     st->bytes = f->bytes;
     if (!f->solved)
         return CELLFIT_ESTATE;
-    st->solver = f->st.solver == NF_SOLVER_GS     ? CELLFIT_SOLVER_GS
-                 : f->st.solver == NF_SOLVER_CHOL ? CELLFIT_SOLVER_CHOL
-                                                  : CELLFIT_SOLVER_PCG;
-    st->iterations = f->st.iterations;
-    st->rel_residual = f->st.rel_residual;
-    for (long i = 0; i < f->f.n; i++) {
+    const nf_solve_stats_t *ss = &f->fp.st;
+    st->solver = ss->solver == NF_SOLVER_GS     ? CELLFIT_SOLVER_GS
+                 : ss->solver == NF_SOLVER_CHOL ? CELLFIT_SOLVER_CHOL
+                                                : CELLFIT_SOLVER_PCG;
+    st->iterations = ss->iterations;
+    st->rel_residual = ss->rel_residual;
+    for (long i = 0; i < st->control_points; i++) {
         const double *a = f->fitted.cp + 3 * i, *b = f->nominal.cp + 3 * i;
         double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
                         (a[2] - b[2]) * (a[2] - b[2]));
@@ -390,7 +400,7 @@ void cellfit_fit_close(cellfit_fit_t *f)
     if (f->have_pj)
         cf_seedgrid_free(&f->pj);
     if (f->own)
-        free(f);
+        free(f->block);
 }
 
 int cellfit_surface_eval(const cellfit_surface_t *s, double u, double v, double xyz[3])

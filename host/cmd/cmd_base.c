@@ -12,6 +12,7 @@
  * four boundary curves as entities 126. */
 #include "cf_cli.h"
 #include "cf_err.h"
+#include "cf_fitpass.h"
 #include "cf_iges.h"
 #include "cf_json.h"
 #include "cf_opt.h"
@@ -25,7 +26,6 @@
 #include "nf_coons.h"
 #include "nf_curvefit.h"
 #include "nf_err.h"
-#include "nf_fit.h"
 #include "nf_project.h"
 #include "nf_refine.h"
 #include <math.h>
@@ -319,38 +319,8 @@ static void uniform_knots(double *U, int n, int p)
         U[i] = (double)(i - p) / (n - p);
 }
 
-/* Knots that bring a net of n to want points: midpoints of the widest
- * spans, split one at a time (sorted on return); r = want - n. */
-static int split_knots(const double *U, int n, int p, int r, double *X)
-{
-    int nd = n - p + 1; /* distinct breakpoints */
-    double *b = malloc(sizeof(double) * (size_t)(nd + r));
-    if (!b)
-        return -1;
-    int m = 0;
-    for (int i = p; i <= n; i++)
-        if (m == 0 || U[i] > b[m - 1])
-            b[m++] = U[i];
-    for (int t = 0; t < r; t++) {
-        int w = 0;
-        for (int i = 1; i + 1 < m; i++)
-            w = b[i + 1] - b[i] > b[w + 1] - b[w] ? i : w;
-        memmove(b + w + 2, b + w + 1, sizeof(double) * (size_t)(m - w - 1));
-        b[w + 1] = 0.5 * (b[w] + b[w + 2]);
-        X[t] = b[w + 1];
-        m++;
-    }
-    free(b);
-    for (int i = 1; i < r; i++) /* insertion sort */
-        for (int j = i; j > 0 && X[j] < X[j - 1]; j--) {
-            double t = X[j];
-            X[j] = X[j - 1];
-            X[j - 1] = t;
-        }
-    return 0;
-}
-
-/* Refine s (heap) in place to at least nu x nv control points. */
+/* Refine s (heap) in place to at least nu x nv control points: the
+ * widest spans halved (nf_refine_widest), inserted by Boehm. */
 static int refine_to(nf_surf_t *s, int nu, int nv)
 {
     for (int dir = 0; dir < 2; dir++) {
@@ -359,12 +329,13 @@ static int refine_to(nf_surf_t *s, int nu, int nv)
             continue;
         double *X = malloc(sizeof(double) * (size_t)r);
         nf_surf_t o;
-        if (!X || split_knots(dir ? s->V : s->U, have, dir ? s->q : s->p, r, X) ||
-            cf_surf_alloc(&o, s->p, s->q, dir ? s->nu : want, dir ? want : s->nv)) {
+        if (!X || cf_surf_alloc(&o, s->p, s->q, dir ? s->nu : want, dir ? want : s->nv)) {
             free(X);
             return CF_ENOMEM;
         }
-        int rc = dir ? nf_refine_v(s, X, r, &o) : nf_refine_u(s, X, r, &o);
+        int rc = nf_refine_widest(dir ? s->V : s->U, have, dir ? s->q : s->p, r, X);
+        if (!rc)
+            rc = dir ? nf_refine_v(s, X, r, &o) : nf_refine_u(s, X, r, &o);
         free(X);
         if (rc) {
             cf_surf_free(&o);
@@ -662,9 +633,9 @@ static int prepare(const base_opts_t *o, const nf_curve_t c[4], int pmin, nf_coo
 typedef struct proj_ctx {
     cf_seedgrid_t g;
     const char *path;
-    nf_coons3_t *b3; /* bicubic: rows of Q = S(u, v) */
-    nf_fit_t *fit;   /* tensor: rows of the fit */
-    double ss;       /* sum of squared projection distances */
+    nf_coons3_t *b3;   /* bicubic: rows of Q = S(u, v) */
+    cf_fitpass_t *fit; /* tensor: rows of the fit */
+    double ss;         /* sum of squared projection distances */
 } proj_ctx_t;
 
 static int proj_point(void *ctx, const double Q[3], long line)
@@ -676,7 +647,8 @@ static int proj_point(void *ctx, const double Q[3], long line)
     nf_proj_t pr;
     cf_seedgrid_project(&c->g, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
     c->ss += pr.dist * pr.dist;
-    int rc = c->b3 ? nf_coons3_add(c->b3, pr.u, pr.v, Q) : nf_fit_add(c->fit, pr.u, pr.v, Q, 1.0);
+    double row[5] = {pr.u, pr.v, Q[0], Q[1], Q[2]};
+    int rc = c->b3 ? nf_coons3_add(c->b3, pr.u, pr.v, Q) : cf_fitpass_rows(c->fit, row, 1, 5, NULL);
     if (rc)
         return cli_error("base", CLI_USAGE, "%s:%ld: %s", c->path, line, nf_strerror(rc));
     return CLI_OK;
@@ -727,8 +699,8 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
         goto done;
     }
     nf_coons3_t b3;
-    nf_fit_t fit;
-    nf_arena_t ar;
+    cf_fitpass_t fit;
+    char msg[512];
     if (o->method == M_BICUBIC) {
         int K = nf_coons3_unknowns(&cs);
         long need = NF_COONS3_DOUBLES(K, nu, nv);
@@ -768,7 +740,7 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
             ec = cli_error("base", CLI_FAIL, "out of memory");
             goto done;
         }
-        long need = nf_fit_bytes(fb.nu, fb.nv, fb.p, fb.q, NF_SOLVER_AUTO);
+        long need = cf_fitpass_bytes(&fb, NF_SOLVER_AUTO, 1);
         if (need < 0 || need > NF_ARENA_BYTES) {
             ec = cli_error("base", CLI_USAGE, "a %d x %d fit needs %ld bytes; board %s allows %ld",
                            fb.nu, fb.nv, need, BOARD_NAME, (long)NF_ARENA_BYTES);
@@ -779,10 +751,9 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
             ec = cli_error("base", CLI_FAIL, "out of memory");
             goto done;
         }
-        nf_arena_init(&ar, fmem, (size_t)need);
-        nf_fit_params_t prm = {NF_ALPHA_DEFAULT, NF_BETA_DEFAULT, NF_SOLVER_AUTO};
-        if ((rc = nf_fit_init(&fit, &fb, &prm, &ar))) {
-            ec = cli_error("base", CLI_USAGE, "tensor fit: %s", nf_strerror(rc));
+        if ((rc = cf_fitpass_begin(&fit, fmem, (size_t)need, &fb, NF_ALPHA_DEFAULT, NF_BETA_DEFAULT,
+                                   NF_SOLVER_AUTO, 1, "tensor fit", msg, sizeof msg))) {
+            ec = cli_error("base", CLI_USAGE, "%s", msg);
             goto done;
         }
         pc.fit = &fit;
@@ -808,16 +779,12 @@ static int make_coons(const base_opts_t *o, cf_points_t *r, nf_surf_t *out, resu
         nf_coons3_surface(&b3, out);
     } else {
         nf_solve_opts_t so = NF_SOLVE_OPTS_DEFAULT;
-        nf_solve_stats_t st;
-        rc = nf_fit_finish(&fit);
-        if (!rc)
-            rc = nf_fit_solve(&fit, NF_SOLVER_AUTO, &so, &st);
-        if (rc) {
-            ec = cli_error("base", CLI_USAGE, "tensor fit to %ld points: %s", res->used,
-                           nf_strerror(rc));
+        char what[64];
+        snprintf(what, sizeof what, "tensor fit to %ld points", res->used);
+        if ((rc = cf_fitpass_solve(&fit, &so, &fb, what, msg, sizeof msg))) {
+            ec = cli_error("base", CLI_USAGE, "%s", msg);
             goto done;
         }
-        memcpy(fb.cp, fit.P, sizeof(double) * 3 * (size_t)fb.nu * (size_t)fb.nv);
         *out = fb;
         memset(&fb, 0, sizeof fb);
     }

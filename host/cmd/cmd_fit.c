@@ -13,6 +13,7 @@
 #include "cf_surfio.h"
 #include "cf_version.h"
 #include "cmd.h"
+#include "cmd_fitopts.h"
 #include "nf_err.h"
 #include <string.h>
 #include <sys/resource.h>
@@ -36,17 +37,15 @@ typedef struct fit_args {
     int uv, json;
     long entity;
     cf_fitjob_opts_t o;
-    int refine, loop_opt, robust_iters_given;
+    cmd_fitopts_t fo;
 } fit_args_t;
 
 static int parse(int argc, char **argv, fit_args_t *a)
 {
-    static const char *const refines[] = {"uniform", "residual", NULL};
     memset(a, 0, sizeof *a);
     cf_fitjob_defaults(&a->o);
-    a->refine = CF_REFINE_RESIDUAL;
     cf_fitjob_opts_t *o = &a->o;
-    const cf_opt_t opts[] = {
+    const cf_opt_t own[] = {
         {.name = "base",
          .kind = CF_OPT_STR,
          .dst = &a->base,
@@ -112,13 +111,6 @@ static int parse(int argc, char **argv, fit_args_t *a)
          .help = "iterations of the iterative solvers at most",
          .lo = 1,
          .hi = 1e8},
-        {.name = "reparam",
-         .kind = CF_OPT_LONG,
-         .dst = &o->reparam,
-         .arg = "K",
-         .help = "reprojection passes onto the fit, each refitted (x y z points)",
-         .lo = 0,
-         .hi = 100},
         {.name = "far",
          .kind = CF_OPT_DOUBLE,
          .dst = &o->far,
@@ -132,60 +124,16 @@ static int parse(int argc, char **argv, fit_args_t *a)
          .kind = CF_OPT_FLAG,
          .dst = &o->drop_far,
          .help = "leave the points beyond --far out of the fit"},
-        {.name = "tol",
-         .kind = CF_OPT_DOUBLE,
-         .dst = &o->tol,
-         .arg = "MM",
-         .help = "deviation tolerance: fit, check, insert knots until --within % of the points "
-                 "are within it (0: one fit)",
-         .lo = 1e-300,
-         .hi = 1e300,
-         .def = "0"},
-        {.name = "within",
-         .kind = CF_OPT_DOUBLE,
-         .dst = &o->within,
-         .arg = "PCT",
-         .help = "share of the points that must be within --tol",
-         .lo = 1e-9,
-         .hi = 100,
-         .given = &a->loop_opt},
-        {.name = "max-cp",
-         .kind = CF_OPT_LONG,
-         .dst = &o->max_cp,
-         .arg = "N",
-         .help = "control points the loop may reach at most",
-         .lo = 4,
-         .hi = NF_MAX_CP,
-         .given = &a->loop_opt},
-        {.name = "max-rounds",
-         .kind = CF_OPT_LONG,
-         .dst = &o->max_rounds,
-         .arg = "N",
-         .help = "rounds of the loop at most",
-         .lo = 1,
-         .hi = CF_FITJOB_MAX_ROUNDS,
-         .given = &a->loop_opt},
-        {.name = "refine",
-         .kind = CF_OPT_CHOICE,
-         .dst = &a->refine,
-         .arg = "HOW",
-         .help = "where the loop inserts knots",
-         .choices = refines,
-         .given = &a->loop_opt},
-        {.name = "robust",
-         .kind = CF_OPT_FLAG,
-         .dst = &o->robust,
-         .help = "Tukey-reweighted passes against outliers (scale from the MAD)"},
-        {.name = "robust-iters",
-         .kind = CF_OPT_LONG,
-         .dst = &o->robust_iters,
-         .arg = "N",
-         .help = "robust passes (implies --robust)",
-         .lo = 1,
-         .hi = 100,
-         .given = &a->robust_iters_given},
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &a->json, .help = "print the summary as JSON"},
         {0}};
+    /* The job's shared options after own's first ten rows (--base to
+     * --max-iter), then --far, --drop-far, --json. */
+    cf_opt_t opts[CF_OPT_MAX];
+    int n = 10, m = (int)(sizeof own / sizeof own[0]);
+    memcpy(opts, own, sizeof(cf_opt_t) * (size_t)n);
+    n += cmd_fitopts_table(opts + n, o, &a->fo,
+                           "reprojection passes onto the fit, each refitted (x y z points)");
+    memcpy(opts + n, own + 10, sizeof(cf_opt_t) * (size_t)(m - 10));
     const cf_cmd_t cmd = {.prog = "cellfit",
                           .name = "fit",
                           .summary = "fit the base surface's net to points (Eq. 7), optionally "
@@ -194,17 +142,13 @@ static int parse(int argc, char **argv, fit_args_t *a)
     int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
     if (rc)
         return rc;
-    o->refine = (cf_refine_t)a->refine;
-    o->robust |= a->robust_iters_given;
-    o->loop = o->tol > 0;
+    if ((rc = cmd_fitopts_check("fit", o, &a->fo)))
+        return rc;
     if (a->uv && (o->far > 0 || o->drop_far))
         return cli_error("fit", CLI_USAGE,
                          "--far and --drop-far apply to projected points: not with --uv");
     if (a->uv && o->reparam)
         return cli_error("fit", CLI_USAGE, "--reparam projects x y z points: not with --uv");
-    if (a->loop_opt && !o->loop)
-        return cli_error("fit", CLI_USAGE,
-                         "--within, --max-cp, --max-rounds and --refine need --tol T");
     return CLI_OK;
 }
 
@@ -236,21 +180,7 @@ static void print_json(const fit_args_t *a, const cf_fitjob_result_t *r, double 
     cf_json_num(&j, "rms", r->rms);
     cf_json_num(&j, "max_abs", r->max_abs);
     cf_json_str(&j, "fit_status", cf_fitjob_status_name(r->status));
-    if (o->loop) {
-        cf_json_num(&j, "tol", o->tol);
-        cf_json_num(&j, "within", o->within);
-        cf_json_num(&j, "within_tol_pct", r->within_pct);
-        cf_json_bool(&j, "tol_met", r->status == CF_FITJOB_MET);
-        cf_json_str(&j, "refine", o->refine == CF_REFINE_UNIFORM ? "uniform" : "residual");
-        if (r->status != CF_FITJOB_MET)
-            cf_json_str(&j, "stopped", r->why);
-        cf_rounds_json(&j, r->rounds, r->nrounds, o->robust);
-    }
-    if (o->robust) {
-        cf_json_int(&j, "robust_iters", o->robust_iters);
-        cf_json_num(&j, "robust_sigma", r->rounds[r->nrounds - 1].sigma);
-        cf_json_int(&j, "outliers", r->rounds[r->nrounds - 1].rejected);
-    }
+    cmd_fitopts_json(&j, o, r);
     cf_json_arr(&j, "warnings");
     for (int i = 0; i < r->nwarn; i++)
         cf_json_str(&j, NULL, r->warn[i]);
@@ -343,11 +273,7 @@ int cmd_fit(int argc, char **argv)
         print_text(&a, &r, t3 - t0, t3 - t2);
     /* The best surface is written either way; a tolerance not met is a
      * failure of the work (exit 1), said in one line. */
-    if (a.o.loop && r.status != CF_FITJOB_MET)
-        ec = cli_error("fit", CLI_FAIL,
-                       "tolerance %g mm not met: %.3f %% of the points within, need %g %%; "
-                       "stopped: %s; wrote the best fit (%d x %d) to %s",
-                       a.o.tol, r.within_pct, a.o.within, r.why, r.surf.nu, r.surf.nv, a.out);
+    ec = cmd_fitopts_verdict("fit", &a.o, &r, a.out);
 done:
     cf_fitjob_result_free(&r);
     return ec;

@@ -16,6 +16,7 @@
 #include "cf_surfio.h"
 #include "cf_version.h"
 #include "cmd.h"
+#include "cmd_fitopts.h"
 #include "jnl.h"
 #include "nf_err.h"
 #include "rig_err.h"
@@ -283,7 +284,7 @@ static int do_fit(int argc, char **argv)
     int json = 0, force = 0;
     cf_fitjob_opts_t fo;
     cf_fitjob_defaults(&fo);
-    const cf_opt_t opts[] = {
+    const cf_opt_t own[] = {
         {.name = "nominal",
          .kind = CF_OPT_STR,
          .dst = &nominal,
@@ -296,13 +297,6 @@ static int do_fit(int argc, char **argv)
          .arg = "OUT.igs",
          .help = "the fitted surface",
          .req = 1},
-        {.name = "reparam",
-         .kind = CF_OPT_LONG,
-         .dst = &fo.reparam,
-         .arg = "K",
-         .help = "reprojection passes onto the fit, each refitted",
-         .lo = 0,
-         .hi = 100},
         {.name = "alpha",
          .kind = CF_OPT_DOUBLE,
          .dst = &fo.alpha,
@@ -330,6 +324,13 @@ static int do_fit(int argc, char **argv)
          .help = "fit even when the journal names another nominal"},
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &json, .help = "print the summary as JSON"},
         {0}};
+    /* own, then the fit job's shared options (as `cellfit fit`). */
+    cf_opt_t opts[CF_OPT_MAX];
+    cmd_fitopts_t fa;
+    int m = (int)(sizeof own / sizeof own[0]) - 1;
+    memcpy(opts, own, sizeof(cf_opt_t) * (size_t)m);
+    m += cmd_fitopts_table(opts + m, &fo, &fa, "reprojection passes onto the fit, each refitted");
+    opts[m] = (cf_opt_t){0};
     const cf_cmd_t cmd = {.prog = "cellfit",
                           .name = "journal fit",
                           .args = "JOURNAL",
@@ -340,6 +341,8 @@ static int do_fit(int argc, char **argv)
     int rc = cf_opt_parse(&cmd, argc, argv, pos, NULL);
     if (rc)
         return cf_opt_exit(rc);
+    if ((rc = cmd_fitopts_check(CMD, &fo, &fa)))
+        return rc;
     const char *path = pos[0];
     double t0 = cli_now();
     char msg[1024], name[JNL_NAME_LEN];
@@ -402,11 +405,14 @@ static int do_fit(int argc, char **argv)
         cf_json_num(&o, "nominal_max_abs", r.nominal_max);
         cf_json_int(&o, "reparam", fo.reparam);
         cf_json_str(&o, "fit_status", cf_fitjob_status_name(r.status));
+        cmd_fitopts_json(&o, &fo, &r);
         cf_json_num(&o, "seconds", cli_now() - t0);
         cf_json_int(&o, "bytes", r.bytes);
         cf_json_str(&o, "out", out);
         cf_json_end(&o);
     } else {
+        for (int i = 0; fo.loop && i < r.nrounds; i++)
+            cf_round_print(stdout, i, &r.rounds[i], fo.tol, fo.robust);
         printf("cellfit journal fit: %ld points of %s (%llu without a surface), %d x %d control "
                "points\n",
                r.points, path, (unsigned long long)j.in.flagged, r.surf.nu, r.surf.nv);
@@ -415,8 +421,13 @@ static int do_fit(int argc, char **argv)
         printf("  solver %s, %d iterations, relative residual %.2e; %.3f s\n",
                nf_solver_name(r.solve.solver), r.solve.iterations, r.solve.rel_residual,
                cli_now() - t0);
+        if (fo.loop)
+            printf("  tolerance %g mm: %.3f %% of the points within (need %g %%): %s\n", fo.tol,
+                   r.within_pct, fo.within, r.status == CF_FITJOB_MET ? "met" : "NOT met");
         printf("  wrote %s\n", out);
     }
+    /* The best surface is written either way, as `cellfit fit`. */
+    ec = cmd_fitopts_verdict(CMD, &fo, &r, out);
 out:
     cf_fitjob_result_free(&r);
     cf_store_file_close(&j.f);

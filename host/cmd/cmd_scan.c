@@ -17,6 +17,7 @@
 #include "cf_surfio.h"
 #include "cf_version.h"
 #include "cmd.h"
+#include "cmd_fitopts.h"
 #include "hal_rig.h"
 #include "nf_err.h"
 #include "rig_err.h"
@@ -68,6 +69,8 @@ typedef struct scan_opts {
     double step, region[4], alpha, beta, z0, cal[3];
     int have_region, json, home;
     long entity, sync_every, job_id;
+    cf_fitjob_opts_t fo; /* --fit: the job's loop, robust passes, reprojection */
+    cmd_fitopts_t fa;
 } scan_opts_t;
 
 /* "a:b:c..." into n doubles. */
@@ -109,7 +112,8 @@ static int parse(int argc, char **argv, scan_opts_t *o)
     o->z0 = 50.0; /* cellsim's default beam height */
     o->sync_every = JNL_SYNC_EVERY_DEFAULT;
     o->job_id = (long)time(NULL);
-    const cf_opt_t opts[] = {
+    cf_fitjob_defaults(&o->fo);
+    const cf_opt_t own[] = {
         {.name = "stage",
          .kind = CF_OPT_STR,
          .dst = &o->stage,
@@ -214,12 +218,25 @@ static int parse(int argc, char **argv, scan_opts_t *o)
         {.name = "home", .kind = CF_OPT_FLAG, .dst = &o->home, .help = "home the stage first"},
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "print the summary as JSON"},
         {0}};
+    /* own, then the fit job's shared options (as `cellfit fit`), with --fit. */
+    cf_opt_t opts[CF_OPT_MAX];
+    int m = (int)(sizeof own / sizeof own[0]) - 1;
+    memcpy(opts, own, sizeof(cf_opt_t) * (size_t)m);
+    m += cmd_fitopts_table(opts + m, &o->fo, &o->fa,
+                           "--fit: reprojection passes onto the fit, each refitted");
+    opts[m] = (cf_opt_t){0};
     const cf_cmd_t cmd = {.prog = "cellfit",
                           .name = "scan",
                           .summary = "measure a part on the rig into a journal, optionally "
                                      "fitting the points as they arrive",
                           .opts = opts};
-    return cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    int rc = cf_opt_parse(&cmd, argc, argv, NULL, NULL);
+    if (rc)
+        return rc;
+    if (!o->fit && cmd_fitopts_given(&o->fa))
+        return cli_error(CMD, CLI_USAGE,
+                         "--tol, --reparam, --robust and the loop's options apply to --fit");
+    return cmd_fitopts_check(CMD, &o->fo, &o->fa);
 }
 
 /* The nominal's extent in x y, from a 65 x 65 sampling of the surface. */
@@ -347,6 +364,8 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
         cf_json_num(&js, "nominal_rms", fr->nominal_rms);
         cf_json_num(&js, "nominal_max_abs", fr->nominal_max);
         cf_json_str(&js, "fit_status", cf_fitjob_status_name(fr->status));
+        cf_json_int(&js, "reparam", o->fo.reparam);
+        cmd_fitopts_json(&js, &o->fo, fr);
     }
     cf_json_num(&js, "seconds", secs);
     cf_json_end(&js);
@@ -387,11 +406,9 @@ int cmd_scan(int argc, char **argv)
     cf_fitjob_result_t fr;
     memset(&fr, 0, sizeof fr);
     if (o.fit) {
-        cf_fitjob_opts_t fo;
-        cf_fitjob_defaults(&fo);
-        fo.alpha = o.alpha;
-        fo.beta = o.beta;
-        if ((ec = cf_fitjob_open(&fj, &nom, &fo, msg, sizeof msg)) != 0) {
+        o.fo.alpha = o.alpha;
+        o.fo.beta = o.beta;
+        if ((ec = cf_fitjob_open(&fj, &nom, &o.fo, msg, sizeof msg)) != 0) {
             cf_surf_free(&nom);
             return cli_error(CMD, ec == CF_ENOMEM ? CLI_FAIL : CLI_USAGE, "%s", msg);
         }
@@ -505,7 +522,15 @@ int cmd_scan(int argc, char **argv)
         if (fitted)
             printf("  fit: rms %.6g  max %.6g (vs nominal rms %.6g); wrote %s\n", fr.rms,
                    fr.max_abs, fr.nominal_rms, o.fit);
+        if (fitted && o.fo.loop)
+            printf("  tolerance %g mm: %.3f %% of the points within (need %g %%): %s, %d x %d "
+                   "control points after %d rounds\n",
+                   o.fo.tol, fr.within_pct, o.fo.within,
+                   fr.status == CF_FITJOB_MET ? "met" : "NOT met", fr.surf.nu, fr.surf.nv,
+                   fr.nrounds);
     }
+    if (fitted && !ec) /* a tolerance not met fails the work, as `cellfit fit` */
+        ec = cmd_fitopts_verdict(CMD, &o.fo, &fr, o.fit);
 out_dev:
     rig_close(devs);
     cf_store_file_close(&f);

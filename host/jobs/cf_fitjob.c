@@ -4,6 +4,7 @@
 #include "cf_fitjob.h"
 #include "cf_cli.h"
 #include "cf_err.h"
+#include "cf_fitpass.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "nf_err.h"
@@ -44,6 +45,8 @@ void cf_fitjob_defaults(cf_fitjob_opts_t *o)
     o->solver = NF_SOLVER_AUTO;
     o->solve_tol = 1e-12;
     o->max_iter = 20000;
+    o->probe = 1;
+    o->threads = 1;
     o->within = 100.0;
     o->max_cp = NF_MAX_CP;
     o->max_rounds = 12;
@@ -137,7 +140,8 @@ int cf_fitjob_open(cf_fitjob_t **jp, const nf_surf_t *nominal, const cf_fitjob_o
     if (nu < nominal->nu || nv < nominal->nv)
         return cf_fail(msg, ml, CF_EARG, "net %d x %d is smaller than the nominal's %d x %d", nu,
                        nv, nominal->nu, nominal->nv);
-    long need = nf_fit_bytes(nu, nv, nominal->p, nominal->q, o->solver);
+    nf_surf_t net = {.p = nominal->p, .q = nominal->q, .nu = nu, .nv = nv};
+    long need = cf_fitpass_bytes(&net, o->solver, o->threads);
     if ((double)nu * nv > (double)NF_MAX_CP || need < 0 || need > NF_ARENA_BYTES) {
         nf_solver_t used = o->solver == NF_SOLVER_AUTO
                                ? nf_solver_pick(nu, nv, nominal->p, nominal->q)
@@ -198,13 +202,14 @@ static int buffers(cf_fitjob_t *j, long n)
         return 0;
     free(j->buf), free(j->rows), free(j->src);
     j->buf = malloc(sizeof(double) * 5 * (size_t)n);
-    j->rows = malloc(sizeof(double) * 5 * (size_t)n);
+    size_t cols = j->o.robust ? 6 : 5; /* u v x y z, and w for robust passes */
+    j->rows = malloc(sizeof(double) * cols * (size_t)n);
     j->src = malloc(sizeof(long) * (size_t)n);
     j->cap = j->buf && j->rows && j->src ? n : 0;
     if (!j->cap)
         return CF_ENOMEM;
     touch(j->buf, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
-    touch(j->rows, sizeof(double) * 5 * (size_t)n);
+    touch(j->rows, sizeof(double) * cols * (size_t)n);
     touch(j->src, sizeof(long) * (size_t)n);
     return 0;
 }
@@ -216,18 +221,15 @@ typedef struct weigh {
     const nf_surf_t *prev;
 } weigh_t;
 
-/* One pass: a fresh fitter on cur's space (P0 = cur's net), parameters
- * given or by projection onto proj. */
+/* One pass: a fresh fitter on cur's space (P0 = cur's net, cf_fitpass in
+ * the job's arena), parameters given or by projection onto proj. */
 typedef struct pass {
-    nf_arena_t ar;
-    nf_fit_t f;
+    cf_fitpass_t fp;
     cf_seedgrid_t pj;
-    const nf_surf_t *cur, *proj;
+    const nf_surf_t *proj;
     const weigh_t *wt;
-    long points, rejected, clamped, nfar, dropped;
+    long points, clamped, nfar, dropped;
     double ss0, mx0; /* |distance| to proj of the points projected */
-    nf_solve_stats_t st;
-    double t0, t_acc, t_solve;
 } pass_t;
 
 /* Distance of row q (u v x y z) to s at its parameters. */
@@ -239,99 +241,62 @@ static double dist_at(const nf_surf_t *s, const double *q)
                 (q[4] - P[2]) * (q[4] - P[2]));
 }
 
-/* Eq. 7's refusals in words: the control point left free, the bytes. */
-static int fit_error(int rc, const nf_fit_t *f, const nf_surf_t *s, const char *name, char *msg,
-                     size_t ml)
-{
-    long b = f->bad_index;
-    int i = b >= 0 ? (int)(b % s->nu) : -1, k = b >= 0 ? (int)(b / s->nu) : -1;
-    switch (rc) {
-    case NF_ENODATA:
-        return cf_fail(msg, ml, rc,
-                       "%s: control point (%d, %d) has no data under it and alpha = beta = 0: "
-                       "the points do not determine the surface (measure there, or give --beta)",
-                       name, i, k);
-    case NF_ESINGULAR:
-        return cf_fail(msg, ml, rc,
-                       "%s: the points do not determine the surface: control point (%d, %d) is "
-                       "left free (numerically rank-deficient normal equations; give "
-                       "--alpha/--beta > 0 or more data there)",
-                       name, i, k);
-    case NF_ENOCONV:
-        return cf_fail(msg, ml, rc, "%s; try --solver chol or more --max-iter", nf_strerror(rc));
-    case NF_EBUDGET:
-        return cf_fail(msg, ml, rc,
-                       "job needs %ld bytes, board %s allows %ld: %s (use fewer control "
-                       "points or another solver)",
-                       f->need_bytes, BOARD_NAME, (long)NF_ARENA_BYTES, nf_strerror(rc));
-    default: return cf_fail(msg, ml, rc, "%s: %s", name, nf_strerror(rc));
-    }
-}
-
 static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf_surf_t *proj,
                       const weigh_t *wt, const char *name, char *msg, size_t ml)
 {
     memset(ps, 0, sizeof *ps);
-    ps->cur = cur;
     ps->proj = proj;
     ps->wt = wt;
-    ps->t0 = cli_now();
-    nf_arena_init(&ps->ar, j->mem, (size_t)j->need);
-    nf_fit_params_t prm = {j->o.alpha, j->o.beta, j->o.solver};
-    int rc = nf_fit_init(&ps->f, cur, &prm, &ps->ar);
+    int rc = cf_fitpass_begin(&ps->fp, j->mem, (size_t)j->need, cur, j->o.alpha, j->o.beta,
+                              j->o.solver, j->o.threads, name, msg, ml);
     if (rc)
-        return fit_error(rc, &ps->f, cur, name, msg, ml);
+        return rc;
     if (proj && cf_seedgrid_init(&ps->pj, proj, SEEDS))
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     return 0;
 }
 
 /* n rows (x y z, or u v x y z without proj) into the fit: projected (far
- * points counted, dropped with drop_far), weighted (robust), added. On an
- * error *bad is the batch index of the row that failed. */
+ * points counted, dropped with drop_far), weighted (robust: a sixth
+ * column), added. On an error *bad is the batch index of the row that
+ * failed. */
 static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long *bad)
 {
     const double *uv = in;
     long m = n;
-    if (ps->proj) {
+    int cols = ps->wt ? 6 : 5;
+    if (ps->proj || ps->wt) {
         m = 0;
         for (long k = 0; k < n; k++) {
-            const double *Q = in + 3 * k;
-            nf_proj_t pr;
-            cf_seedgrid_project(&ps->pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
-            double d = fabs(pr.dist);
-            ps->clamped += pr.clamped != 0;
-            ps->ss0 += d * d;
-            ps->mx0 = d > ps->mx0 ? d : ps->mx0;
-            if (d > j->o.far) {
-                ps->nfar++;
-                if (j->o.drop_far) {
-                    ps->dropped++;
-                    continue;
+            double *r = j->rows + cols * m;
+            if (ps->proj) {
+                const double *Q = in + 3 * k;
+                nf_proj_t pr;
+                cf_seedgrid_project(&ps->pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+                double d = fabs(pr.dist);
+                ps->clamped += pr.clamped != 0;
+                ps->ss0 += d * d;
+                ps->mx0 = d > ps->mx0 ? d : ps->mx0;
+                if (d > j->o.far) {
+                    ps->nfar++;
+                    if (j->o.drop_far) {
+                        ps->dropped++;
+                        continue;
+                    }
                 }
-            }
-            j->src[m] = k;
-            double *r = j->rows + 5 * m++;
-            r[0] = pr.u, r[1] = pr.v, r[2] = Q[0], r[3] = Q[1], r[4] = Q[2];
+                r[0] = pr.u, r[1] = pr.v, r[2] = Q[0], r[3] = Q[1], r[4] = Q[2];
+            } else
+                memcpy(r, in + 5 * k, sizeof(double) * 5);
+            if (ps->wt)
+                r[5] = nf_tukey(dist_at(ps->wt->prev, r), ps->wt->c);
+            j->src[m++] = k;
         }
         uv = j->rows;
     }
-    int rc = 0;
     long b = -1;
-    if (!ps->wt)
-        rc = nf_fit_add_rows(&ps->f, uv, m, &b);
-    else
-        for (long k = 0; k < m && !rc; k++) {
-            const double *q = uv + 5 * k;
-            double w = nf_tukey(dist_at(ps->wt->prev, q), ps->wt->c);
-            if (w > 0)
-                rc = nf_fit_add(&ps->f, q[0], q[1], q + 2, w);
-            else
-                ps->rejected++;
-            b = k;
-        }
+    int rc = cf_fitpass_rows(&ps->fp, uv, m, cols, &b);
     if (rc)
-        *bad = ps->proj && b >= 0 ? j->src[b] : b;
+        *bad = uv != in && b >= 0 ? j->src[b] : b;
     ps->points += n;
     return rc;
 }
@@ -339,17 +304,8 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
 static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *name, char *msg,
                       size_t ml)
 {
-    double t1 = cli_now();
-    int rc = nf_fit_finish(&ps->f);
-    nf_solve_opts_t so = {j->o.solve_tol, (int)j->o.max_iter, 1};
-    if (!rc)
-        rc = nf_fit_solve(&ps->f, j->o.solver, &so, &ps->st);
-    if (rc)
-        return fit_error(rc, &ps->f, ps->cur, name, msg, ml);
-    memcpy(out->cp, ps->f.P, sizeof(double) * (size_t)(3 * ps->f.n));
-    ps->t_acc = t1 - ps->t0;
-    ps->t_solve = cli_now() - t1;
-    return 0;
+    nf_solve_opts_t so = {j->o.solve_tol, (int)j->o.max_iter, j->o.probe};
+    return cf_fitpass_solve(&ps->fp, &so, out, name, msg, ml);
 }
 
 static void pass_free(pass_t *ps)
@@ -432,15 +388,9 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
         if (rc) {
             char at[4200];
             s->where(s->ctx, before + bad, at, sizeof at);
-            if (rc == NF_EDOMAIN && !ps->proj) {
-                const double *q = j->buf + 5 * bad;
-                double u0, u1, v0, v1;
-                nf_surf_domain(cur, &u0, &u1, &v0, &v1);
-                cf_fail(r->msg, r->ml, rc,
-                        "%s: parameters (%.17g, %.17g) outside the knot domain "
-                        "[%.17g, %.17g] x [%.17g, %.17g] of the base",
-                        at, q[0], q[1], u0, u1, v0, v1);
-            } else
+            if (!ps->proj)
+                cf_fitpass_row_error(&ps->fp, rc, j->buf + 5 * bad, at, r->msg, r->ml);
+            else
                 cf_fail(r->msg, r->ml, rc, "%s: %s", at, nf_strerror(rc));
             break;
         }
@@ -583,7 +533,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     int npass = (int)(o->reparam + 1 + (o->robust ? 2 * o->robust_iters : 0) + 1), ip = 0;
     /* Round k fits in the space of cur with P0 = cur's net: the base
      * first, then the previous fit refined (Section 2.2). */
-    j->need = nf_fit_bytes(S->cur.nu, S->cur.nv, S->cur.p, S->cur.q, o->solver);
+    j->need = cf_fitpass_bytes(&S->cur, o->solver, o->threads);
     if (!(k == 0 && j->live)) {
         free(j->mem);
         j->mem = malloc((size_t)j->need);
@@ -615,8 +565,10 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             out->nominal_rms = po->points ? sqrt(po->ss0 / (double)po->points) : 0.0;
             out->nominal_max = po->mx0;
         }
-        out->t_acc += po->t_acc;
-        out->t_solve += po->t_solve;
+        out->t_acc += po->fp.t_acc;
+        out->t_solve += po->fp.t_solve;
+        out->t_rows += po->fp.t_rows;
+        out->t_merge += po->fp.t_merge;
         memcpy(S->prev.cp, S->fit.cp, sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
     }
     /* Robust passes: the MAD of the residuals to the last fit sets the
@@ -634,9 +586,11 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         set_pass(r, lo, hi, ip++, npass);
         if ((rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, &wt, &S->fit, po)))
             return rc;
-        *rejected = po->rejected;
-        out->t_acc += po->t_acc;
-        out->t_solve += po->t_solve;
+        *rejected = po->fp.rejected;
+        out->t_acc += po->fp.t_acc;
+        out->t_solve += po->fp.t_solve;
+        out->t_rows += po->fp.t_rows;
+        out->t_merge += po->fp.t_merge;
         memcpy(S->prev.cp, S->fit.cp, sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
     }
     /* The check: distances of all points to this fit, and where they are
@@ -715,7 +669,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->max_abs = rd->mx;
             out->sigma = rd->sigma;
             out->outliers = rd->rejected;
-            out->solve = po.st;
+            out->solve = po.fp.st;
+            out->store_bytes = cf_fitpass_store_bytes(&po.fp);
             out->bytes = j->need;
             if (S.st) {
                 cf_stats_t *t = best_st;

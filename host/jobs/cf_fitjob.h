@@ -48,6 +48,9 @@ typedef struct cf_fitjob_opts {
     nf_solver_t solver;
     double solve_tol; /* relative residual of the iterative solvers */
     long max_iter;
+    int probe;        /* 1: the iterative solvers check that the data determine the net */
+    int threads;      /* accumulating cores: 1, or 2 (a second accumulator, cf_accum; its
+                       * bytes checked at open and per pass, not by the loop's max_cp) */
     int net_u, net_v; /* 0: the base's net; else the base refined to it first */
     long reparam;     /* reprojection passes per round (Section 2.2) */
     double far;       /* projected points farther than this are counted (mm; 0: 5 % of the net) */
@@ -63,8 +66,9 @@ typedef struct cf_fitjob_opts {
 } cf_fitjob_opts_t;
 
 /* The shell's defaults: alpha, beta of the paper, solver auto, 1e-12 and
- * 20000 iterations, within 100 %, max_cp the board's, 12 rounds, residual
- * refinement, 3 robust passes; everything else off. */
+ * 20000 iterations with the probe, one core, within 100 %, max_cp the
+ * board's, 12 rounds, residual refinement, 3 robust passes; everything
+ * else off. */
 void cf_fitjob_defaults(cf_fitjob_opts_t *o);
 
 typedef struct cf_fitjob_result {
@@ -84,7 +88,9 @@ typedef struct cf_fitjob_result {
     cf_round_t rounds[CF_FITJOB_MAX_ROUNDS];
     int nrounds;
     double seconds, t_acc, t_solve;
-    cf_stats_t *stats; /* heap, with opts.stats: deviations to the best fit */
+    double t_rows, t_merge; /* of t_acc: inside the fitter's accumulation; the cores' merge */
+    long store_bytes;       /* the stripes of Eq. 7's matrix, best round */
+    cf_stats_t *stats;      /* heap, with opts.stats: deviations to the best fit */
     int nwarn;
     char warn[CF_FITJOB_MAX_WARN][160];
 } cf_fitjob_result_t;

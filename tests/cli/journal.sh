@@ -105,6 +105,41 @@ le "$d" 1e-9 && ok "journal fit --reparam 1 = cellfit fit --reparam 1 (max diff 
 cmp -s "$T/e-jf1" "$T/e-jf" && no "--reparam 1 changed nothing" || ok "--reparam 1 is a different fit from pass 0"
 r=$(json "$T/jf.json" rms)
 le "$r" 0.006 && ok "residual rms $r from the second pass over the journal (noise 0.005)" || no "rms $r"
+# To a tolerance, with `cellfit fit`'s options: noise 0.005 mm along z, so
+# 0.02 mm (4 sigma) holds for 99 % of the points on the first round;
+# 0.01 mm (2 sigma) cannot hold for 99 % (a Gaussian keeps 95.4 % within
+# 2 sigma, and knots do not remove noise): two rounds, the second on the
+# uniform refinement of the 40 x 30 cubic net (every span halved: 40 + 37
+# by 30 + 27), the best round written and reported, exit 1 as `cellfit fit`.
+expect 0 "journal fit --tol 0.02 --within 99" "$CF" journal fit "$T/p.jnl" --nominal "$T/part/nominal.igs" \
+    --tol 0.02 --within 99 --json --out "$T/jt.igs"
+[ "$(json "$T/out" fit_status)" = met ] && grep -q '"tol_met": true' "$T/out" &&
+    [ "$(grep -o '"round": ' "$T/out" | wc -l)" -eq 1 ] && ok "tol 0.02: fit_status met in one round" ||
+    no "tol 0.02: $(cat "$T/out")"
+awk -v p="$(json "$T/out" within_tol_pct)" 'BEGIN { exit !(p >= 99 && p <= 100) }' &&
+    ok "tol 0.02: $(json "$T/out" within_tol_pct) % within" || no "tol 0.02: within $(json "$T/out" within_tol_pct)"
+expect 1 "journal fit --tol 0.01 --within 99 --max-rounds 2 --refine uniform: not met, exit 1" "$CF" journal fit "$T/p.jnl" \
+    --nominal "$T/part/nominal.igs" --tol 0.01 --within 99 --max-rounds 2 --refine uniform --json --out "$T/jt2.igs"
+cp "$T/out" "$T/jt2.json"
+grep -q "tolerance 0.01 mm not met" "$T/err" && one_line && [ -s "$T/jt2.igs" ] &&
+    ok "says the tolerance was not met in one line, the best fit written" || no "not met: $(cat "$T/err")"
+[ "$(json "$T/jt2.json" fit_status)" = not_met_no_progress ] && grep -q '"tol_met": false' "$T/jt2.json" &&
+    grep -q '"stopped": "after 2 rounds' "$T/jt2.json" && ok "tol 0.01: fit_status not_met_no_progress after 2 rounds" ||
+    no "tol 0.01: $(cat "$T/jt2.json")"
+grep -q '"round": 0, "nu": 40, "nv": 30, ' "$T/jt2.json" && grep -q '"round": 1, "nu": 77, "nv": 57, ' "$T/jt2.json" &&
+    [ "$(grep -o '"round": ' "$T/jt2.json" | wc -l)" -eq 2 ] && ok "tol 0.01: rounds 40 x 30, then 77 x 57" ||
+    no "tol 0.01 rounds: $(cat "$T/jt2.json")"
+awk -v p="$(sed 's/.*"round": 0,[^}]*"within_tol_pct": \([0-9.e+-]*\).*/\1/' "$T/jt2.json")" \
+    'BEGIN { exit !(p > 94.5 && p < 99) }' && ok "tol 0.01: round 0 keeps about 95.4 % within 2 sigma" ||
+    no "tol 0.01: round 0 within $(cat "$T/jt2.json")"
+"$CF" fit --base "$T/part/nominal.igs" --points "$T/part/p.xyz" --tol 0.01 --within 99 --max-rounds 2 \
+    --refine uniform --json --out "$T/ft2.igs" >"$T/ft2.json" 2>/dev/null
+[ "$(sed 's/.*"rounds": \(\[[^]]*\]\).*/\1/; s/"seconds": [0-9.e+-]*//g' "$T/ft2.json")" = \
+    "$(sed 's/.*"rounds": \(\[[^]]*\]\).*/\1/; s/"seconds": [0-9.e+-]*//g' "$T/jt2.json")" ] &&
+    ok "journal fit rounds = cellfit fit rounds of the same points" || no "rounds differ from cellfit fit"
+expect 2 "journal fit --within without --tol: exit 2" "$CF" journal fit "$T/p.jnl" --nominal "$T/part/nominal.igs" \
+    --within 99 --out "$T/x.igs"
+grep -q -- "need --tol" "$T/err" && one_line && ok "says --within needs --tol" || no "--within message: $(cat "$T/err")"
 "$CF" gen --dir "$T/other" --nu 8 --nv 8 --count 100 >/dev/null
 for sub in export info recover fit; do
     expect 0 "journal $sub --help: exit 0" "$CF" journal $sub --help
@@ -116,6 +151,8 @@ grep -q "measured against 'nominal.igs'" "$T/err" && one_line && ok "says which 
 
 # cellfit scan: usage errors; without device drivers in the build it says so.
 expect 2 "scan without --journal: exit 2" "$CF" scan --stage a --probe b --nominal "$T/part/nominal.igs"
+expect 2 "scan --tol without --fit: exit 2" "$CF" scan --stage a --probe b --nominal "$T/part/nominal.igs" --journal "$T/s.jnl" --tol 0.1
+grep -q -- "apply to --fit" "$T/err" && one_line && ok "says --tol applies to --fit" || no "scan --tol message: $(cat "$T/err")"
 expect 2 "scan --step 0: exit 2" "$CF" scan --stage a --probe b --nominal "$T/part/nominal.igs" --journal "$T/s.jnl" --step 0
 expect 2 "scan --region bad: exit 2" "$CF" scan --stage a --probe b --nominal "$T/part/nominal.igs" --journal "$T/s.jnl" --region 1:0:0:1
 expect 2 "scan onto an existing journal: exit 2" "$CF" scan --stage a --probe b --nominal "$T/part/nominal.igs" --journal "$T/a.jnl"
