@@ -41,10 +41,10 @@ typedef struct fit_args {
 
 static int parse(int argc, char **argv, fit_args_t *a)
 {
-    static const char *const refines[] = {"uniform", "residual", NULL};
+    static const char *const refines[] = {"uniform", "residual", "auto", NULL};
     memset(a, 0, sizeof *a);
     cf_fitjob_defaults(&a->o);
-    a->refine = CF_REFINE_RESIDUAL;
+    a->refine = CF_REFINE_AUTO;
     cf_fitjob_opts_t *o = &a->o;
     const cf_opt_t opts[] = {
         {.name = "base",
@@ -169,9 +169,35 @@ static int parse(int argc, char **argv, fit_args_t *a)
          .kind = CF_OPT_CHOICE,
          .dst = &a->refine,
          .arg = "HOW",
-         .help = "where the loop inserts knots",
+         .help = "where the loop inserts knots: auto (knot lines per control point where data "
+                 "lie on both sides, at most half the points), residual or uniform",
          .choices = refines,
          .given = &a->loop_opt},
+        {.name = "min-gain",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->min_gain,
+         .arg = "PTS",
+         .help = "--refine auto: stop (not_met_no_progress) after two rounds in a row gaining "
+                 "less than this many points of the percentage within",
+         .lo = 0,
+         .hi = 100,
+         .given = &a->loop_opt},
+        {.name = "holdout",
+         .kind = CF_OPT_LONG,
+         .dst = &o->holdout,
+         .arg = "K",
+         .help = "leave every K-th scan row (a run of points of equal y, or v with --uv) out of "
+                 "the fit and report their distances to it",
+         .lo = 2,
+         .hi = 1000000},
+        {.name = "noise",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->noise,
+         .arg = "MM",
+         .help = "the probe's noise: a floor under the robust scale (with --tol at least a "
+                 "quarter of it)",
+         .lo = 0,
+         .hi = 1e300},
         {.name = "robust",
          .kind = CF_OPT_FLAG,
          .dst = &o->robust,
@@ -241,13 +267,30 @@ static void print_json(const fit_args_t *a, const cf_fitjob_result_t *r, double 
         cf_json_num(&j, "within", o->within);
         cf_json_num(&j, "within_tol_pct", r->within_pct);
         cf_json_bool(&j, "tol_met", r->status == CF_FITJOB_MET);
-        cf_json_str(&j, "refine", o->refine == CF_REFINE_UNIFORM ? "uniform" : "residual");
-        if (r->status != CF_FITJOB_MET)
-            cf_json_str(&j, "stopped", r->why);
+        cf_json_str(&j, "refine", cf_refine_name(o->refine));
+        cf_json_str(&j, "stopped", r->why);
+        if (r->fp_cells > 0) {
+            cf_json_obj(&j, "footprint");
+            cf_json_int(&j, "cells", r->fp_cells);
+            cf_json_int(&j, "filled", r->fp_filled);
+            cf_json_int(&j, "empty", r->fp_empty);
+            cf_json_int(&j, "outline", r->fp_outline);
+            cf_json_close(&j);
+        }
         cf_rounds_json(&j, r->rounds, r->nrounds, o->robust);
+    }
+    if (o->holdout >= 2) {
+        cf_json_obj(&j, "holdout");
+        cf_json_int(&j, "every", o->holdout);
+        cf_json_int(&j, "points", r->ho_points);
+        cf_json_num(&j, "rms", r->ho_rms);
+        cf_json_num(&j, "p99", r->ho_p99);
+        cf_json_num(&j, "max_abs", r->ho_max);
+        cf_json_close(&j);
     }
     if (o->robust) {
         cf_json_int(&j, "robust_iters", o->robust_iters);
+        cf_json_num(&j, "robust_floor", r->robust_floor);
         cf_json_num(&j, "robust_sigma", r->rounds[r->nrounds - 1].sigma);
         cf_json_int(&j, "outliers", r->rounds[r->nrounds - 1].rejected);
     }
@@ -291,8 +334,16 @@ static void print_text(const fit_args_t *a, const cf_fitjob_result_t *r, double 
     printf("  rms %.6g  max %.6g  (%s)\n", r->rms, r->max_abs,
            a->uv ? "|Q - S(u,v)| at the given parameters" : "normal distance to the fit");
     if (o->loop)
-        printf("  tolerance %g mm: %.3f %% of the points within (need %g %%): %s\n", o->tol,
-               r->within_pct, o->within, r->status == CF_FITJOB_MET ? "met" : "NOT met");
+        printf("  tolerance %g mm: %.3f %% of the points within (need %g %%): %s\n"
+               "  stopped (%s): %s\n",
+               o->tol, r->within_pct, o->within, r->status == CF_FITJOB_MET ? "met" : "NOT met",
+               cf_fitjob_status_name(r->status), r->why);
+    if (r->fp_cells > 0)
+        printf("  footprint: %ld of %ld cells with points, %ld without, %ld on its edge\n",
+               r->fp_filled, r->fp_cells, r->fp_empty, r->fp_outline);
+    if (o->holdout >= 2)
+        printf("  held out (every %ld-th row): %ld points, rms %.6g  p99 %.6g  max %.6g\n",
+               o->holdout, r->ho_points, r->ho_rms, r->ho_p99, r->ho_max);
     printf("  %.3f s (read + accumulate %.3f, solve %.3f, summary + write %.3f)\n", secs, r->t_acc,
            r->t_solve, t_out);
     printf("  %ld bytes of fitter memory (board %s allows %ld)\n", r->bytes, BOARD_NAME,
