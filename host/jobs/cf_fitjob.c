@@ -538,8 +538,12 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                     nf_spanres_add_rejected(sr, q[0], q[1], d);
             } else if (sr)
                 nf_spanres_add(sr, q[0], q[1], d);
+            /* A point the robust pass rejected weighs as one at the cut:
+             * spikes, spread alike over the spans, cannot pull the knots,
+             * but a cluster of them (a feature the net cannot follow yet,
+             * so the robust pass rejects it too) still does. */
             if (ck && ck->ks)
-                nf_knotsel_add(ck->ks, q[0], q[1], cut > 0 && d >= cut ? NAN : d);
+                nf_knotsel_add(ck->ks, q[0], q[1], cut > 0 && d >= cut ? cut : d);
             if (ck && ck->fp && !clamped)
                 nf_footprint_add(ck->fp, q[0], q[1]); /* outside the domain: not counted */
             if (st)
@@ -726,8 +730,12 @@ static int auto_verdict(const cf_fitjob_opts_t *o, nf_loopctl_t *lc, const nf_kn
     ko.max_add = nf_loopctl_budget(lc, o->within, fit->nu < fit->nv ? fit->nu : fit->nv);
     *n = 0;
     nf_knotsel_choose(ks, &ko, cand, (fit->nu - fit->p) + (fit->nv - fit->q), n, &kst);
-    /* min_gain 0 means no gain is asked: the least the rules take. */
-    double mg = o->min_gain > 0 ? o->min_gain : 1e-12;
+    /* min_gain 0 means no gain is asked: the least the rules take. Near
+     * the target a round cannot gain more than what is missing: the least
+     * gain is at most a quarter of the gap to the best share so far. */
+    double gap = o->within - (lc->best > 0 ? lc->best : 0.0);
+    double mg = o->min_gain < 0.25 * gap ? o->min_gain : 0.25 * gap;
+    mg = mg > 1e-12 ? mg : 1e-12;
     int v = nf_loopctl_verdict(lc, pct, o->within, mg, k, mr, kst);
     const char *rule = nf_loopctl_str(v);
     switch (v) {
