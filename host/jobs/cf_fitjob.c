@@ -538,12 +538,11 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                     nf_spanres_add_rejected(sr, q[0], q[1], d);
             } else if (sr)
                 nf_spanres_add(sr, q[0], q[1], d);
-            /* A point the robust pass rejected weighs as one at the cut:
-             * spikes, spread alike over the spans, cannot pull the knots,
-             * but a cluster of them (a feature the net cannot follow yet,
-             * so the robust pass rejects it too) still does. */
+            /* A point the robust pass rejected is data, not misfit (NaN):
+             * a spike is not a shape. (nf_spanres_fold's rescue of a
+             * rejected cluster, a feature, has no auto counterpart yet.) */
             if (ck && ck->ks)
-                nf_knotsel_add(ck->ks, q[0], q[1], cut > 0 && d >= cut ? cut : d);
+                nf_knotsel_add(ck->ks, q[0], q[1], cut > 0 && d >= cut ? NAN : d);
             if (ck && ck->fp && !clamped)
                 nf_footprint_add(ck->fp, q[0], q[1]); /* outside the domain: not counted */
             if (st)
