@@ -14,6 +14,20 @@ SAN ?=
 ifeq ($(origin CC),default)
 CC := gcc
 endif
+# Another CPU's Linux (mk/arch.mk): make TARGET=aarch64-linux-gnu builds
+# build/<TARGET>/ with Debian's cross compiler <TARGET>-gcc (CC=... on the
+# command line still wins); pkg-config then reads the :arm64 libraries
+# (ARCH_PKG_LIBDIR, used by mk/arch.mk). One block, ahead of BUILD's uses.
+TARGET ?=
+ifneq ($(TARGET),)
+ifeq ($(origin BUILD),file)
+BUILD := build/$(TARGET)
+endif
+ifneq ($(origin CC),command line)
+CC := $(TARGET)-gcc
+endif
+ARCH_PKG_LIBDIR := /usr/lib/$(TARGET)/pkgconfig:/usr/share/pkgconfig
+endif
 
 include boards/$(BOARD)/board.mk
 

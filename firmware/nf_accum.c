@@ -1,4 +1,6 @@
 /* nf_accum.c: streaming accumulation of R^T R and R^T Q (Eq. 9-11). */
+#include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
+
 #include "nf_accum.h"
 #include <math.h>
 
@@ -26,6 +28,7 @@ typedef double nf_v4u __attribute__((vector_size(32), aligned(8), may_alias));
 #define NF_ACCUM_VECTOR 0
 #endif
 
+#if NF_ISA_COLD
 void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *rhs)
 {
     ac->s = s;
@@ -59,6 +62,7 @@ void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *r
     ac->fast = 0;
 #endif
 }
+#endif
 
 static void rhs_add(nf_accum_t *ac, int l, int k, const double *R, const double *q)
 {
@@ -322,6 +326,7 @@ NF_INLINE void row_add33(nf_accum_t *ac, int l, const double *Nu, const double *
 }
 #endif
 
+#if NF_ISA_COLD
 void nf_accum_rowbuf(nf_accum_t *ac, double *G, double *Gq)
 {
     ac->G = G && Gq ? G : 0;
@@ -340,6 +345,7 @@ void nf_accum_rtab(nf_accum_t *ac, double *tu, double *tv)
     ac->rtu = tu;
     ac->rtv = tv;
 }
+#endif
 
 /* Runs of at most this many rows skip the block: straight to the stripes. */
 #define NF_ACCUM_DIRECT 2

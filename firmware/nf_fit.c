@@ -1,7 +1,9 @@
 /* nf_fit.c: streaming assembly of the generalised normal equations (Eq. 7). */
-#include "nf_fit.h"
+#include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
+
 #include "nf_basis.h"
 #include "nf_err.h"
+#include "nf_fit.h"
 #include "nf_solve.h"
 #include <stdint.h>
 
@@ -27,6 +29,7 @@ static inline int in_box(const nf_fit_t *f, double u, double v)
 /* Points the general path takes after the row kernel stopped short. */
 #define NF_ROW_RETRY 1024
 
+#if NF_ISA_COLD
 /* Lend the raster row buffers and the bins from arena room the solver uses
  * later (idle while points stream in): at most half the job's solver term
  * each for the job and for one shard, so nothing is added to the formula. */
@@ -160,6 +163,7 @@ int nf_fit_shard_init(nf_fit_t *sh, const nf_fit_t *f, nf_arena_t *a)
     take_lent(sh, a); /* from room the job's solver uses later */
     return NF_OK;
 }
+#endif
 
 int nf_fit_shard_merge(nf_fit_t *f, nf_fit_t *sh)
 {
@@ -587,6 +591,7 @@ int nf_fit_finish(nf_fit_t *f)
     return NF_OK;
 }
 
+#if NF_ISA_COLD /* not hot: one copy in the dispatched build (nf_isa_pass.h) */
 int nf_fit_pin(nf_fit_t *f, long i, double beta)
 {
     if (!f->finished || f->shard)
@@ -599,6 +604,7 @@ int nf_fit_pin(nf_fit_t *f, long i, double beta)
         f->rhs[3 * i + c] += beta * P0[3 * i + c];
     return NF_OK;
 }
+#endif
 
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st)
 {

@@ -12,6 +12,8 @@
  * multiply-add and the diagonal factors cost no extra bytes. Bicubic rows
  * whose every neighbour is in range take unrolled 4-wide kernels; the last
  * rows, other degrees and other compilers take the generic loops. */
+#include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
+
 #include "nf_err.h"
 #include "nf_solve.h"
 #include <math.h>

@@ -1,6 +1,9 @@
 /* nf_stripe.c: the stripe store S of A = R^T R (Eq. 9-11) and its products. */
+#include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
+
 #include "nf_stripe.h"
 
+#if NF_ISA_COLD
 void nf_stripe_init(nf_stripe_t *st, int nu, int nv, int p, int q, double *S)
 {
     st->n = (long)nu * nv;
@@ -32,6 +35,7 @@ double nf_stripe_get(const nf_stripe_t *st, long i, long j)
         return 0.0;
     return st->S[i * st->K + nf_stripe_slot(st->p, (int)e, (int)f)];
 }
+#endif
 
 void nf_stripe_add_outer(nf_stripe_t *st, long base, const double *R, double wgt)
 {

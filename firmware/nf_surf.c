@@ -1,8 +1,11 @@
 /* nf_surf.c: NURBS surface validation and evaluation (Eq. 1; NURBS Book A4.3, A4.4). */
-#include "nf_surf.h"
+#include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
+
 #include "nf_basis.h"
 #include "nf_err.h"
+#include "nf_surf.h"
 
+#if NF_ISA_COLD
 void nf_surf_wire(nf_surf_t *s, int p, int q, int nu, int nv, double *mem)
 {
     long n = (long)nu * nv;
@@ -48,6 +51,7 @@ void nf_surf_domain(const nf_surf_t *s, double *u0, double *u1, double *v0, doub
     *v0 = s->V[s->q];
     *v1 = s->V[s->nv];
 }
+#endif
 
 static double clampd(double x, double lo, double hi)
 {

@@ -2,6 +2,7 @@
  * address, features, the stream with packet resend, frame ids unwrapped
  * and every lost frame counted. */
 #include "hal_gev.h"
+#if CF_HAVE_ARAVIS
 #include "hal.h"
 #include <arv.h>
 #include <stdarg.h>
@@ -273,3 +274,64 @@ void hal_gev_close(hal_gev_t *g)
         g_object_unref(g->cam);
     free(g);
 }
+
+#else /* !CF_HAVE_ARAVIS: a build without Aravis (e.g. a cross build whose
+       * target has no libaravis-dev): every call says so. */
+#include "rig_err.h"
+#include <stdio.h>
+#include <string.h>
+
+int hal_gev_open(hal_gev_t **g, const char *uri, const hal_gev_opts_t *o, char *err, size_t len)
+{
+    (void)uri;
+    (void)o;
+    if (g)
+        *g = NULL;
+    if (err && len)
+        snprintf(err, len, "this cellfit is built without Aravis (libaravis-dev): no GigE Vision");
+    return RIG_EUNSUPPORTED;
+}
+
+int hal_gev_start(hal_gev_t *g)
+{
+    (void)g;
+    return RIG_EUNSUPPORTED;
+}
+
+int hal_gev_next(hal_gev_t *g, hal_gev_frame_t *f, int timeout_ms)
+{
+    (void)g;
+    (void)f;
+    (void)timeout_ms;
+    return RIG_EUNSUPPORTED;
+}
+
+int hal_gev_stop(hal_gev_t *g)
+{
+    (void)g;
+    return RIG_EUNSUPPORTED;
+}
+
+void hal_gev_stats(const hal_gev_t *g, hal_gev_stats_t *s)
+{
+    (void)g;
+    memset(s, 0, sizeof *s);
+}
+
+void hal_gev_size(const hal_gev_t *g, int *width, int *height)
+{
+    (void)g;
+    *width = *height = 0;
+}
+
+const char *hal_gev_error(const hal_gev_t *g)
+{
+    (void)g;
+    return "built without Aravis";
+}
+
+void hal_gev_close(hal_gev_t *g)
+{
+    (void)g;
+}
+#endif

@@ -6,9 +6,13 @@
 # tests/cli/profiler.sh) and build/scan-bench (bench/scan_bench.c: the scan
 # benchmark, make bench-scan).
 GEV_PKGS := aravis-0.8
+# The target's pkg-config (a cross build looks in its own libraries); without
+# Aravis there, hal_gev and cellsim --gev are built as "unsupported".
+GEV_PC := $(if $(TARGET),PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR)) pkg-config
+GEV_HAVE := $(shell $(GEV_PC) --exists $(GEV_PKGS) 2>/dev/null && echo 1)
 # GLib's headers come in as system headers (they are not -Wstrict-prototypes clean).
-GEV_CFLAGS = $(patsubst -I%,-isystem %,$(shell pkg-config --cflags $(GEV_PKGS) 2>/dev/null))
-GEV_LIBS = $(shell pkg-config --libs $(GEV_PKGS) 2>/dev/null)
+GEV_CFLAGS = $(if $(GEV_HAVE),-DCF_HAVE_ARAVIS=1 $(patsubst -I%,-isystem %,$(shell $(GEV_PC) --cflags $(GEV_PKGS) 2>/dev/null)))
+GEV_LIBS = $(if $(GEV_HAVE),$(shell $(GEV_PC) --libs $(GEV_PKGS) 2>/dev/null))
 LIBS += $(GEV_LIBS)
 
 $(BUILD)/hal/hal_gev.o: HAL_CFLAGS += $(GEV_CFLAGS)

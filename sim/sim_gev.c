@@ -4,6 +4,7 @@
  * profiles with noise. The callback runs on the fake camera's thread; it
  * reads the map and owns the noise generator, nothing else. */
 #include "sim_gev.h"
+#if CF_HAVE_ARAVIS
 #include <arv.h>
 #include <math.h>
 #include <stdio.h>
@@ -173,3 +174,20 @@ void sim_gev_stop(sim_gev_t *g)
     free(g->noise);
     free(g);
 }
+
+#else /* !CF_HAVE_ARAVIS: cellsim built without Aravis has no profiler. */
+#include <stdio.h>
+
+int sim_gev_start(sim_gev_t **g, sim_gev_cfg_t *c, char *msg, size_t len)
+{
+    (void)c;
+    *g = NULL;
+    snprintf(msg, len, "--gev: this cellsim is built without Aravis (libaravis-dev)");
+    return -1;
+}
+
+void sim_gev_stop(sim_gev_t *g)
+{
+    (void)g;
+}
+#endif

@@ -2,6 +2,7 @@
  * options, the part, the stage and probe models, the servers, the control
  * file, and the "ready" lines tests wait for. */
 #include "cf_cli.h"
+#include "cf_cpu.h"
 #include "cf_opt.h"
 #include "hal_regmap.h"
 #include "sim.h"
@@ -197,6 +198,7 @@ static void control(const char *path, sim_faults_t *fs, sim_stage_t *st)
 
 int main(int argc, char **argv)
 {
+    cf_cpu_from_env();
     static sim_net_t net;
     static sim_faults_t faults;
     static sim_stage_t stage;

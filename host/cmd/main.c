@@ -1,6 +1,7 @@
 /* main.c: the cellfit command-line tool: one table of subcommands, each
  * with its own option table (cf_opt.h) behind `cellfit CMD --help`. */
 #include "cf_cli.h"
+#include "cf_cpu.h"
 #include "cf_version.h"
 #include "cmd.h"
 #include "nf_config.h"
@@ -47,6 +48,7 @@ static int usage(FILE *f, int code)
 
 int main(int argc, char **argv)
 {
+    cf_cpu_from_env();
     if (argc < 2)
         return usage(stderr, CLI_USAGE);
     const char *c = argv[1];
