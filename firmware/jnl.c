@@ -79,6 +79,7 @@ static void hdr_encode(const jnl_header_t *h, uint8_t b[JNL_HDR_BYTES])
     putd(b + 88, h->cal[2]);
     putd(b + 96, h->t_start);
     put64(b + 104, h->planned);
+    putd(b + 112, h->utc_start); /* zero in journals from before it */
     put32(b + 124, jnl_crc32(0, b, 124));
 }
 
@@ -101,6 +102,7 @@ static int hdr_decode(const uint8_t b[JNL_HDR_BYTES], jnl_header_t *h)
     h->cal[2] = getd(b + 88);
     h->t_start = getd(b + 96);
     h->planned = get64(b + 104);
+    h->utc_start = getd(b + 112);
     return RIG_OK;
 }
 

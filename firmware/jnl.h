@@ -42,6 +42,10 @@ typedef struct jnl_header {
     double cal[3];                   /* calibration offset cx, cy, cz */
     double t_start;                  /* job start, clock seconds */
     uint64_t planned;                /* points planned */
+    /* Wall-clock UTC of t_start (seconds since 1970) when the board has a
+     * clock, so every record's t dates as utc_start + (t - t_start); 0 on a
+     * board without one (a monotonic clock is no date). */
+    double utc_start;
 } jnl_header_t;
 
 typedef struct jnl_rec {

@@ -61,3 +61,25 @@ double cli_now(void)
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
+
+double cli_utc_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void cli_iso8601(double utc, char *b, size_t n)
+{
+    if (!(utc > 0) || n < 32) {
+        if (n)
+            b[0] = '\0';
+        return;
+    }
+    time_t t = (time_t)floor(utc);
+    int ms = (int)floor((utc - (double)t) * 1000.0);
+    struct tm tm;
+    gmtime_r(&t, &tm);
+    size_t k = strftime(b, n, "%Y-%m-%dT%H:%M:%S", &tm);
+    snprintf(b + k, n - k, ".%03dZ", ms > 999 ? 999 : ms);
+}

@@ -22,4 +22,11 @@ int cli_solver(const char *s, nf_solver_t *out);
 
 double cli_now(void); /* monotonic seconds */
 
+/* Wall-clock UTC, seconds since 1970 (the Linux cell controller's clock). */
+double cli_utc_now(void);
+
+/* utc as ISO 8601 with milliseconds, "2026-12-02T04:45:01.123Z" (n >= 32);
+ * "" for utc <= 0 (no wall clock). */
+void cli_iso8601(double utc, char *b, size_t n);
+
 #endif

@@ -87,12 +87,18 @@ static int valid_point(const jnl_rec_t *r)
 static int do_export(int argc, char **argv)
 {
     const char *pos[1], *out = NULL;
+    int times = 0;
     const cf_opt_t opts[] = {{.name = "out",
                               .kind = CF_OPT_STR,
                               .dst = &out,
                               .arg = "FILE",
                               .help = "write the points here",
                               .def = "standard output"},
+                             {.name = "times",
+                              .kind = CF_OPT_FLAG,
+                              .dst = &times,
+                              .help = "CSV with a header, utc,x,y,z: each point's wall-clock UTC "
+                                      "(seconds since 1970; docs/journal.md, Dates)"},
                              {0}};
     const cf_cmd_t cmd = {.prog = "cellfit",
                           .name = "journal export",
@@ -115,9 +121,26 @@ static int do_export(int argc, char **argv)
         return cli_error(CMD, CLI_FAIL, "%s: cannot write", out);
     }
     jnl_rec_t r;
-    while ((rc = jnl_reader_next(&j.rd, &r)) == 1)
-        if (valid_point(&r))
+    if (times && !(j.h.utc_start > 0)) {
+        if (out)
+            fclose(f);
+        cf_store_file_close(&j.f);
+        return cli_error(CMD, CLI_USAGE,
+                         "%s: --times: the journal has no wall-clock start (a board "
+                         "without a clock wrote it)",
+                         path);
+    }
+    if (times)
+        fputs("utc,x,y,z\n", f);
+    while ((rc = jnl_reader_next(&j.rd, &r)) == 1) {
+        if (!valid_point(&r))
+            continue;
+        if (times)
+            fprintf(f, "%.3f,%.17g,%.17g,%.17g\n", j.h.utc_start + (r.t - j.h.t_start), r.xyz[0],
+                    r.xyz[1], r.xyz[2]);
+        else
             fprintf(f, "%.17g %.17g %.17g\n", r.xyz[0], r.xyz[1], r.xyz[2]);
+    }
     int werr = ferror(f);
     if (out && fclose(f))
         werr = 1;
@@ -156,6 +179,12 @@ static int do_info(int argc, char **argv)
     char hash[24];
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)j.h.nominal_hash);
     double span = in->records ? in->t_last - in->t_first : 0.0;
+    /* Dates from the wall-clock start, where the board had a clock. */
+    char d0[40], d1[40], d2[40];
+    const double u0 = j.h.utc_start;
+    cli_iso8601(u0, d0, sizeof d0);
+    cli_iso8601(u0 > 0 && in->records ? u0 + (in->t_first - j.h.t_start) : 0, d1, sizeof d1);
+    cli_iso8601(u0 > 0 && in->records ? u0 + (in->t_last - j.h.t_start) : 0, d2, sizeof d2);
     if (json) {
         cf_json_t o;
         cf_json_begin(&o, stdout);
@@ -178,6 +207,9 @@ static int do_info(int argc, char **argv)
         cf_json_num(&o, "t_first", in->t_first);
         cf_json_num(&o, "t_last", in->t_last);
         cf_json_num(&o, "span_seconds", span);
+        cf_json_str(&o, "started_utc", u0 > 0 ? d0 : NULL);
+        cf_json_str(&o, "first_utc", d1[0] ? d1 : NULL);
+        cf_json_str(&o, "last_utc", d2[0] ? d2 : NULL);
         cf_json_num(&o, "z0", j.h.z0);
         cf_json_num(&o, "cx", j.h.cal[0]);
         cf_json_num(&o, "cy", j.h.cal[1]);
@@ -203,6 +235,11 @@ static int do_info(int argc, char **argv)
         printf("  no torn tail\n");
     printf("  time %.6g .. %.6g s (span %.6g s); kinematics z0 %.6g, offset (%.6g, %.6g, %.6g)\n",
            in->t_first, in->t_last, span, j.h.z0, j.h.cal[0], j.h.cal[1], j.h.cal[2]);
+    if (u0 > 0)
+        printf("  started %s; records %s .. %s (UTC)\n", d0, d1[0] ? d1 : "-", d2[0] ? d2 : "-");
+    else
+        printf("  no wall clock: the board that wrote it has none (times are seconds of its "
+               "monotonic clock)\n");
     return CLI_OK;
 }
 

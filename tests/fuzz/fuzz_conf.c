@@ -5,6 +5,7 @@
  * line naming the file. */
 #include "cf_cli.h"
 #include "cf_conf.h"
+#include "cmd.h"
 #include "fuzz.h"
 #include <stdio.h>
 #include <stdlib.h>
