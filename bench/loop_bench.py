@@ -9,9 +9,10 @@ asserts nothing.
   knotsel+p the same with --reparam: each check pass projects the points
             onto the fit (nf_project), d the normal distance (compare with
             cellfit)
-  cellfit   `cellfit fit --tol T --within 99 --refine residual` from a 4 x 4
-            bicubic plane base (`cellfit base --method plane`), points
-            projected (the current host loop)
+  cellfit   `cellfit fit --tol T --within 99 --refine auto` (the default:
+            the chooser wired into the fit job) from a 4 x 4 bicubic plane
+            base (`cellfit base --method plane`), points projected;
+            --cellfit-refine residual or uniform for the older rules
   surfit    FITPACK surfit through scipy's bisplrep (SmoothBivariateSpline's
             routine, with room for more knots: nxest = nyest = 4 + sqrt(M),
             at most 160), bicubic, smoothing s = M (T / 2.58)^2 f for
@@ -33,7 +34,7 @@ vertical T is about 2.7 normal T, so compare within pairs.
 Usage: /usr/bin/python3 bench/loop_bench.py --cellfit build/cellfit
            --knotsel build/knotsel_loop [--sizes 5000,20000,100000]
            [--sets cliffs,narrow,holes,scan] [--surfit-s 300] [--json FILE]
-           [--no-cellfit] [--no-surfit]
+           [--no-cellfit] [--no-surfit] [--no-knotsel] [--cellfit-refine HOW]
 --surfit-s: time budget of surfit's search per data set (LOOP_BENCH_SURFIT_S).
 """
 
@@ -109,7 +110,7 @@ def run_knotsel(exe, fit, hold, tol, extra=()):
             "status": r["fit_status"], "seconds": r["seconds"], "rounds": r["rounds"]}
 
 
-def run_cellfit(exe, fit, hold, tol, work):
+def run_cellfit(exe, fit, hold, tol, work, refine="auto"):
     base, out = os.path.join(work, "base.igs"), os.path.join(work, "out.igs")
     b = subprocess.run([exe, "base", "--points", fit, "--method", "plane", "--nu", "4", "--nv", "4",
                         "--degree", "3", "--out", base], capture_output=True, text=True,
@@ -118,7 +119,7 @@ def run_cellfit(exe, fit, hold, tol, work):
         return {"status": "base failed: " + b.stderr.strip()[:200]}
     t = time.time()
     f = subprocess.run([exe, "fit", "--base", base, "--points", fit, "--tol", repr(tol),
-                        "--within", "99", "--refine", "residual", "--out", out, "--json"],
+                        "--within", "99", "--refine", refine, "--out", out, "--json"],
                        capture_output=True, text=True, check=False)
     wall = time.time() - t
     try:
@@ -202,6 +203,8 @@ def main():
     ap.add_argument("--surfit-s", type=float, default=float(os.environ.get("LOOP_BENCH_SURFIT_S", 300)))
     ap.add_argument("--no-cellfit", action="store_true")
     ap.add_argument("--no-surfit", action="store_true")
+    ap.add_argument("--no-knotsel", action="store_true")
+    ap.add_argument("--cellfit-refine", default="auto")
     ap.add_argument("--json")
     ap.add_argument("--surfit-worker", nargs=4)
     a = ap.parse_args()
@@ -221,10 +224,13 @@ def main():
                 fit, hold = os.path.join(work, "fit.xyz"), os.path.join(work, "hold.xyz")
                 np.savetxt(fit, fit_pts, fmt="%.9g")
                 np.savetxt(hold, hold_pts, fmt="%.9g")
-                res = [("knotsel", run_knotsel(a.knotsel, fit, hold, tol)),
-                       ("knotsel+p", run_knotsel(a.knotsel, fit, hold, tol, ["--reparam"]))]
+                res = []
+                if a.knotsel and not a.no_knotsel:
+                    res = [("knotsel", run_knotsel(a.knotsel, fit, hold, tol)),
+                           ("knotsel+p", run_knotsel(a.knotsel, fit, hold, tol, ["--reparam"]))]
                 if a.cellfit and not a.no_cellfit:
-                    res.append(("cellfit residual", run_cellfit(a.cellfit, fit, hold, tol, work)))
+                    res.append(("cellfit " + a.cellfit_refine,
+                                run_cellfit(a.cellfit, fit, hold, tol, work, a.cellfit_refine)))
                 if not a.no_surfit:
                     res.append(("surfit", run_surfit(fit, hold, tol, a.surfit_s)))
                 for meth, r in res:

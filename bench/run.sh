@@ -4,7 +4,8 @@
 # machine's memory bandwidth; prints Markdown tables beside the paper's
 # Tables 2-4 (bench/tables.py), projection, and keeps every raw JSON line in
 # BUILD/bench/*.jsonl (BUILD: CELLFIT's directory). Measures, asserts nothing.
-# About 1.5 minutes on 2 cores. Environment: BENCH_REPS (3) runs per cell,
+# About 1.5 minutes on 2 cores, plus the fitting loop's section (a few
+# minutes: surfit's search). Environment: BENCH_REPS (3) runs per cell,
 # the fastest kept, while one run takes less than BENCH_REPEAT_S (5) seconds
 # of wall time; BENCH_CHOL_MAX_S (20): banded Cholesky is skipped ("-") where
 # its estimate from N = 10^4 exceeds this; CC (gcc) builds the C helpers.
@@ -233,6 +234,19 @@ for n in 1000 10000 100000; do
     done
 done
 table project
+
+# --- the fitting loop to a tolerance beside FITPACK surfit (issue 14) ---------
+# bench/loop_bench.py (also `make bench-loop`, with the firmware-level
+# chooser): `cellfit fit --tol T --within 99` (--refine auto) and surfit on
+# terrain-like fields, every 5th row held out; its own Markdown table.
+# BENCH_LOOP=0 skips it; BENCH_LOOP_SIZES (5000,20000), BENCH_LOOP_SURFIT_S
+# (60) the time surfit's search may take per data set.
+if [ "${BENCH_LOOP:-1}" != 0 ]; then
+    say "fitting loop: cellfit fit --tol (auto) and FITPACK surfit (bench/loop_bench.py)"
+    "$PY" "$HERE/loop_bench.py" --cellfit "$CF" --no-knotsel --sizes "${BENCH_LOOP_SIZES:-5000,20000}" \
+        --surfit-s "${BENCH_LOOP_SURFIT_S:-60}" --json "$OUT/loop.jsonl" ||
+        say "loop_bench.py failed"
+fi
 
 table targets
 secs=$(awk -v a="$start" -v b="$(now_ns)" 'BEGIN { printf "%.0f", (b - a) / 1e9 }')

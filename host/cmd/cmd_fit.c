@@ -124,6 +124,14 @@ static int parse(int argc, char **argv, fit_args_t *a)
          .kind = CF_OPT_FLAG,
          .dst = &o->drop_far,
          .help = "leave the points beyond --far out of the fit"},
+        {.name = "holdout",
+         .kind = CF_OPT_LONG,
+         .dst = &o->holdout,
+         .arg = "K",
+         .help = "leave every K-th scan row (a run of points of equal y, or v with --uv) out of "
+                 "the fit and report their distances to it (docs/loop.md)",
+         .lo = 2,
+         .hi = 1000000},
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &a->json, .help = "print the summary as JSON"},
         {0}};
     /* The job's shared options after own's first ten rows (--base to
@@ -181,6 +189,15 @@ static void print_json(const fit_args_t *a, const cf_fitjob_result_t *r, double 
     cf_json_num(&j, "max_abs", r->max_abs);
     cf_json_str(&j, "fit_status", cf_fitjob_status_name(r->status));
     cmd_fitopts_json(&j, o, r);
+    if (o->holdout >= 2) {
+        cf_json_obj(&j, "holdout");
+        cf_json_int(&j, "every", o->holdout);
+        cf_json_int(&j, "points", r->ho_points);
+        cf_json_num(&j, "rms", r->ho_rms);
+        cf_json_num(&j, "p99", r->ho_p99);
+        cf_json_num(&j, "max_abs", r->ho_max);
+        cf_json_close(&j);
+    }
     cf_json_arr(&j, "warnings");
     for (int i = 0; i < r->nwarn; i++)
         cf_json_str(&j, NULL, r->warn[i]);
@@ -221,8 +238,16 @@ static void print_text(const fit_args_t *a, const cf_fitjob_result_t *r, double 
     printf("  rms %.6g  max %.6g  (%s)\n", r->rms, r->max_abs,
            a->uv ? "|Q - S(u,v)| at the given parameters" : "normal distance to the fit");
     if (o->loop)
-        printf("  tolerance %g mm: %.3f %% of the points within (need %g %%): %s\n", o->tol,
-               r->within_pct, o->within, r->status == CF_FITJOB_MET ? "met" : "NOT met");
+        printf("  tolerance %g mm: %.3f %% of the points within (need %g %%): %s\n"
+               "  stopped (%s): %s\n",
+               o->tol, r->within_pct, o->within, r->status == CF_FITJOB_MET ? "met" : "NOT met",
+               cf_fitjob_status_name(r->status), r->why);
+    if (r->fp_cells > 0)
+        printf("  footprint: %ld of %ld cells with points, %ld without, %ld on its edge\n",
+               r->fp_filled, r->fp_cells, r->fp_empty, r->fp_outline);
+    if (o->holdout >= 2)
+        printf("  held out (every %ld-th row): %ld points, rms %.6g  p99 %.6g  max %.6g\n",
+               o->holdout, r->ho_points, r->ho_rms, r->ho_p99, r->ho_max);
     printf("  %.3f s (read + accumulate %.3f, solve %.3f, summary + write %.3f)\n", secs, r->t_acc,
            r->t_solve, t_out);
     printf("  %ld bytes of fitter memory (board %s allows %ld)\n", r->bytes, BOARD_NAME,

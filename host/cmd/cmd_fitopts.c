@@ -5,12 +5,13 @@
 #include "cf_cli.h"
 #include <string.h>
 
-static const char *const refines[] = {"uniform", "residual", NULL};
+/* In the order of cf_refine_t. */
+static const char *const refines[] = {"uniform", "residual", "auto", NULL};
 
 int cmd_fitopts_table(cf_opt_t *t, cf_fitjob_opts_t *o, cmd_fitopts_t *a, const char *reparam_help)
 {
     memset(a, 0, sizeof *a);
-    a->refine = o->refine == CF_REFINE_UNIFORM ? 0 : 1;
+    a->refine = (int)o->refine;
     const cf_opt_t rows[CMD_FITOPTS_N] = {
         {.name = "reparam",
          .kind = CF_OPT_LONG,
@@ -58,9 +59,29 @@ int cmd_fitopts_table(cf_opt_t *t, cf_fitjob_opts_t *o, cmd_fitopts_t *a, const 
          .kind = CF_OPT_CHOICE,
          .dst = &a->refine,
          .arg = "HOW",
-         .help = "where the loop inserts knots",
+         .help = "where the loop inserts knots: auto (knot lines scored per control point added, "
+                 "only where data lie on both sides, at most half the points), residual or "
+                 "uniform",
          .choices = refines,
          .given = &a->loop_opt},
+        {.name = "min-gain",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->min_gain,
+         .arg = "PTS",
+         .help = "--refine auto: stop (not_met_no_progress) after two rounds in a row gaining "
+                 "less than this many points of the percentage within",
+         .lo = 1e-12,
+         .hi = 100,
+         .given = &a->loop_opt},
+        {.name = "noise",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->noise,
+         .arg = "MM",
+         .help = "the probe's noise: a floor under the robust scale (with --tol at least a "
+                 "quarter of it)",
+         .lo = 1e-12,
+         .hi = 1e300,
+         .def = "0"},
         {.name = "robust",
          .kind = CF_OPT_FLAG,
          .dst = &o->robust,
@@ -81,7 +102,7 @@ int cmd_fitopts_table(cf_opt_t *t, cf_fitjob_opts_t *o, cmd_fitopts_t *a, const 
 
 int cmd_fitopts_check(const char *cmd, cf_fitjob_opts_t *o, const cmd_fitopts_t *a)
 {
-    o->refine = a->refine == 0 ? CF_REFINE_UNIFORM : CF_REFINE_RESIDUAL;
+    o->refine = (cf_refine_t)a->refine;
     o->robust |= a->robust_iters_given;
     o->loop = o->tol > 0;
     if (a->loop_opt && !o->loop)
@@ -102,15 +123,23 @@ void cmd_fitopts_json(cf_json_t *j, const cf_fitjob_opts_t *o, const cf_fitjob_r
         cf_json_num(j, "within", o->within);
         cf_json_num(j, "within_tol_pct", r->within_pct);
         cf_json_bool(j, "tol_met", r->status == CF_FITJOB_MET);
-        cf_json_str(j, "refine", o->refine == CF_REFINE_UNIFORM ? "uniform" : "residual");
-        if (r->status != CF_FITJOB_MET)
-            cf_json_str(j, "stopped", r->why);
+        cf_json_str(j, "refine", cf_refine_name(o->refine));
+        cf_json_str(j, "stopped", r->why);
+        if (r->fp_cells > 0) {
+            cf_json_obj(j, "footprint");
+            cf_json_int(j, "cells", r->fp_cells);
+            cf_json_int(j, "filled", r->fp_filled);
+            cf_json_int(j, "empty", r->fp_empty);
+            cf_json_int(j, "outline", r->fp_outline);
+            cf_json_close(j);
+        }
         cf_rounds_json(j, r->rounds, r->nrounds, o->robust);
     }
     if (o->robust && r->nrounds > 0) {
         cf_json_int(j, "robust_iters", o->robust_iters);
         cf_json_num(j, "robust_sigma", r->rounds[r->nrounds - 1].sigma);
         cf_json_int(j, "outliers", r->rounds[r->nrounds - 1].rejected);
+        cf_json_num(j, "robust_floor", r->robust_floor);
     }
 }
 

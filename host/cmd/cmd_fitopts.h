@@ -1,6 +1,7 @@
 /* cmd_fitopts.h: the fit job's options that `cellfit fit`, `journal fit`
  * and `scan --fit` share, with one meaning each: --reparam, --tol,
- * --within, --max-cp, --max-rounds, --refine, --robust, --robust-iters
+ * --within, --max-cp, --max-rounds, --refine, --min-gain, --noise,
+ * --robust, --robust-iters
  * (rows of a cf_opt table), their checks after parsing, and the JSON
  * fields of the tolerance loop and the robust passes in the summaries. */
 #ifndef CMD_FITOPTS_H
@@ -10,11 +11,11 @@
 #include "cf_json.h"
 #include "cf_opt.h"
 
-#define CMD_FITOPTS_N 8 /* rows cmd_fitopts_table writes */
+#define CMD_FITOPTS_N 10 /* rows cmd_fitopts_table writes */
 
 /* What was given, for the checks. */
 typedef struct cmd_fitopts {
-    int refine;             /* index into uniform, residual */
+    int refine;             /* cf_refine_t: uniform, residual, auto */
     int loop_opt;           /* --within, --max-cp, --max-rounds or --refine given */
     int robust_iters_given; /* --robust-iters implies --robust */
     int any;                /* --tol, --reparam or --robust given */

@@ -5,10 +5,14 @@
 #include "cf_cli.h"
 #include "cf_err.h"
 #include "cf_fitpass.h"
+#include "cf_holdout.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "nf_err.h"
+#include "nf_footprint.h"
 #include "nf_knots.h"
+#include "nf_knotsel.h"
+#include "nf_loopctl.h"
 #include "nf_project.h"
 #include "nf_refine.h"
 #include "nf_robust.h"
@@ -50,8 +54,9 @@ void cf_fitjob_defaults(cf_fitjob_opts_t *o)
     o->within = 100.0;
     o->max_cp = NF_MAX_CP;
     o->max_rounds = 12;
-    o->refine = CF_REFINE_RESIDUAL;
+    o->refine = CF_REFINE_AUTO;
     o->robust_iters = 3;
+    o->min_gain = NF_LOOPCTL_MIN_GAIN;
 }
 
 const char *cf_fitjob_status_name(cf_fitjob_status_t s)
@@ -136,6 +141,9 @@ int cf_fitjob_open(cf_fitjob_t **jp, const nf_surf_t *nominal, const cf_fitjob_o
     *jp = NULL;
     if ((o->loop || o->stats) && !(o->tol > 0))
         return cf_fail(msg, ml, CF_EARG, "a tolerance loop or statistics need a tolerance > 0");
+    if (o->holdout == 1 || o->holdout < 0 || !(o->noise >= 0) || !(o->min_gain >= 0))
+        return cf_fail(msg, ml, CF_EARG, "holdout %ld (0 or >= 2), noise %g, min gain %g (>= 0)",
+                       o->holdout, o->noise, o->min_gain);
     int nu = o->net_u > 0 ? o->net_u : nominal->nu, nv = o->net_v > 0 ? o->net_v : nominal->nv;
     if (nu < nominal->nu || nv < nominal->nv)
         return cf_fail(msg, ml, CF_EARG, "net %d x %d is smaller than the nominal's %d x %d", nu,
@@ -418,15 +426,25 @@ typedef struct resid {
     nf_rhist_t hist; /* |d| for the robust scale */
 } resid_t;
 
+/* The check pass's per-span counts: residual (sr) or auto (ks, with the
+ * data footprint fp); NULL members are not filled. */
+typedef struct check {
+    nf_spanres_t *sr;
+    nf_knotsel_t *ks;
+    nf_footprint_t *fp;
+} check_t;
+
 /* A pass over the points against the fit s: |Q - S(u, v)| at the given
  * parameters, else the normal distance to s (projection). Sums for the
- * summary, the count within tol (if > 0), the |d| histogram, (if sr) the
+ * summary, the count within tol (if > 0), the |d| histogram, (if ck) the
  * excess per knot span of the points out of tolerance (those beyond cut
- * > 0, the points a robust fit rejects, go to their cells only), and (if
- * st) the signed normal deviations. */
-static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, resid_t *out,
+ * > 0, the points a robust fit rejects, go to their cells only, and to the
+ * knot chooser as data without misfit), the footprint of the feet not
+ * clamped to the boundary, and (if st) the signed normal deviations. */
+static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, resid_t *out,
                    cf_stats_t *st)
 {
+    nf_spanres_t *sr = ck ? ck->sr : NULL;
     cf_fitjob_t *j = r->j;
     const cf_fitsrc_t *src = r->src;
     double tol = j->o.tol;
@@ -447,12 +465,14 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
         for (long k = 0; k < got; k++) {
             const double *Q = j->buf + (long)src->cols * k + (src->cols - 3);
             double *q = j->rows, sd = 0.0;
+            int clamped = 0;
             if (uv)
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
                 cf_seedgrid_project(&pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
                 sd = pr.dist;
+                clamped = !uv && pr.clamped;
                 if (!uv)
                     q[0] = pr.u, q[1] = pr.v, q[2] = Q[0], q[3] = Q[1], q[4] = Q[2];
             }
@@ -468,6 +488,13 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
                     nf_spanres_add_rejected(sr, q[0], q[1], d);
             } else if (sr)
                 nf_spanres_add(sr, q[0], q[1], d);
+            /* A point the robust pass rejected is data, not misfit (NaN):
+             * a spike is not a shape. (nf_spanres_fold's rescue of a
+             * rejected cluster, a feature, has no auto counterpart yet.) */
+            if (ck && ck->ks)
+                nf_knotsel_add(ck->ks, q[0], q[1], cut > 0 && d >= cut ? NAN : d);
+            if (ck && ck->fp && !clamped)
+                nf_footprint_add(ck->fp, q[0], q[1]); /* outside the domain: not counted */
             if (st)
                 cf_stats_add(st, sd);
         }
@@ -508,6 +535,10 @@ typedef struct surfs {
     nf_surf_t cur, fit, prev, nxt;
     cf_stats_t *st; /* the round's deviations (swapped with the best's) */
     double *srmem;
+    void *fpmem;       /* auto: the footprint's cells */
+    nf_knotsel_t ks;   /* auto: the check pass's spans (in srmem) */
+    nf_footprint_t fp; /* auto: where the points are */
+    nf_robust_t rb;    /* the last robust pass's scale */
 } surfs_t;
 
 static void surfs_free(surfs_t *s)
@@ -518,12 +549,13 @@ static void surfs_free(surfs_t *s)
     cf_surf_free(&s->nxt);
     free(s->st);
     free(s->srmem);
+    free(s->fpmem);
 }
 
 /* Round k on S->cur: the fit passes (the first from the live points when
  * there are), the robust passes, and the check. */
 static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, double *c,
-                     long *rejected, nf_spanres_t **srp, nf_spanres_t *sr, cf_fitjob_result_t *out)
+                     long *rejected, check_t *ck, nf_spanres_t *sr, cf_fitjob_result_t *out)
 {
     cf_fitjob_t *j = r->j;
     const cf_fitjob_opts_t *o = &j->o;
@@ -572,14 +604,19 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         memcpy(S->prev.cp, S->fit.cp, sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
     }
     /* Robust passes: the MAD of the residuals to the last fit sets the
-     * scale, Tukey weights of those residuals the next fit. */
+     * scale, floored by the probe's noise or a share of tol (nf_robust:
+     * clean data keep their weight), Tukey weights of those residuals the
+     * next fit, zero from NF_ROBUST_CUT scales on. */
     *c = 0.0;
     *rejected = 0;
+    memset(&S->rb, 0, sizeof S->rb);
     for (long it = 0; o->robust && it < o->robust_iters; it++) {
         set_pass(r, lo, hi, ip++, npass);
         if ((rc = measure(r, &S->prev, NULL, 0.0, res, NULL)))
             return rc;
-        *c = NF_TUKEY_C * nf_rhist_sigma(&res->hist);
+        if ((rc = nf_robust_init(&S->rb, &res->hist, out->robust_floor)))
+            return cf_fail(r->msg, r->ml, rc, "robust scale: %s", nf_strerror(rc));
+        *c = NF_ROBUST_CUT * S->rb.scale;
         if (!(*c > 0))
             break; /* the fit is exact: nothing to reweight */
         weigh_t wt = {*c, &S->prev};
@@ -596,23 +633,114 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     /* The check: distances of all points to this fit, and where they are
      * out of tolerance (per knot span). */
     free(S->srmem);
+    free(S->fpmem);
     S->srmem = NULL;
-    *srp = NULL;
+    S->fpmem = NULL;
+    memset(ck, 0, sizeof *ck);
     if (o->loop && o->refine == CF_REFINE_RESIDUAL) {
         S->srmem = malloc(sizeof(double) *
                           (size_t)NF_SPANRES_DOUBLES(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q));
         if (!S->srmem)
             return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
         nf_spanres_init(sr, &S->fit, o->tol, S->srmem);
-        *srp = sr;
+        ck->sr = sr;
+    } else if (o->loop && o->refine == CF_REFINE_AUTO) {
+        long fb = nf_footprint_bytes(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q);
+        S->srmem = malloc(sizeof(double) *
+                          (size_t)NF_KNOTSEL_DOUBLES(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q));
+        S->fpmem = fb > 0 ? malloc((size_t)fb) : NULL;
+        if (!S->srmem || !S->fpmem)
+            return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+        if ((rc = nf_knotsel_init(&S->ks, &S->fit, o->tol, S->srmem)) ||
+            (rc = nf_footprint_init(&S->fp, &S->fit, S->fpmem, (size_t)fb)))
+            return cf_fail(r->msg, r->ml, rc, "check pass: %s", nf_strerror(rc));
+        ck->ks = &S->ks;
+        ck->fp = &S->fp;
     }
     if (S->st && (rc = cf_stats_init(S->st, o->tol)))
         return cf_fail(r->msg, r->ml, rc, "statistics: %s", cf_strerror(rc));
     set_pass(r, lo, hi, npass - 1, npass);
-    if ((rc = measure(r, &S->fit, *srp, *c, res, S->st)))
+    if ((rc = measure(r, &S->fit, ck, *c, res, S->st)))
         return rc;
-    if (*srp)
-        nf_spanres_fold(*srp); /* rejected misfit in one place: a feature */
+    if (ck->sr)
+        nf_spanres_fold(ck->sr); /* rejected misfit in one place: a feature */
+    return 0;
+}
+
+/* The verdict of the knot chooser's loop after round k (auto): the knots
+ * of the next round into cand (*n), the job's status and why into out; 0
+ * to go on. */
+static int auto_verdict(const cf_fitjob_opts_t *o, nf_loopctl_t *lc, const nf_knotsel_t *ks,
+                        const nf_surf_t *fit, int k, double pct, nf_knotsel_cand_t *cand, int *n,
+                        cf_fitjob_result_t *out)
+{
+    int kst = NF_KNOTSEL_NONE_OUT,
+        mr = (int)(o->max_rounds < CF_FITJOB_MAX_ROUNDS ? o->max_rounds : CF_FITJOB_MAX_ROUNDS);
+    nf_knotsel_opts_t ko;
+    memset(&ko, 0, sizeof ko);
+    ko.max_cp = o->max_cp;
+    nf_loopctl_record(lc, pct, (long)fit->nu * fit->nv);
+    ko.max_add = nf_loopctl_budget(lc, o->within, fit->nu < fit->nv ? fit->nu : fit->nv);
+    *n = 0;
+    nf_knotsel_choose(ks, &ko, cand, (fit->nu - fit->p) + (fit->nv - fit->q), n, &kst);
+    /* min_gain 0 means no gain is asked: the least the rules take. Near
+     * the target a round cannot gain more than what is missing: the least
+     * gain is at most a quarter of the gap to the best share so far. */
+    double gap = o->within - (lc->best > 0 ? lc->best : 0.0);
+    double mg = o->min_gain < 0.25 * gap ? o->min_gain : 0.25 * gap;
+    mg = mg > 1e-12 ? mg : 1e-12;
+    int v = nf_loopctl_verdict(lc, pct, o->within, mg, k, mr, kst);
+    const char *rule = nf_loopctl_str(v);
+    switch (v) {
+    case NF_LOOPCTL_CONTINUE: return 0;
+    case NF_LOOPCTL_MET:
+        out->status = CF_FITJOB_MET;
+        snprintf(out->why, sizeof out->why, "%s: %.3f %% within (need %g %%)", rule, pct,
+                 o->within);
+        return 1;
+    case NF_LOOPCTL_DATA_LIMIT:
+        out->status = CF_FITJOB_NOT_MET_DATA_LIMIT;
+        snprintf(out->why, sizeof out->why, "%s: %s (%ld points, %d x %d net)", rule,
+                 kst == NF_KNOTSEL_HALF_PTS ? "the next split would pass half the points"
+                                            : "no span out of tolerance holds data to split",
+                 ks->n, fit->nu, fit->nv);
+        return 1;
+    case NF_LOOPCTL_MAX_CP:
+        out->status = CF_FITJOB_NOT_MET_MAX_CP;
+        snprintf(out->why, sizeof out->why,
+                 "%s: the next split would pass --max-cp %ld or the "
+                 "board's %ld control points",
+                 rule, o->max_cp, (long)NF_MAX_CP);
+        return 1;
+    case NF_LOOPCTL_NO_PROGRESS:
+        out->status = CF_FITJOB_NOT_MET_NO_PROGRESS;
+        snprintf(out->why, sizeof out->why,
+                 "%s: %d rounds in a row gained less than %g points of share (best %.3f %%)", rule,
+                 NF_LOOPCTL_PATIENCE, o->min_gain, lc->best);
+        return 1;
+    default: /* the round limit: the job's status has no fifth value */
+        out->status = CF_FITJOB_NOT_MET_NO_PROGRESS;
+        snprintf(out->why, sizeof out->why, "%s: after %d rounds (--max-rounds)", rule, k + 1);
+        return 1;
+    }
+}
+
+/* The held-out rows measured against the best fit (opts.holdout). */
+static int holdout_check(run_t *r, const cf_fitsrc_t *in, cf_fitjob_result_t *out)
+{
+    cf_holdout_t hc;
+    cf_fitsrc_t hs;
+    cf_holdout_src(&hs, &hc, in, r->j->o.holdout, 1);
+    r->src = &hs;
+    resid_t res;
+    int rc = measure(r, &out->surf, NULL, 0.0, &res, NULL);
+    r->src = in;
+    if (rc)
+        return rc;
+    out->ho_points = res.n;
+    out->ho_rms = res.n ? sqrt(res.ss / (double)res.n) : 0.0;
+    out->ho_p99 = nf_rhist_quantile(&res.hist, 0.99);
+    out->ho_max = res.mx;
     return 0;
 }
 
@@ -620,12 +748,27 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
                   int pct1, cf_fitjob_result_t *out, char *msg, size_t ml)
 {
     const cf_fitjob_opts_t *o = &j->o;
-    double t0 = cli_now();
+    double t0 = cli_now(), alpha0 = o->alpha;
     memset(out, 0, sizeof *out);
+    if (o->holdout >= 2 && j->live)
+        return cf_fail(msg, ml, CF_EARG, "--holdout needs a points source, not live points");
+    /* With a holdout the rounds read only the rows kept for the fit. */
+    const cf_fitsrc_t *all = src;
+    cf_holdout_t hk;
+    cf_fitsrc_t ks_src;
+    if (o->holdout >= 2) {
+        cf_holdout_src(&ks_src, &hk, src, o->holdout, 0);
+        src = &ks_src;
+    }
     run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml};
     surfs_t S;
     memset(&S, 0, sizeof S);
     cf_stats_t *best_st = NULL;
+    nf_knotsel_cand_t *cand = NULL;
+    nf_loopctl_t lc;
+    nf_loopctl_init(&lc);
+    out->robust_floor =
+        o->noise > CF_FITJOB_FLOOR_TOL * o->tol ? o->noise : CF_FITJOB_FLOOR_TOL * o->tol;
     if (o->stats && (!(S.st = malloc(sizeof *S.st)) || !(best_st = malloc(sizeof *best_st)))) {
         free(S.st);
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
@@ -638,14 +781,18 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     if (r.ctl && r.ctl->progress)
         r.ctl->progress(r.ctl->ctx, pct0);
     out->far_limit = o->far;
-    double best_within = -1.0, best_rms = 0.0;
+    double best_within = -1.0, best_rms = 0.0, best_share = 0.0;
     for (int k = 0;; k++) {
         double tr = cli_now(), c = 0.0;
         resid_t res;
         pass_t po;
         long rejected = 0;
-        nf_spanres_t sr, *srp = NULL;
-        if ((rc = one_round(&r, k, &S, &res, &po, &c, &rejected, &srp, &sr, out)))
+        nf_spanres_t sr;
+        check_t ck;
+        /* auto: alpha follows the knot spacing of each level (nf_loopctl). */
+        if (o->loop && o->refine == CF_REFINE_AUTO)
+            j->o.alpha = nf_loopctl_alpha(alpha0, &j->base, &S.cur, NF_LOOPCTL_ALPHA_K);
+        if ((rc = one_round(&r, k, &S, &res, &po, &c, &rejected, &ck, &sr, out)))
             goto fail;
         cf_round_t *rd = &out->rounds[out->nrounds++];
         rd->nu = S.fit.nu;
@@ -653,7 +800,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         rd->within_pct = 100.0 * (double)res.within / (double)res.n;
         rd->rms = sqrt(res.ss / (double)res.n);
         rd->mx = res.mx;
-        rd->sigma = c / NF_TUKEY_C;
+        rd->sigma = c > 0 ? S.rb.scale : 0.0;
         rd->rejected = rejected;
         rd->seconds = cli_now() - tr;
         /* Keep the best fit: most points within tolerance, then lowest rms. */
@@ -664,6 +811,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             }
             best_within = rd->within_pct;
             best_rms = rd->rms;
+            best_share = po.points > 0 ? (double)rejected / (double)po.points : 0.0;
             out->within_pct = rd->within_pct;
             out->rms = rd->rms;
             out->max_abs = rd->mx;
@@ -672,6 +820,14 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->solve = po.fp.st;
             out->store_bytes = cf_fitpass_store_bytes(&po.fp);
             out->bytes = j->need;
+            if (ck.fp) {
+                nf_footprint_stats_t fs;
+                nf_footprint_stats(ck.fp, &fs);
+                out->fp_cells = fs.cells;
+                out->fp_filled = fs.filled;
+                out->fp_empty = fs.empty;
+                out->fp_outline = fs.outline;
+            }
             if (S.st) {
                 cf_stats_t *t = best_st;
                 best_st = S.st;
@@ -682,18 +838,42 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->status = CF_FITJOB_PLAIN;
             break;
         }
-        if ((double)res.within >= o->within / 100.0 * (double)res.n) {
-            out->status = CF_FITJOB_MET;
-            break;
+        int stop = 0, n = 0;
+        if (o->refine == CF_REFINE_AUTO) {
+            free(cand);
+            cand = malloc(sizeof *cand * (size_t)((S.fit.nu - S.fit.p) + (S.fit.nv - S.fit.q)));
+            if (!cand) {
+                rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+                goto fail;
+            }
+            if (auto_verdict(o, &lc, &S.ks, &S.fit, k, rd->within_pct, cand, &n, out))
+                break;
+            rc = cf_loop_insert(&S.fit, cand, n, o->max_cp, o->solver, &S.nxt, &stop, out->why,
+                                sizeof out->why);
+        } else {
+            if ((double)res.within >= o->within / 100.0 * (double)res.n) {
+                out->status = CF_FITJOB_MET;
+                snprintf(out->why, sizeof out->why, "met: %.3f %% within (need %g %%)",
+                         rd->within_pct, o->within);
+                break;
+            }
+            if (k + 1 >= o->max_rounds || k + 1 >= CF_FITJOB_MAX_ROUNDS) {
+                out->status = CF_FITJOB_NOT_MET_NO_PROGRESS;
+                snprintf(out->why, sizeof out->why,
+                         "not_met_max_rounds: after %ld rounds (--max-rounds)", o->max_rounds);
+                break;
+            }
+            rc = cf_loop_next(&S.fit, ck.sr, o->refine, o->max_cp, o->solver, &S.nxt, &stop,
+                              out->why, sizeof out->why);
+            /* Never more control points than half the points. */
+            if (!rc && !stop && 2 * (long)S.nxt.nu * S.nxt.nv > res.n) {
+                stop = CF_LOOP_STOP_DATA;
+                snprintf(out->why, sizeof out->why,
+                         "the next net (%d x %d) would pass half the %ld points", S.nxt.nu,
+                         S.nxt.nv, res.n);
+                cf_surf_free(&S.nxt);
+            }
         }
-        if (k + 1 >= o->max_rounds || k + 1 >= CF_FITJOB_MAX_ROUNDS) {
-            out->status = CF_FITJOB_NOT_MET_NO_PROGRESS;
-            snprintf(out->why, sizeof out->why, "after %ld rounds (--max-rounds)", o->max_rounds);
-            break;
-        }
-        int stop = 0;
-        rc = cf_loop_next(&S.fit, srp, o->refine, o->max_cp, o->solver, &S.nxt, &stop, out->why,
-                          sizeof out->why);
         if (rc) {
             cf_fail(msg, ml, rc, "%s", out->why);
             goto fail;
@@ -701,13 +881,31 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         if (stop) {
             out->status =
                 stop == CF_LOOP_STOP_DATA ? CF_FITJOB_NOT_MET_DATA_LIMIT : CF_FITJOB_NOT_MET_MAX_CP;
+            /* The rule's name first, as auto says it ("not_met_...: why"). */
+            const char *name = cf_fitjob_status_name(out->status);
+            size_t nl = strlen(name) + 2, wl = strlen(out->why);
+            if (wl + nl >= sizeof out->why)
+                wl = sizeof out->why - nl - 1;
+            memmove(out->why + nl, out->why, wl);
+            out->why[nl + wl] = '\0';
+            memcpy(out->why, name, nl - 2);
+            out->why[nl - 2] = ':';
+            out->why[nl - 1] = ' ';
             break;
         }
         cf_surf_free(&S.cur);
         S.cur = S.nxt;
         memset(&S.nxt, 0, sizeof S.nxt);
     }
+    j->o.alpha = alpha0;
+    if (o->holdout >= 2 && (rc = holdout_check(&r, all, out)))
+        goto fail;
     char *w;
+    if (o->robust && best_share > NF_ROBUST_WARN_SHARE && (w = warning(out)))
+        snprintf(w, sizeof out->warn[0],
+                 "robust: %.1f %% of the points flagged as outliers (scale %.3g mm, floor %.3g "
+                 "mm): the scale or the part may be wrong",
+                 100.0 * best_share, out->sigma, out->robust_floor);
     if (out->far > 0 && (w = warning(out)))
         snprintf(w, sizeof out->warn[0], "%ld points farther than %g mm from the base, %s",
                  out->far, o->far, o->drop_far ? "left out" : "fitted");
@@ -719,10 +917,13 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     if (r.ctl && r.ctl->progress)
         r.ctl->progress(r.ctl->ctx, pct1);
     surfs_free(&S);
+    free(cand);
     return 0;
 fail:
+    j->o.alpha = alpha0;
     surfs_free(&S);
     free(best_st);
+    free(cand);
     cf_fitjob_result_free(out);
     return rc;
 }

@@ -6,8 +6,13 @@
  * (Section 2.2); optionally robust (Tukey weights, scale from the MAD of
  * the residuals); optionally to a tolerance: rounds of fit, check, knot
  * insertion (uniform or where the residuals are, cf_loop) until the share
- * of points within tol is reached or a limit says no. The best round is
- * the result: surface, statistics, rounds, timings, warnings, status.
+ * of points within tol is reached or a limit says no (auto, the default:
+ * nf_knotsel's knot lines where the misfit is and data lie on both sides,
+ * never more control points than half the points, and nf_loopctl's rules:
+ * met, no progress, data limit, max_cp, rounds). The best round is the
+ * result: surface, statistics, rounds, timings, warnings, status. Every
+ * K-th scan row can be held out of the fit and measured against it
+ * (cf_holdout).
  *
  * Points come from a source (cf_fitsrc: points file or journal) read again
  * per pass; a live scan adds its points as they arrive (cf_fitjob_add), the
@@ -40,7 +45,7 @@ typedef enum cf_fitjob_status {
     CF_FITJOB_MET = 1,                /* the share of points within tol reached */
     CF_FITJOB_NOT_MET_DATA_LIMIT = 2, /* no span with data on both sides left to split */
     CF_FITJOB_NOT_MET_MAX_CP = 3,     /* the next net exceeds max_cp, the board's points or bytes */
-    CF_FITJOB_NOT_MET_NO_PROGRESS = 4 /* max_rounds used up */
+    CF_FITJOB_NOT_MET_NO_PROGRESS = 4 /* rounds stopped gaining (auto), or max_rounds used up */
 } cf_fitjob_status_t;
 
 typedef struct cf_fitjob_opts {
@@ -62,19 +67,27 @@ typedef struct cf_fitjob_opts {
     cf_refine_t refine;
     int robust; /* Tukey reweighting passes after each fit */
     long robust_iters;
-    int stats; /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
+    int stats;       /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
+    double min_gain; /* auto: least gain of a round, points of percent (nf_loopctl) */
+    double noise;    /* robust: the probe's noise, mm, a floor under the scale */
+    long holdout;    /* >= 2: every holdout-th scan row left out and measured (cf_holdout) */
 } cf_fitjob_opts_t;
+
+/* The robust scale's floor as a share of tol: max(noise, this tol). Points
+ * keep weight > 0 up to NF_ROBUST_CUT floors (1.5 tol): a fit short of the
+ * tolerance never rejects the data it has yet to reach. */
+#define CF_FITJOB_FLOOR_TOL 0.25
 
 /* The shell's defaults: alpha, beta of the paper, solver auto, 1e-12 and
  * 20000 iterations with the probe, one core, within 100 %, max_cp the
- * board's, 12 rounds, residual refinement, 3 robust passes; everything
- * else off. */
+ * board's, 12 rounds, auto refinement with min_gain NF_LOOPCTL_MIN_GAIN, 3
+ * robust passes; everything else off. */
 void cf_fitjob_defaults(cf_fitjob_opts_t *o);
 
 typedef struct cf_fitjob_result {
     nf_surf_t surf; /* the best fit (heap, cf_surf) */
     cf_fitjob_status_t status;
-    char why[256];              /* why the loop stopped short (status 2..4) */
+    char why[256];              /* the rule that stopped the loop, and why ("met: ...") */
     long points;                /* points read in a pass */
     long clamped, far, dropped; /* projection: feet on the boundary, beyond far, left out */
     double far_limit;
@@ -91,6 +104,14 @@ typedef struct cf_fitjob_result {
     double t_rows, t_merge; /* of t_acc: inside the fitter's accumulation; the cores' merge */
     long store_bytes;       /* the stripes of Eq. 7's matrix, best round */
     cf_stats_t *stats;      /* heap, with opts.stats: deviations to the best fit */
+    double robust_floor;    /* the scale's floor (robust) */
+    /* The best round's data footprint (nf_footprint): cells of the knot
+     * spans with points, without ("no data"), on the edge; fp_cells 0: none. */
+    long fp_cells, fp_filled, fp_empty, fp_outline;
+    /* Held-out rows (opts.holdout): points, rms, p99 (the histogram's
+     * estimate, within NF_RHIST_RELERR) and max of their distances. */
+    long ho_points;
+    double ho_rms, ho_p99, ho_max;
     int nwarn;
     char warn[CF_FITJOB_MAX_WARN][160];
 } cf_fitjob_result_t;

@@ -73,6 +73,60 @@ int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, 
     return rc;
 }
 
+const char *cf_refine_name(cf_refine_t how)
+{
+    return how == CF_REFINE_UNIFORM ? "uniform" : how == CF_REFINE_RESIDUAL ? "residual" : "auto";
+}
+
+int cf_loop_insert(const nf_surf_t *fit, const nf_knotsel_cand_t *c, int n, long max_cp,
+                   nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml)
+{
+    int ru = 0, rv = 0, rc;
+    *stop = CF_LOOP_STOP_DATA;
+    if (n <= 0) {
+        cf_fail(msg, ml, CF_OK, "no knot span with data enough to split");
+        return CF_OK;
+    }
+    double *Xu = malloc(sizeof(double) * (size_t)n), *Xv = malloc(sizeof(double) * (size_t)n);
+    if (!Xu || !Xv) {
+        free(Xu);
+        free(Xv);
+        return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+    }
+    rc = nf_knotsel_split(c, n, Xu, n, &ru, Xv, n, &rv);
+    int nu2 = fit->nu + ru, nv2 = fit->nv + rv;
+    long ncp = (long)nu2 * nv2, need = nf_fit_bytes(nu2, nv2, fit->p, fit->q, solver);
+    *stop = CF_LOOP_STOP_MAX_CP;
+    if (rc)
+        rc = cf_fail(msg, ml, rc, "knot selection: %s", nf_strerror(rc));
+    else if (ncp > max_cp || ncp > NF_MAX_CP)
+        cf_fail(msg, ml, CF_OK, "the next net (%d x %d = %ld control points) would exceed %s %ld",
+                nu2, nv2, ncp, ncp > max_cp ? "--max-cp" : "the board's",
+                ncp > max_cp ? max_cp : (long)NF_MAX_CP);
+    else if (need < 0 || need > NF_ARENA_BYTES)
+        cf_fail(msg, ml, CF_OK, "the next net (%d x %d) would need %ld bytes, board %s allows %ld",
+                nu2, nv2, need, BOARD_NAME, (long)NF_ARENA_BYTES);
+    else {
+        nf_surf_t tmp;
+        memset(&tmp, 0, sizeof tmp);
+        if (cf_surf_alloc(nxt, fit->p, fit->q, nu2, nv2) ||
+            cf_surf_alloc(&tmp, fit->p, fit->q, nu2, fit->nv))
+            rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+        else if (!(rc = nf_refine_u(fit, Xu, ru, &tmp)))
+            rc = nf_refine_v(&tmp, Xv, rv, nxt);
+        cf_surf_free(&tmp);
+        if (rc) {
+            cf_surf_free(nxt);
+            if (rc != CF_ENOMEM)
+                cf_fail(msg, ml, rc, "knot insertion: %s", nf_strerror(rc));
+        } else
+            *stop = CF_LOOP_GO;
+    }
+    free(Xu);
+    free(Xv);
+    return rc;
+}
+
 void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust)
 {
     cf_json_arr(j, "rounds");

@@ -9,13 +9,19 @@
 #include "cf_json.h"
 #include "nf_budget.h"
 #include "nf_knots.h"
+#include "nf_knotsel.h"
 #include "nf_surf.h"
 #include <stddef.h>
 
 typedef enum cf_refine {
-    CF_REFINE_UNIFORM = 0, /* every non-empty span halved (nf_refine_uniform) */
-    CF_REFINE_RESIDUAL = 1 /* the spans holding most excess split (nf_spanres_choose) */
+    CF_REFINE_UNIFORM = 0,  /* every non-empty span halved (nf_refine_uniform) */
+    CF_REFINE_RESIDUAL = 1, /* the spans holding most excess split (nf_spanres_choose) */
+    CF_REFINE_AUTO = 2      /* knot lines per control point added where data both sides
+                               (nf_knotsel), rules of nf_loopctl: the default */
 } cf_refine_t;
+
+/* "uniform", "residual", "auto". */
+const char *cf_refine_name(cf_refine_t how);
 
 /* Why the loop cannot go on (cf_loop_next's *stop). */
 enum {
@@ -33,6 +39,13 @@ enum {
  * CF_ENOMEM, or an nf_err_t of knot insertion, with msg. */
 int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, long max_cp,
                  nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml);
+
+/* The next net from fit with the knot lines c[0..n-1] of nf_knotsel_choose
+ * inserted (Boehm: the same surface). Limits and results as cf_loop_next:
+ * *stop = CF_LOOP_STOP_DATA when n is 0, CF_LOOP_STOP_MAX_CP past max_cp,
+ * the board's control points or its arena bytes with this solver. */
+int cf_loop_insert(const nf_surf_t *fit, const nf_knotsel_cand_t *c, int n, long max_cp,
+                   nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml);
 
 /* One round as reported. */
 typedef struct cf_round {
