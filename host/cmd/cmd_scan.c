@@ -401,12 +401,17 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
 }
 
 /* The fast methods' counts (cf_scanfast_res_t) into the summary. */
-static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, double fit_ready)
+static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, double fit_ready,
+                         const cf_fitjob_result_t *fr)
 {
     cf_json_int(js, "rows", x->rows);
     cf_json_int(js, "rows_done", x->rows_done);
     cf_json_num(js, "scan_seconds", x->seconds);
     cf_json_num(js, "points_per_s", x->seconds > 0 ? (double)x->points / x->seconds : 0);
+    /* After the last row: the surface solved from the accumulated stripes
+     * (fit_solve_s), and the job done (fit_ready_s: with the check of every
+     * point read back from the journal, which is statistics, not the fit). */
+    cf_json_num(js, "fit_solve_s", fr ? fr->t_solve : 0);
     cf_json_num(js, "fit_ready_s", fit_ready);
     if (method == CF_SCAN_OTF) {
         cf_json_num(js, "speed", x->speed);
@@ -465,7 +470,7 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
     }
     cf_json_str(&js, "method", cf_scanfast_method_name((cf_scan_method_t)method));
     if (method != CF_SCAN_STOP)
-        summary_fast(&js, method, fast, fit_ready);
+        summary_fast(&js, method, fast, fit_ready, fr);
     cf_json_num(&js, "seconds", secs);
     cf_json_end(&js);
 }
