@@ -136,6 +136,7 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
         return rc;
     }
     int stopped = 0;
+    double t_poll = cli_now();
     while (!rc) {
         rig_reading_t rd[256];
         rig_trig_event_t pos[256];
@@ -145,7 +146,13 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
             *where = SCAN_AT_PROBE;
             break;
         }
-        if (n && ((rc = scan_otf_trig(o, pos, n)) || (rc = scan_otf_read(o, rd, n)))) {
+        /* Entry by entry, position then reading: a batch of positions
+         * past a gap must not push the readings of its first entries out
+         * of the window before they are taken (they would count as late). */
+        for (size_t i = 0; i < n && !rc; i++)
+            if ((rc = scan_otf_trig(o, &pos[i], 1)) == 0)
+                rc = scan_otf_read(o, &rd[i], 1);
+        if (rc) {
             *where = o->err ? SCAN_AT_CALLER : SCAN_AT_PROBE;
             break;
         }
@@ -159,7 +166,12 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
             rc = hal_probe_stream_stop(&rig->pr);
             continue;
         }
-        if (moving && n < 256) {
+        /* The stage's status when the FIFO is drained, and at least every
+         * 20 ms while it is not (a host behind the stream still sees the
+         * row end and a fault within the row). */
+        double t = cli_now();
+        if (moving && (n < 256 || t - t_poll >= 0.02)) {
+            t_poll = t;
             uint32_t st = 0;
             if ((rc = rig->stage.ops->status(rig->stage.ctx, &st)) != 0) {
                 *where = SCAN_AT_STAGE;
