@@ -128,8 +128,13 @@ static void otf_counts(const scan_otf_t *o, unsigned long dropped, cf_scanfast_r
 /* The stream's entries while the stage runs the row, then the stop and
  * the drain. *fault set when the stage faulted (or E-stop) mid-row. */
 static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t *cb,
-                          double period_us, unsigned long *dropped, int *fault, int *where)
+                          double period_us, double t_row, unsigned long *dropped, int *fault,
+                          int *where)
 {
+    /* Bounds, so that a stage that never reports the row's end or a stream
+     * whose end never comes is an error, not a hang: the row's travel three
+     * times over plus 2 s; 2 s without an entry once stopped. */
+    double t_start = cli_now(), t_entry = t_start, t_max = 3 * t_row + 2;
     int moving = 1, rc = hal_probe_stream_start(&rig->pr, (uint32_t)lround(period_us));
     if (rc) {
         *where = SCAN_AT_PROBE;
@@ -158,6 +163,24 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
         }
         if (!moving && !n && !rig->pr.streaming)
             break;
+        double t_now = cli_now();
+        if (n)
+            t_entry = t_now;
+        if (!moving && !n && t_now - t_entry > 2.0) {
+            rc = RIG_ETIMEOUT;
+            *where = SCAN_AT_PROBE;
+            snprintf(rig->pr.err, sizeof rig->pr.err,
+                     "probe stream: stopped, but its end did not come within 2 s");
+            break;
+        }
+        if (moving && t_now - t_start > t_max) {
+            rig->stage.ops->stop(rig->stage.ctx);
+            rc = RIG_ETIMEOUT;
+            *where = SCAN_AT_STAGE;
+            snprintf(rig->st.err, sizeof rig->st.err,
+                     "stage: the row's move did not end within %.1f s (still busy)", t_max);
+            break;
+        }
         if (moving && !stopped && stop_asked(cb)) {
             /* ABORT or the watchdog: the stage first, then the stream. */
             rig->stage.ops->stop(rig->stage.ctx);
@@ -253,7 +276,8 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
             break;
         }
         int fault = 0, where = SCAN_AT_NONE;
-        rc = otf_stream_row(rig, &o, cb, res->period_us, &dropped, &fault, &where);
+        rc = otf_stream_row(rig, &o, cb, res->period_us, fabs(xb - xa) / speed, &dropped, &fault,
+                            &where);
         int erc = scan_otf_row_end(&o, fault != 0, 0);
         if (!rc)
             rc = erc;
@@ -289,7 +313,11 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
     res->seconds = cli_now() - t0;
     res->code = rc;
     if (rc && msg && ml && !*msg)
-        snprintf(msg, ml, "on the fly: row %ld: %s", res->fail_row, rig_strerror(rc));
+        snprintf(msg, ml, "on the fly: row %ld: %s%s%s", res->fail_row, rig_strerror(rc),
+                 res->where == SCAN_AT_STAGE || res->where == SCAN_AT_PROBE ? ": " : "",
+                 res->where == SCAN_AT_STAGE   ? rig->st.err
+                 : res->where == SCAN_AT_PROBE ? rig->pr.err
+                                               : "");
     return rc;
 }
 
