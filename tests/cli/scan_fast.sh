@@ -9,7 +9,8 @@
 # entries they carried lost on both sides), a small FIFO held up by slow
 # replies (overrun, every dropped entry counted), a drive fault half-way
 # along a row (the row cut short, the job ended with the fault, the
-# journal consistent). The profiler (--method profiler; cellsim --gev):
+# journal consistent), SIGTERM mid-row (ended RIG_EABORTED in the row).
+# The profiler (--method profiler; cellsim --gev):
 # the fit against the true part and the journal's count, then with 1 % of
 # the GVSP packets lost: every lost profile a flagged journal record,
 # none shifted (the fit still matches the part). Processes stopped by PID.
@@ -132,6 +133,27 @@ p=$(jf points)
     ok "stage fault: journal ended with -209, $p points (row 0 and half of row 1)" ||
     no "stage fault journal: $(cat "$T/info")"
 grep -q "drive fault\|fault" "$T/err" && ok "stage fault: said on stderr" || no "stage fault: stderr $(cat "$T/err")"
+stop_all
+
+# 4b. SIGTERM mid-row (the stop flag the cell's ABORT and watchdog also
+# set): rows of 0.8 s (a trigger every 1 ms, 0.1 mm apart: 100 mm/s); the
+# signal 1.5 s in. The stage stopped, the stream drained, the job ended
+# RIG_EABORTED (-217) in that row, the journal ended with it.
+sim term
+"$CF" scan --method otf --stage "tcp:127.0.0.1:$P:1" --probe "tcp:127.0.0.1:$P:2" --nominal "$NOM" \
+    --journal "$T/term.jnl" --region $REGION --step 0.1 --pitch 4 --period 1000 --json \
+    >"$T/out" 2>"$T/err" &
+SP=$!
+sleep 1.5
+kill -TERM $SP
+i=0
+while kill -0 $SP 2>/dev/null && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+wait $SP
+rc=$?
+"$CF" journal info "$T/term.jnl" --json >"$T/info"
+[ $rc -eq 1 ] && [ "$(jf code)" = -217 ] && [ "$(ji end_code)" = -217 ] && [ "$(ji points)" = "$(jf points)" ] &&
+    le "$(jf rows_done)" 2 && ok "SIGTERM mid-row: ended -217 after $(jf rows_done) whole rows, journal ended, $(jf points) points" ||
+    no "SIGTERM mid-row: exit $rc; $(cat "$T/out"); journal $(cat "$T/info")"
 stop_all
 
 # 5. The profiler (cellsim --gev, port 3956: one per machine, so a start
