@@ -305,8 +305,8 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
         res->fail_row = -1;
         res->where = SCAN_AT_NONE;
     }
-    if (old_speed >= 1 && hal_stage_set_speed(&rig->st, old_speed) && !rc)
-        res->where = SCAN_AT_STAGE; /* best effort: the scan itself stands */
+    if (old_speed >= 1)
+        (void)hal_stage_set_speed(&rig->st, old_speed); /* best effort: the scan itself stands */
     if (rc == RIG_EABORTED || res->where == SCAN_AT_STAGE)
         rig->stage.ops->stop(rig->stage.ctx);
     jnl_end(j, rc, cli_now());
