@@ -34,6 +34,13 @@ typedef struct hal_stage {
 int hal_stage_init(hal_stage_t *s, hal_t *h);
 extern const rig_stage_ops_t hal_stage_ops; /* ctx: hal_stage_t * */
 
+/* On the fly (issue 19): start a move to (x, y) at the stage's speed and
+ * return once the stage took it (limits, homed and the result checked as
+ * move_to does); its end shows in the status (BUSY clears, FAULT sets).
+ * And set the travel speed of both axes (1..65535 mm/s, rounded). */
+int hal_stage_move_start(hal_stage_t *s, double x, double y);
+int hal_stage_set_speed(hal_stage_t *s, double mm_s);
+
 typedef struct hal_probe {
     hal_t *h;
     int modbus;    /* 1: input registers; 0: ASCII protocol */

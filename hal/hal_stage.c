@@ -327,6 +327,39 @@ static int st_move_to(void *ctx, double x, double y)
     return wait_move(s, to, t_cmd, est, tmo);
 }
 
+/* On the fly: the same checked command as st_move_to (limits, homed, the
+ * move counter and result), without the wait; the caller polls the status
+ * between its stream reads (BUSY clears at the target, FAULT on a fault). */
+int hal_stage_move_start(hal_stage_t *s, double x, double y)
+{
+    if (!s || !isfinite(x) || !isfinite(y))
+        return s ? sfail(s, RIG_EARG, "stage: target not finite") : RIG_EARG;
+    s->at_valid = 0;
+    if (x < s->lo[0] || x > s->hi[0] || y < s->lo[1] || y > s->hi[1])
+        return sfail(s, RIG_ELIMIT,
+                     "stage: target (%g, %g) outside soft limits [%g, %g] x [%g, %g]", x, y,
+                     s->lo[0], s->hi[0], s->lo[1], s->hi[1]);
+    uint16_t r[STG_MOVES - STG_STATUS + 1];
+    int rc = rd(s, STG_STATUS, STG_MOVES - STG_STATUS + 1, r, "reading status and position");
+    if (rc || (rc = status_error(s, r[0], "before the move")))
+        return rc;
+    if (!(r[0] & RIG_ST_HOMED))
+        return sfail(s, RIG_ENOTHOMED, "stage: move to (%g, %g) asked before homing", x, y);
+    int32_t tgt[2] = {(int32_t)lround(x * 1e3), (int32_t)lround(y * 1e3)};
+    return command(s, STG_CMD_MOVE, tgt, &r[STG_MOVES - STG_STATUS], "the move");
+}
+
+int hal_stage_set_speed(hal_stage_t *s, double mm_s)
+{
+    if (!s || !(mm_s >= 1 && mm_s <= 65535))
+        return s ? sfail(s, RIG_EARG, "stage: speed %g mm/s outside 1..65535", mm_s) : RIG_EARG;
+    uint16_t v = (uint16_t)lround(mm_s);
+    int rc = wr(s, STG_SPEED, 1, &v, "writing the speed");
+    if (!rc)
+        s->speed = v;
+    return rc;
+}
+
 static int st_stop(void *ctx)
 {
     hal_stage_t *s = ctx;

@@ -25,12 +25,39 @@
 # DEMO_BETA (0.03), DEMO_ALPHA (0.1), DEMO_SEED (1), DEMO_MARGIN mm (15:
 # check points this far inside / outside the scanned rectangle count as
 # measured / unmeasured).
+#
+# DEMO_METHOD (issue 19): otf (the default) scans on the fly: each raster
+# row at constant speed, the probe streaming one reading per trigger over
+# its ASCII protocol (cellsim simulates the trigger input), the readings
+# paired with the positions latched at the same trigger number, journalled
+# and streamed into the fit row by row: DEMO_STEP (0.1 mm between
+# triggers), DEMO_PITCH (2 mm between rows), DEMO_PERIOD (50 us between
+# triggers: the stage runs at step / period, 2000 mm/s) give 76 rows of
+# 1401 points. stop keeps the stop-and-go probe (DEMO_STEP 2.5). profiler
+# runs cellsim's GigE Vision line profiler (--gev, Aravis's fake camera on
+# 127.0.0.1): DEMO_GEV_WIDTH (512) points a profile, DEMO_GEV_PROFILES
+# (200) a pass over the whole part, DEMO_GEV_RATE (50) frames/s of 16
+# profiles; the region is then the profiler's pass (no unmeasured strip).
 set -u
 CF=$1
 SIM=$(dirname "$CF")/cellsim
 D=${DEMO_DIR:-build/demo}
 REGION=${DEMO_REGION:-60:200:0:150}
-STEP=${DEMO_STEP:-2.5}
+METHOD=${DEMO_METHOD:-otf}
+case $METHOD in
+otf) STEP=${DEMO_STEP:-0.1} ;;
+stop | profiler) STEP=${DEMO_STEP:-2.5} ;;
+*)
+    echo "demo: DEMO_METHOD=$METHOD: want otf, stop or profiler" >&2
+    exit 1
+    ;;
+esac
+PITCH=${DEMO_PITCH:-2}
+PERIOD=${DEMO_PERIOD:-50}
+GEV_WIDTH=${DEMO_GEV_WIDTH:-512}
+GEV_PROFILES=${DEMO_GEV_PROFILES:-200}
+GEV_RATE=${DEMO_GEV_RATE:-50}
+GEV_SERIAL=DEMO$$
 SPEED=${DEMO_SPEED:-500}
 NOISE=${DEMO_NOISE:-0.002}
 TOL=${DEMO_TOL:-0.1}
@@ -120,8 +147,11 @@ wait_for "$T/socat1.err" "starting data transfer loop" $! || die "socat (RTU pai
 $DETACH socat -d -d "pty,raw,echo=0,link=$T/asc.a" "pty,raw,echo=0,link=$T/asc.b" 2>"$T/socat2.err" &
 PIDS="$PIDS $!"
 wait_for "$T/socat2.err" "starting data transfer loop" $! || die "socat (ASCII pair) did not start: $(cat "$T/socat2.err")"
+GEV=""
+[ "$METHOD" = profiler ] && GEV="--gev $GEV_SERIAL --gev-width $GEV_WIDTH --gev-height 16 --gev-profiles $GEV_PROFILES"
+# shellcheck disable=SC2086
 $DETACH "$SIM" --rtu "$T/rtu.b" --ascii "$T/asc.b" --homed --speed "$SPEED" --seed "$SEED" \
-    --noise "$NOISE" >"$T/sim.out" 2>"$T/sim.err" &
+    --noise "$NOISE" $GEV >"$T/sim.out" 2>"$T/sim.err" &
 SIMPID=$!
 PIDS="$PIDS $SIMPID"
 wait_for "$T/sim.out" "^cellsim: ready pid $SIMPID\$" $SIMPID || die "cellsim did not come up: $(cat "$T/sim.err")"
@@ -136,13 +166,35 @@ t_rig=$(since "$t")
 STAGE=rtu:$T/rtu.a:$BAUD:8N1:1
 PROBE=tty:$T/asc.a:$BAUD
 
-# 3. Scan and fit: the serpentine raster over the region, every point
-# journalled and streamed into the fit.
-echo "demo: scanning x $X0..$X1, y $Y0..$Y1 mm, step $STEP mm (stage $SPEED mm/s on Modbus RTU, probe ASCII)"
+# 3. Scan and fit: the serpentine raster over the region (or the
+# profiler's pass), every point journalled and streamed into the fit.
+case $METHOD in
+otf)
+    HOW="on the fly, a trigger every $PERIOD us, rows $PITCH mm apart (stage on Modbus RTU, probe streaming ASCII)"
+    set -- --method otf --stage "$STAGE" --probe "$PROBE" --region "$REGION" --step "$STEP" \
+        --pitch "$PITCH" --period "$PERIOD"
+    ;;
+profiler)
+    GEOM=$(sed -n 's/^cellsim: gev //p' "$T/sim.out")
+    [ -n "$GEOM" ] || die "cellsim printed no profiler geometry: $(cat "$T/sim.err")"
+    set -- $(echo "$GEOM" | awk '{ for (i = 1; i < NF; i++) g[$i] = $(i + 1)
+        printf "%s %s %s %s", g["x0"], g["x0"] + (g["profiles"] - 1) * g["dx"], g["y0"], g["y0"] + (g["width"] - 1) * g["dy"] }')
+    X0=$1 X1=$2 Y0=$3 Y1=$4
+    REGION=$X0:$X1:$Y0:$Y1
+    STEP=$(echo "$GEOM" | awk '{ for (i = 1; i < NF; i++) if ($i == "dx") printf "%.3f", $(i + 1) }')
+    HOW="GigE Vision line profiler ($GEV_WIDTH points a profile, $GEV_RATE frames of 16 profiles/s, cellsim's fake camera on 127.0.0.1)"
+    set -- --method profiler --probe "gev:127.0.0.1:$GEV_SERIAL" --geometry "$GEOM" --frame-rate "$GEV_RATE"
+    ;;
+*)
+    HOW="stop and go, stage $SPEED mm/s on Modbus RTU, probe ASCII"
+    set -- --method stop --stage "$STAGE" --probe "$PROBE" --region "$REGION" --step "$STEP"
+    ;;
+esac
+echo "demo: scanning x $X0..$X1, y $Y0..$Y1 mm, step $STEP mm ($HOW)"
 t=$(now)
 if [ -t 2 ]; then SCANERR=/dev/stderr; else SCANERR=$T/scan.err; fi # the progress bar on a terminal
-run "$T/scan.out" "$SCANERR" "$CF" scan --stage "$STAGE" --probe "$PROBE" --nominal "$NOM" \
-    --journal "$D/scan.jnl" --region "$REGION" --step "$STEP" --alpha "$ALPHA" --beta "$BETA" \
+run "$T/scan.out" "$SCANERR" "$CF" scan "$@" --nominal "$NOM" \
+    --journal "$D/scan.jnl" --alpha "$ALPHA" --beta "$BETA" \
     --fit "$D/fitted.igs" --job-id 1 --report "$T/scan.json" ||
     die "scan failed$([ -f "$T/scan.err" ] && echo ": $(tail -n 1 "$T/scan.err")")"
 t_scan=$(since "$t")
@@ -193,8 +245,13 @@ t_report=$(since "$t")
 S=$T/scan.json
 NPTS=$(json "$S" points)
 RATE=$(awk -v n="$(json "$S" done)" -v s="$(json "$S" seconds)" 'BEGIN { printf "%.0f", n / s }')
+# The fast methods' own figures: the points/s of the scan alone, the fit's
+# readiness after the last row, and every loss counted (0 when not asked).
+jn() { v=$(json "$S" "$1"); echo "${v:-0}"; }
+SCANRATE=$(jn points_per_s | awk '{ printf "%.0f", $1 }')
+[ "$METHOD" = stop ] && SCANRATE=$RATE
 cat >"$D/report.json" <<EOF
-{"points": $NPTS, "planned": $(json "$S" planned), "flagged": $(json "$S" flagged), "nx": $(json "$S" nx), "ny": $(json "$S" ny), "step": $STEP, "region": "$REGION", "control_points": $(json "$T/info.json" control_points), "nu": $(json "$T/info.json" nu), "nv": $(json "$T/info.json" nv), "alpha": $ALPHA, "beta": $BETA, "rms": $(json "$S" rms), "max_abs": $(json "$S" max_abs), "nominal_rms": $(json "$S" nominal_rms), "nominal_max_abs": $(json "$S" nominal_max_abs), "tol": $TOL, "within_tol_pct": $(json "$T/dev.json" within_tol_pct), "deviation_rms": $(json "$T/dev.json" rms), "deviation_min": $(json "$T/dev.json" min), "deviation_max": $(json "$T/dev.json" max), "dent_x": $DX, "dent_y": $DY, "dent_found": $(json "$T/fdev.json" min), "dent_true": $(json "$T/tdev.json" min), "noise": $NOISE, "check_measured": $NCHK, "fit_vs_true_rms": $FT_RMS, "fit_vs_true_max_abs": $FT_MAX, "check_unmeasured": $NUN, "unmeasured_fit_vs_nominal_max_abs": $UN_FN, "unmeasured_true_vs_nominal_max_abs": $UN_TN, "margin": $MARGIN, "speed": $SPEED, "points_per_s": $RATE, "seconds_rig": $t_rig, "seconds_scan_fit": $t_scan, "seconds_report": $t_report, "fitted": "$D/fitted.igs", "points_file": "$D/points.xyz", "png": "$D/deviation-map.png", "png_fitted": "$D/fitted-vs-nominal.png", "journal": "$D/scan.jnl"}
+{"points": $NPTS, "planned": $(json "$S" planned), "flagged": $(json "$S" flagged), "nx": $(json "$S" nx), "ny": $(json "$S" ny), "step": $STEP, "region": "$REGION", "control_points": $(json "$T/info.json" control_points), "nu": $(json "$T/info.json" nu), "nv": $(json "$T/info.json" nv), "alpha": $ALPHA, "beta": $BETA, "rms": $(json "$S" rms), "max_abs": $(json "$S" max_abs), "nominal_rms": $(json "$S" nominal_rms), "nominal_max_abs": $(json "$S" nominal_max_abs), "tol": $TOL, "within_tol_pct": $(json "$T/dev.json" within_tol_pct), "deviation_rms": $(json "$T/dev.json" rms), "deviation_min": $(json "$T/dev.json" min), "deviation_max": $(json "$T/dev.json" max), "dent_x": $DX, "dent_y": $DY, "dent_found": $(json "$T/fdev.json" min), "dent_true": $(json "$T/tdev.json" min), "noise": $NOISE, "check_measured": $NCHK, "fit_vs_true_rms": $FT_RMS, "fit_vs_true_max_abs": $FT_MAX, "check_unmeasured": $NUN, "unmeasured_fit_vs_nominal_max_abs": $UN_FN, "unmeasured_true_vs_nominal_max_abs": $UN_TN, "margin": $MARGIN, "speed": $SPEED, "points_per_s": $RATE, "method": "$METHOD", "scan_points_per_s": $SCANRATE, "fit_ready_s": $(jn fit_ready_s), "fit_solve_s": $(jn fit_solve_s), "lost_readings": $(jn lost_readings), "lost_triggers": $(jn lost_triggers), "both_lost": $(jn both_lost), "overrun": $(jn overrun), "dropped_by_probe": $(jn dropped_by_probe), "rows_cut": $(jn rows_cut), "profiles_lost": $(jn profiles_lost), "frames_lost": $(jn frames_lost), "dropouts": $(jn dropouts), "seconds_rig": $t_rig, "seconds_scan_fit": $t_scan, "seconds_report": $t_report, "fitted": "$D/fitted.igs", "points_file": "$D/points.xyz", "png": "$D/deviation-map.png", "png_fitted": "$D/fitted-vs-nominal.png", "journal": "$D/scan.jnl"}
 EOF
 
 # 6. The summary.
@@ -202,7 +259,8 @@ R=$D/report.json
 f() { awk -v v="$(json "$R" "$1")" -v fmt="$2" 'BEGIN { printf fmt, v }'; }
 echo "== cellfit demo: the cell's job on the simulated rig"
 echo "rig:     stage Modbus RTU $BAUD 8N1 (pty), probe ASCII (pty), cellsim pid $SIMPID; probe noise sigma $NOISE mm"
-echo "scan:    x $X0..$X1 y $Y0..$Y1 mm, step $STEP mm: $NPTS points ($(json "$R" nx) x $(json "$R" ny)), $(json "$R" flagged) without surface; $RATE points/s at $SPEED mm/s"
+echo "scan:    $METHOD: x $X0..$X1 y $Y0..$Y1 mm, step $STEP mm: $NPTS points ($(json "$R" nx) x $(json "$R" ny)), $(json "$R" flagged) without surface; $SCANRATE points/s scanning, $RATE points/s with the fit"
+[ "$METHOD" = stop ] || echo "losses:  readings $(json "$R" lost_readings), triggers $(json "$R" lost_triggers), both sides $(json "$R" both_lost), overrun $(json "$R" overrun), dropped by the probe $(json "$R" dropped_by_probe), rows cut $(json "$R" rows_cut), profiles $(json "$R" profiles_lost) ($(json "$R" frames_lost) frames); fit solved $(f fit_solve_s %.3f) s after the last row, checked against every point $(f fit_ready_s %.2f) s after it"
 echo "fit:     $(json "$R" control_points) control points ($(json "$R" nu) x $(json "$R" nv)), alpha $ALPHA beta $BETA: residual rms $(f rms %.4f) mm, max $(f max_abs %.4f) mm"
 echo "part:    vs nominal, tol +-$TOL mm: $(f within_tol_pct %.1f) % of points within; deviation rms $(f deviation_rms %.4f), min $(f deviation_min %+.4f), max $(f deviation_max %+.4f) mm"
 echo "dent:    deepest $(f dent_found %+.4f) mm at ($DX, $DY) on the fitted surface; simulator's true part there $(f dent_true %+.4f) mm"

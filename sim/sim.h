@@ -123,11 +123,11 @@ typedef struct sim_fifo_ent {
  * on its wires): every period_us from arming, the probe measures at the
  * stage's position at that instant and latches it with the reading. */
 typedef struct sim_stream {
-    uint32_t period_us;   /* 0: not streaming */
-    double t_arm;         /* ms */
-    uint64_t k;           /* next trigger number */
-    sim_fifo_ent_t *fifo; /* cap entries (allocated at the first arming) */
-    size_t cap, head, count;
+    uint32_t period_us;      /* 0: not streaming */
+    double t_arm;            /* ms */
+    uint64_t k;              /* next trigger number */
+    sim_fifo_ent_t *fifo;    /* cap entries (allocated at the first arming) */
+    size_t cap, head, count; /* cap preset before the first arming: that size (0: 65536) */
     uint16_t overrun;
     double uv[2]; /* the part's parameters at the last reading (warm start) */
     /* The ASCII protocol's streaming (sim_ascii.c): entries go out as lines

@@ -209,6 +209,7 @@ int main(int argc, char **argv)
     double dent = -1, warp = 0, z0 = 50, off[2] = {0, 0}, range[2] = {30, 60}, noise = 0.002;
     double speed = 200, settle = 0, lim[4] = {-10, 210, -10, 160};
     long seed = 1;
+    long fifo = 0;
     int homed = 0, verbose = 0, warp_set = 0;
     int stage_unit = HAL_STAGE_UNIT, probe_unit = HAL_PROBE_UNIT;
     fault_specs_t specs = {{0}, 0};
@@ -286,6 +287,15 @@ int main(int argc, char **argv)
          .help = "profiles over one pass of the part",
          .lo = 2,
          .hi = 100000},
+        {.name = "fifo",
+         .kind = CF_OPT_LONG,
+         .dst = &fifo,
+         .arg = "N",
+         .help = "entries the probe's streaming FIFO holds (a small one overflows: the overrun "
+                 "fault of tests/cli/scan_fast.sh)",
+         .lo = 1,
+         .hi = 65536,
+         .def = "65536"},
         {.name = "gev-scale",
          .kind = CF_OPT_DOUBLE,
          .dst = &gev.scale,
@@ -468,6 +478,7 @@ int main(int argc, char **argv)
     probe.hi = range[1];
     probe.noise = noise;
     probe.faults = &faults;
+    probe.stream.cap = (size_t)fifo;
     sim_rng_seed(&probe.rng, (uint64_t)seed, 2);
     net.rig = &rig;
     net.faults = &faults;

@@ -384,7 +384,10 @@ void sim_net_poll(sim_net_t *n, double max_ms)
             wait = t < wait ? t : wait;
         }
     }
-    if (n->rig->probe && n->rig->probe->stream.ascii && wait > 1)
+    int pending = 0;
+    for (int k = 0; k < SIM_MAX_CONNS; k++)
+        pending |= n->conn[k].fd >= 0 && n->conn[k].nsout;
+    if (n->rig->probe && (n->rig->probe->stream.ascii || pending) && wait > 1)
         wait = 1; /* streaming: lines go out every millisecond */
     wait = wait < 0 ? 0 : wait;
     struct timeval tv = {(time_t)(wait / 1e3),
@@ -431,8 +434,11 @@ void sim_net_poll(sim_net_t *n, double max_ms)
             if (!c->nout && c->nin == before)
                 break;
         }
-        if (c->fd >= 0 && n->rig->probe && n->rig->probe->stream.ascii &&
-            n->rig->probe->stream.ascii_conn == k && !c->nout)
+        /* Also once the stream has ended: its last lines (the end line
+         * among them) may still wait in sout for a full pty to take them. */
+        if (c->fd >= 0 && n->rig->probe &&
+            (c->nsout || (n->rig->probe->stream.ascii && n->rig->probe->stream.ascii_conn == k)) &&
+            !c->nout)
             stream_out(n, c);
         /* RTU: bytes of an incomplete frame followed by silence are noise. */
         if (c->fd >= 0 && c->nin && n->port[c->port].wire == SIM_W_RTU &&

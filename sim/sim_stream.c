@@ -84,10 +84,11 @@ int sim_stream_write(sim_probe_t *pr, double now, int addr, int n, const uint16_
     if (p && (p < PRB_MIN_PERIOD_US || p > PRB_MAX_PERIOD_US))
         return 3;
     if (p && !s->fifo) {
-        s->fifo = malloc(SIM_FIFO_CAP * sizeof *s->fifo);
+        size_t cap = s->cap ? s->cap : SIM_FIFO_CAP; /* cellsim --fifo sets a smaller one */
+        s->fifo = malloc(cap * sizeof *s->fifo);
         if (!s->fifo)
             return 4; /* server device failure */
-        s->cap = SIM_FIFO_CAP;
+        s->cap = cap;
     }
     /* Arming restarts the numbering and empties the FIFO; stopping keeps
      * what is queued for the host to read. */

@@ -45,6 +45,10 @@ static void scan_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_scanjob_o
     o->job_id = (unsigned long long)time(NULL) * 65536ull + p->seq;
     o->pct0 = 0;
     o->pct1 = p->cmd == PLC_C_SCAN_FIT ? 70 : 100;
+    /* issue 19: the scan method (config scan_method) */
+    o->method = rr->scan_method;
+    o->rig = rr->rig;
+    o->period_us = rr->scan_period_us;
 }
 
 /* The scan's checks before it is accepted: a plan inside the stage's soft

@@ -42,6 +42,10 @@ typedef struct cf_plcrun {
     char journal[4096];      /* the last scan's journal */
     char last_journal[4096]; /* the journal of the latched fit ("" for FIT) */
     char last_export[4096];  /* folder of the last export */
+    /* issue 19: SCAN's method (cf_scanfast.h: 0 stop-and-go, 1 on the fly)
+     * and trigger period (config scan_method, scan_period_us) */
+    int scan_method;
+    double scan_period_us;
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

@@ -4,6 +4,8 @@
 #include "cf_cli.h"
 #include "cf_err.h"
 #include "cf_fitsrc.h"
+#include "cf_log.h"
+#include "cf_scanfast.h"
 #include "cf_store_file.h"
 #include "rig_err.h"
 #include <math.h>
@@ -59,6 +61,43 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
     }
 }
 
+/* On the fly (cf_scanfast.h): rows instead of grid points for progress
+ * and the stop check; the result in the stop-and-go terms (fail_index the
+ * row's first grid point). The points are not fitted live here: SCAN_FIT
+ * fits the journal after the scan (cf_scanjob_fit). */
+static int fast_stop(void *ctx)
+{
+    return stop(((const sj_ctx_t *)ctx)->ctl);
+}
+
+static void fast_progress(void *ctx, long rows_done, long rows, long points)
+{
+    (void)points;
+    on_progress(ctx, rows_done, rows, 0);
+}
+
+static int run_otf(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
+                   scan_result_t *res, char *msg, size_t ml)
+{
+    cf_scanfast_cb_t cb = {NULL, fast_progress, fast_stop, sc};
+    cf_scanfast_res_t fr;
+    int rc = cf_scanfast_otf(o->rig, &job->plan, &job->kin, o->period_us > 0 ? o->period_us : 50, j,
+                             &cb, &fr, msg, ml);
+    res->points = fr.points;
+    res->flagged = fr.flagged;
+    res->done = fr.points + fr.flagged;
+    res->fail_index = fr.fail_row >= 0 ? fr.fail_row * job->plan.nx : -1;
+    res->code = rc;
+    res->where = fr.where;
+    cf_log(rc ? CF_LOG_WARN : CF_LOG_INFO,
+           "scan on the fly: %ld rows, %ld points, %.0f points/s; lost: %ld readings, %ld "
+           "triggers, %ld on both sides (%ld dropped by the probe), %ld overrun, %ld rows cut",
+           fr.rows_done, fr.points, fr.seconds > 0 ? (double)fr.points / fr.seconds : 0,
+           fr.lost_readings, fr.lost_triggers, fr.both_lost, fr.dropped_by_probe, fr.overrun,
+           fr.rows_cut);
+    return rc;
+}
+
 int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_result_t *res,
                    char *msg, size_t ml)
 {
@@ -86,6 +125,8 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     h.job_id = (uint64_t)o->job_id;
     h.t_start = cli_now();
     scan_header(&job, &h);
+    if (o->method == CF_SCAN_OTF)
+        cf_scanfast_header(&job.kin, scan_plan_count(&job.plan), &h);
     jnl_t j;
     if ((rc = jnl_create(&j, st, &h)) != RIG_OK) {
         rc = cf_fail(msg, ml, rc, "%s: %s (%s)", o->journal, rig_strerror(rc), f.err);
@@ -97,7 +138,10 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     job.clock = (rig_clock_t){&sj_clock, &sc};
     job.cb = (scan_cb_t){NULL, on_progress, &sc};
     progress(ctl, o->pct0);
-    rc = scan_run(&job, &j, res);
+    if (o->method == CF_SCAN_OTF)
+        rc = run_otf(o, &job, &j, &sc, res, msg, ml);
+    else
+        rc = scan_run(&job, &j, res);
     if (rc)
         cf_fail(msg, ml, rc, "%s: job ended at grid point %ld: %s (%llu records acknowledged)",
                 o->journal, res->fail_index, rig_strerror(rc), (unsigned long long)jnl_acked(&j));

@@ -8,6 +8,7 @@
 #define CF_SCANJOB_H
 
 #include "cf_job.h"
+#include "hal_rig.h"
 #include "rig.h"
 #include "scan.h"
 #include <stddef.h>
@@ -21,6 +22,13 @@ typedef struct cf_scanjob_opts {
     const char *nominal;         /* identity in the header, or NULL */
     unsigned long long job_id;
     int pct0, pct1; /* progress reported over this span */
+    /* Appended (issue 19): the method (cf_scanfast.h; 0 stop-and-go) and,
+     * on the fly, the rig's drivers (the stream and the non-blocking move
+     * are theirs) and the trigger period (0: 50 us); the profiler is not a
+     * cell method yet. */
+    int method;
+    hal_rig_t *rig;
+    double period_us;
 } cf_scanjob_opts_t;
 
 /* The plan of the region (RIG_EARG when it has no point or too many). */

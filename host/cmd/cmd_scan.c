@@ -12,6 +12,7 @@
 #include "cf_iges.h"
 #include "cf_json.h"
 #include "cf_opt.h"
+#include "cf_scanfast.h"
 #include "cf_store_file.h"
 #include "cf_surf.h"
 #include "cf_surfio.h"
@@ -71,6 +72,10 @@ typedef struct scan_opts {
     long entity, sync_every, job_id;
     cf_fitjob_opts_t fo; /* --fit: the job's loop, robust passes, reprojection */
     cmd_fitopts_t fa;
+    /* issue 19: the method and its settings (cf_scanfast.h) */
+    const char *method, *geometry;
+    double period_us, frame_rate, pitch;
+    long profiles;
 } scan_opts_t;
 
 /* "a:b:c..." into n doubles. */
@@ -113,19 +118,63 @@ static int parse(int argc, char **argv, scan_opts_t *o)
     o->sync_every = JNL_SYNC_EVERY_DEFAULT;
     o->job_id = (long)time(NULL);
     cf_fitjob_defaults(&o->fo);
+    o->period_us = 50;
     const cf_opt_t own[] = {
         {.name = "stage",
          .kind = CF_OPT_STR,
          .dst = &o->stage,
          .arg = "URI",
-         .help = "the motion stage (hal: modbus-tcp://, modbus-rtu://, sim://)",
-         .req = 1},
+         .help = "the motion stage (hal: modbus-tcp://, modbus-rtu://, sim://); not for "
+                 "--method profiler"},
         {.name = "probe",
          .kind = CF_OPT_STR,
          .dst = &o->probe,
          .arg = "URI",
-         .help = "the laser probe",
+         .help = "the laser probe (gev:ADDRESS[:SERIAL]: a line profiler)",
          .req = 1},
+        {.name = "method",
+         .kind = CF_OPT_STR,
+         .dst = &o->method,
+         .arg = "M",
+         .help = "stop (stop-and-go), otf (on the fly: the probe streams a reading per "
+                 "trigger), profiler (GigE Vision line profiler)",
+         .def = "profiler for a gev: probe, else stop"},
+        {.name = "pitch",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->pitch,
+         .arg = "MM",
+         .help = "distance between raster rows (y)",
+         .lo = 1e-300,
+         .hi = 1e300,
+         .def = "the step"},
+        {.name = "period",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->period_us,
+         .arg = "US",
+         .help = "otf: trigger period; the stage runs at step / period",
+         .lo = 20,
+         .hi = 1e6},
+        {.name = "geometry",
+         .kind = CF_OPT_STR,
+         .dst = &o->geometry,
+         .arg = "'width W height H profiles P x0 X dx DX y0 Y dy DY z0 Z lo LO scale S'",
+         .help = "profiler: the scan geometry (cellsim --gev prints it)"},
+        {.name = "profiles",
+         .kind = CF_OPT_LONG,
+         .dst = &o->profiles,
+         .arg = "N",
+         .help = "profiler: profiles to take",
+         .lo = 0,
+         .hi = 1e9,
+         .def = "one pass, P"},
+        {.name = "frame-rate",
+         .kind = CF_OPT_DOUBLE,
+         .dst = &o->frame_rate,
+         .arg = "HZ",
+         .help = "profiler: frames/s",
+         .lo = 0,
+         .hi = 1e6,
+         .def = "the device's"},
         {.name = "nominal",
          .kind = CF_OPT_STR,
          .dst = &o->nominal,
@@ -312,6 +361,40 @@ static int on_point(void *ctx, const jnl_rec_t *r)
     return rc;
 }
 
+/* A fast method's point (cf_scanfast.h): journalled already, into the fit. */
+static int on_fast_point(void *ctx, const double xyz[3])
+{
+    scan_ctx_t *c = ctx;
+    char msg[256];
+    if (!c->fj)
+        return 0;
+    int rc = cf_fitjob_add(c->fj, xyz, msg, sizeof msg);
+    if (rc)
+        c->fit_err = rc;
+    return rc;
+}
+
+static int on_fast_stop(void *ctx)
+{
+    (void)ctx;
+    return stop_flag != 0;
+}
+
+static void on_fast_progress(void *ctx, long rows_done, long rows, long points)
+{
+    scan_ctx_t *c = ctx;
+    long tenth = rows > 0 ? 10 * rows_done / rows : 10;
+    if (c->tty)
+        fprintf(stderr, "\rscan: row %ld/%ld, %ld points", rows_done, rows, points);
+    else if (tenth != c->last_tenth) {
+        c->last_tenth = tenth;
+        fprintf(stderr, "scan: %ld/%ld rows (%ld%%), %ld points\n", rows_done, rows,
+                rows > 0 ? 100 * rows_done / rows : 100, points);
+    }
+    if (c->tty && rows_done == rows)
+        fputc('\n', stderr);
+}
+
 static void on_progress(void *ctx, long done, long planned, uint64_t acked)
 {
     scan_ctx_t *c = ctx;
@@ -334,8 +417,45 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
     }
 }
 
+/* The fast methods' counts (cf_scanfast_res_t) into the summary. */
+static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, double fit_ready,
+                         const cf_fitjob_result_t *fr)
+{
+    cf_json_int(js, "rows", x->rows);
+    cf_json_int(js, "rows_done", x->rows_done);
+    cf_json_num(js, "scan_seconds", x->seconds);
+    cf_json_num(js, "points_per_s", x->seconds > 0 ? (double)x->points / x->seconds : 0);
+    /* After the last row: the surface solved from the accumulated stripes
+     * (fit_solve_s), and the job done (fit_ready_s: with the check of every
+     * point read back from the journal, which is statistics, not the fit). */
+    cf_json_num(js, "fit_solve_s", fr ? fr->t_solve : 0);
+    cf_json_num(js, "fit_ready_s", fit_ready);
+    if (method == CF_SCAN_OTF) {
+        cf_json_num(js, "speed", x->speed);
+        cf_json_num(js, "period_us", x->period_us);
+        cf_json_int(js, "triggers", x->triggers);
+        cf_json_int(js, "nosurf", x->nosurf);
+        cf_json_int(js, "sensor_errors", x->sensor_errors);
+        cf_json_int(js, "lost_readings", x->lost_readings);
+        cf_json_int(js, "lost_triggers", x->lost_triggers);
+        cf_json_int(js, "both_lost", x->both_lost);
+        cf_json_int(js, "dup", x->dup);
+        cf_json_int(js, "late", x->late);
+        cf_json_int(js, "overrun", x->overrun);
+        cf_json_int(js, "dropped_by_probe", x->dropped_by_probe);
+        cf_json_int(js, "rows_cut", x->rows_cut);
+    } else {
+        cf_json_int(js, "frames", x->frames);
+        cf_json_int(js, "frames_lost", x->frames_lost);
+        cf_json_int(js, "profiles_lost", x->profiles_lost);
+        cf_json_int(js, "frames_bad", x->frames_bad);
+        cf_json_int(js, "dropouts", x->dropouts);
+    }
+}
+
 static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const scan_result_t *res,
-                    const jnl_t *j, const cf_fitjob_result_t *fr, double secs)
+                    const jnl_t *j, const cf_fitjob_result_t *fr, double secs, int method,
+                    const cf_scanfast_res_t *fast, double fit_ready)
 {
     cf_json_t js;
     cf_json_begin(&js, f);
@@ -367,6 +487,9 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
         cf_json_int(&js, "reparam", o->fo.reparam);
         cmd_fitopts_json(&js, &o->fo, fr);
     }
+    cf_json_str(&js, "method", cf_scanfast_method_name((cf_scan_method_t)method));
+    if (method != CF_SCAN_STOP)
+        summary_fast(&js, method, fast, fit_ready, fr);
     cf_json_num(&js, "seconds", secs);
     cf_json_end(&js);
 }
@@ -379,6 +502,17 @@ int cmd_scan(int argc, char **argv)
         return cf_opt_exit(ec);
     double t0 = cli_now();
     char msg[512];
+    int method = o.method ? cf_scanfast_method(o.method) : (int)cf_scanfast_default_method(o.probe);
+    cf_scanfast_geom_t geom;
+    if (method < 0)
+        return cli_error(CMD, CLI_USAGE, "--method %s: want stop, otf or profiler", o.method);
+    if (method != CF_SCAN_PROFILER && !o.stage)
+        return cli_error(CMD, CLI_USAGE, "--stage is needed for --method %s",
+                         cf_scanfast_method_name((cf_scan_method_t)method));
+    if (method == CF_SCAN_PROFILER && cf_scanfast_geom_parse(o.geometry, &geom))
+        return cli_error(CMD, CLI_USAGE,
+                         "--method profiler needs --geometry 'width W height H profiles P x0 X "
+                         "dx DX y0 Y dy DY z0 Z lo LO scale S' (cellsim --gev prints it)");
     nf_surf_t nom;
     if (cf_surfio_read(o.nominal, (int)o.entity, &nom, msg, sizeof msg))
         return cli_error(CMD, CLI_USAGE, "%s", msg);
@@ -392,8 +526,13 @@ int cmd_scan(int argc, char **argv)
     memset(&job, 0, sizeof job);
     if (!o.have_region)
         nominal_extent(&nom, o.region);
-    if (scan_plan_init(&job.plan, o.region[0], o.region[1], o.region[2], o.region[3], o.step,
-                       o.step)) {
+    if (method == CF_SCAN_PROFILER) {
+        /* The profiler's plan, for the summary: profiles along x, points along y. */
+        job.plan = (scan_plan_t){
+            geom.x0,   geom.y0, geom.dx, geom.dy, o.profiles > 0 ? o.profiles : geom.profiles,
+            geom.width};
+    } else if (scan_plan_init(&job.plan, o.region[0], o.region[1], o.region[2], o.region[3], o.step,
+                              o.pitch > 0 ? o.pitch : o.step)) {
         cf_surf_free(&nom);
         return cli_error(
             CMD, CLI_USAGE, "region %g:%g:%g:%g with step %g: no plan (at most %ld points)",
@@ -430,7 +569,9 @@ int cmd_scan(int argc, char **argv)
         goto out;
     }
     void *devs = NULL;
-    int rc = rig_open(o.stage, o.probe, &job.stage, &job.probe, &devs, msg, sizeof msg);
+    int rc = method == CF_SCAN_PROFILER
+                 ? RIG_OK
+                 : rig_open(o.stage, o.probe, &job.stage, &job.probe, &devs, msg, sizeof msg);
     if (rc) {
         cf_store_file_close(&f);
         unlink(o.journal); /* nothing measured: leave no empty journal behind */
@@ -442,6 +583,9 @@ int cmd_scan(int argc, char **argv)
     h.job_id = (uint64_t)o.job_id;
     h.t_start = cli_now();
     scan_header(&job, &h);
+    if (method != CF_SCAN_STOP)
+        cf_scanfast_header(method == CF_SCAN_OTF ? &job.kin : &(scan_kin_t){geom.z0, {0, 0, 0}},
+                           scan_plan_count(&job.plan), &h);
     jnl_t j;
     if ((rc = jnl_create(&j, st, &h)) != RIG_OK) {
         ec = cli_error(CMD, CLI_FAIL, "%s: %s [%d] (%s); nothing measured", o.journal,
@@ -458,22 +602,52 @@ int cmd_scan(int argc, char **argv)
     job.clock = (rig_clock_t){&host_clock, NULL};
     job.cb = (scan_cb_t){on_point, on_progress, &sc};
     scan_result_t res;
-    rc = scan_run(&job, &j, &res);
+    cf_scanfast_res_t fast;
+    memset(&fast, 0, sizeof fast);
+    if (method == CF_SCAN_STOP)
+        rc = scan_run(&job, &j, &res);
+    else {
+        /* The fast methods (cf_scanfast.h): the same journal, live fit and
+         * stop flag; their row counts into the stop-and-go result. */
+        if (!o.home || (rc = job.stage.ops ? job.stage.ops->home(job.stage.ctx) : 0) == 0) {
+            cf_scanfast_cb_t fcb = {on_fast_point, on_fast_progress, on_fast_stop, &sc};
+            msg[0] = 0;
+            rc = method == CF_SCAN_OTF
+                     ? cf_scanfast_otf(devs, &job.plan, &job.kin, o.period_us, &j, &fcb, &fast, msg,
+                                       sizeof msg)
+                     : cf_scanfast_profiler(o.probe, &geom, o.profiles, o.frame_rate, &j, &fcb,
+                                            &fast, msg, sizeof msg);
+        } else {
+            fast.where = SCAN_AT_STAGE;
+            jnl_end(&j, rc, cli_now());
+        }
+        memset(&res, 0, sizeof res);
+        res.points = fast.points;
+        res.flagged = fast.flagged;
+        res.done = fast.points + fast.flagged;
+        res.fail_index = fast.fail_row;
+        res.code = rc;
+        res.where = fast.where;
+    }
     if (sc.tty && rc)
         fputc('\n', stderr);
     int fitted = 0;
+    double t_fit0 = 0, fit_ready = 0;
     if (rc) {
         double x = NAN, y = NAN;
         int end;
-        if (res.fail_index >= 0 && res.fail_index < scan_plan_count(&job.plan))
+        if (method == CF_SCAN_OTF && res.fail_index >= 0 && res.fail_index < job.plan.ny)
+            scan_plan_point(&job.plan, res.fail_index * job.plan.nx, &x, &y, &end);
+        else if (method == CF_SCAN_STOP && res.fail_index >= 0 &&
+                 res.fail_index < scan_plan_count(&job.plan))
             scan_plan_point(&job.plan, res.fail_index, &x, &y, &end);
         static const char *const at[] = {"", "stage", "probe", "journal", "fit", "stop"};
-        const char *det = rig_detail(&job, res.where);
+        const char *det = method == CF_SCAN_STOP ? rig_detail(&job, res.where) : msg;
         ec = cli_error(CMD, CLI_FAIL,
-                       "job ended at grid point %ld (x %g, y %g): %s: %s [%d]%s%s; %s holds %llu "
+                       "job ended at %s %ld (x %g, y %g): %s: %s [%d]%s%s; %s holds %llu "
                        "acknowledged records",
-                       res.fail_index, x, y, at[res.where],
-                       sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), rc,
+                       method == CF_SCAN_STOP ? "grid point" : "row", res.fail_index, x, y,
+                       at[res.where], sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), rc,
                        *det ? ": " : "", det, o.journal, (unsigned long long)jnl_acked(&j));
     } else if (fj) {
         /* The first pass took the points as they arrived; the job reads
@@ -488,6 +662,7 @@ int cmd_scan(int argc, char **argv)
         cf_fitsrc_t src;
         cf_fitsrc_jnl_t jc;
         cf_fitsrc_journal(&src, &jc, &rd, o.journal, (long)in.points);
+        t_fit0 = fast.t_last_row > 0 ? fast.t_last_row : cli_now();
         if ((rc = cf_fitjob_run(fj, &src, NULL, 0, 100, &fr, msg, sizeof msg)) != 0) {
             ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
             goto out_dev;
@@ -498,13 +673,15 @@ int cmd_scan(int argc, char **argv)
             goto out_dev;
         }
         fitted = 1;
+        fit_ready = cli_now() - t_fit0;
     }
     double secs = cli_now() - t0;
     if (o.report) {
         FILE *rf = fopen(o.report, "w");
         int werr = rf ? 0 : errno;
         if (rf) {
-            summary(rf, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs);
+            summary(rf, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs, method, &fast,
+                    fit_ready);
             werr = ferror(rf) ? errno : 0;
             if (fclose(rf) && !werr)
                 werr = errno ? errno : EIO;
@@ -514,11 +691,19 @@ int cmd_scan(int argc, char **argv)
                            strerror(werr));
     }
     if (o.json)
-        summary(stdout, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs);
+        summary(stdout, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs, method, &fast,
+                fit_ready);
     else if (!rc) {
         printf("cellfit scan: %ld points (%ld x %ld grid, step %g), %ld without a surface; "
                "journal %s\n",
                res.done, job.plan.nx, job.plan.ny, o.step, res.flagged, o.journal);
+        if (method != CF_SCAN_STOP)
+            printf("  %s: %.0f points/s over %ld rows; lost: %ld readings, %ld triggers, %ld on "
+                   "both sides, %ld overrun, %ld profiles (%ld frames)\n",
+                   cf_scanfast_method_name((cf_scan_method_t)method),
+                   fast.seconds > 0 ? (double)fast.points / fast.seconds : 0, fast.rows_done,
+                   fast.lost_readings, fast.lost_triggers, fast.both_lost, fast.overrun,
+                   fast.profiles_lost, fast.frames_lost);
         if (fitted)
             printf("  fit: rms %.6g  max %.6g (vs nominal rms %.6g); wrote %s\n", fr.rms,
                    fr.max_abs, fr.nominal_rms, o.fit);

@@ -15,6 +15,7 @@
 #include "cf_plcdoc.h"
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
+#include "cf_scanfast.h"
 #include "cf_simchild.h"
 #include "cmd.h"
 #include "hal_rig.h"
@@ -209,7 +210,15 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         c->probe = keep(c, v);
     else if (!strcmp(k, "sim_args"))
         c->sim_args = keep(c, v);
-    else if (!strcmp(k, "journal_dir"))
+    else if (!strcmp(k, "scan_method")) { /* issue 19: cf_scanfast.h */
+        r->scan_method = cf_scanfast_method(v);
+        if (r->scan_method != CF_SCAN_STOP && r->scan_method != CF_SCAN_OTF)
+            return cf_fail(msg, ml, CF_EARG, "scan_method '%s': stop or otf", v);
+    } else if (!strcmp(k, "scan_period_us")) {
+        if (cli_double(v, &r->scan_period_us) || !(r->scan_period_us >= 20) ||
+            r->scan_period_us > 1e6)
+            return cf_fail(msg, ml, CF_EARG, "scan_period_us '%s': need 20 .. 1000000", v);
+    } else if (!strcmp(k, "journal_dir"))
         r->journal_dir = keep(c, v);
     else if (!strcmp(k, "board"))
         c->board = keep(c, v);
@@ -259,6 +268,9 @@ static const serve_key_t keys[] = {
     {"stage", "URI", "the rig's stage (docs/rig-devices.md)", NULL},
     {"probe", "URI", "the rig's probe", NULL},
     {"sim_args", "ARGS", "extra cellsim arguments, space-separated", NULL},
+    {"scan_method", "M", "SCAN's method: stop (stop-and-go) or otf (on the fly)", "stop"},
+    {"scan_period_us", "US",
+     "scan_method otf: the trigger period; the stage runs at SCAN_STEP / it", "50"},
     {"journal_dir", "DIR", "folder of the scans' journals", "the results folder"},
     {"z0", "MM", "the probe's beam height", "50"},
     {"cal", "CX,CY,CZ", "the probe's calibration offset, mm", "0,0,0"},

@@ -1,6 +1,6 @@
 #!/bin/sh
 # tests/cli/demo.sh CELLFIT: scripts/demo.sh (what `make demo` runs) on a
-# small scan: the files and report fields it promises; the fit against the
+# small stop-and-go scan (DEMO_METHOD=stop): the files and report fields it promises; the fit against the
 # simulator's true part (normal distances of cellfit gen's true check points
 # to the fitted surface, within the probe noise where measured); the
 # unmeasured area left at nominal where the true part is not; cellsim's
@@ -54,7 +54,7 @@ MARGIN=15
 REGION=100:170:25:95
 X0=100 X1=170 Y0=25 Y1=95
 D=$T/d1
-DEMO_DIR=$D DEMO_REGION=$REGION DEMO_STEP=2.5 DEMO_SPEED=5000 DEMO_NOISE=$NOISE \
+DEMO_DIR=$D DEMO_METHOD=stop DEMO_REGION=$REGION DEMO_STEP=2.5 DEMO_SPEED=5000 DEMO_NOISE=$NOISE \
     DEMO_MARGIN=$MARGIN timeout 120 sh "$DEMO" "$CF" >"$T/demo.out" 2>"$T/demo.err"
 rc=$?
 [ $rc -eq 0 ] && ok "demo.sh runs (exit 0)" || { no "demo.sh exit $rc"; sed 's/^/     /' "$T/demo.err" | tail -n 5; }
@@ -151,7 +151,7 @@ stop_all
 # SIGTERM in the middle of the scan (a slow stage): demo.sh stops the scan
 # (journal ended and synced), then every server, and exits non-zero.
 D2=$T/d2
-DEMO_DIR=$D2 DEMO_REGION=0:200:0:150 DEMO_STEP=2.5 DEMO_SPEED=200 sh "$DEMO" "$CF" >"$T/d2.out" 2>"$T/d2.err" &
+DEMO_DIR=$D2 DEMO_METHOD=stop DEMO_REGION=0:200:0:150 DEMO_STEP=2.5 DEMO_SPEED=200 sh "$DEMO" "$CF" >"$T/d2.out" 2>"$T/d2.err" &
 DP=$!
 i=0
 while [ ! -s "$D2/scan.jnl" ] && [ $i -lt 200 ] && kill -0 $DP 2>/dev/null; do sleep 0.05; i=$((i + 1)); done
@@ -173,6 +173,35 @@ rc=$?
 [ "$(json "$T/ji.json" ended)" = 1 ] && [ "$(json "$T/ji.json" end_code)" != 0 ] &&
     ok "SIGTERM: the journal is ended (code $(json "$T/ji.json" end_code)), $(json "$T/ji.json" records) records" ||
     no "SIGTERM: journal $(cat "$T/ji.json")"
+
+# The default demo (issue 19): on the fly, full size. Checked: the method,
+# the point count (76 rows of at least 1,401 triggers), nothing lost, the
+# journal's count, and the truth figures as above; the rate and the times
+# are printed, not asserted (a shared machine's timing is no test).
+D3=$T/d3
+DEMO_DIR=$D3 DEMO_NOISE=$NOISE timeout 120 sh "$DEMO" "$CF" >"$T/d3.out" 2>"$T/d3.err"
+rc=$?
+[ $rc -eq 0 ] && ok "default demo (on the fly) runs (exit 0)" ||
+    { no "default demo: exit $rc"; sed 's/^/     /' "$T/d3.err" | tail -n 5; }
+R=$D3/report.json
+grep '^scan: \|^losses: \|^time: ' "$T/d3.out" | sed 's/^/     /'
+n=$(json "$R" points)
+[ "$(json "$R" method)" = otf ] && le $((76 * 1401)) "${n:-0}" && le 100000 "${n:-0}" &&
+    ok "default demo: on the fly, $n points (>= 100,000; $(json "$R" scan_points_per_s) points/s, scan + fit $(json "$R" seconds_scan_fit) s)" ||
+    no "default demo: method $(json "$R" method), $n points"
+"$CF" journal info "$D3/scan.jnl" --json >"$T/ji3.json" 2>/dev/null
+[ "$(json "$T/ji3.json" points)" = "$n" ] && [ "$(json "$T/ji3.json" end_code)" = 0 ] &&
+    [ "$(json "$R" lost_readings)" = 0 ] && [ "$(json "$R" lost_triggers)" = 0 ] &&
+    [ "$(json "$R" both_lost)" = 0 ] && [ "$(json "$R" overrun)" = 0 ] &&
+    ok "default demo: journal holds the $n points, nothing lost" ||
+    no "default demo: journal $(cat "$T/ji3.json"); report $(cat "$R")"
+le "$(json "$R" fit_vs_true_max_abs)" "$(awk -v s=$NOISE 'BEGIN { print 4 * s }')" &&
+    le "$(json "$R" unmeasured_fit_vs_nominal_max_abs)" "$(awk -v s=$NOISE 'BEGIN { print 5 * s }')" &&
+    le 500 "$(json "$R" check_measured)" && le 100 "$(json "$R" check_unmeasured)" &&
+    ok "default demo: fit vs true part max $(json "$R" fit_vs_true_max_abs) mm, unmeasured at nominal" ||
+    no "default demo figures: $(cat "$R")"
+[ -s "$D3/pids" ] && none_alive "$D3/pids" && ok "default demo: every process it started is gone" ||
+    no "default demo: left running: $(cat "$D3/pids" 2>/dev/null)"
 
 echo "demo: $pass passed, $fail failed"
 [ $fail -eq 0 ]

@@ -1,0 +1,216 @@
+#!/bin/sh
+# tests/cli/scan_fast.sh CELLFIT: `cellfit scan` at a sensor's pace (issue
+# 19) on cellsim, end to end. On the fly (--method otf; stage and probe on
+# Modbus TCP, the probe streaming one reading per trigger): the fitted
+# surface against the true part (cellfit gen's check grid, the same
+# lib/cf_part.c formula as cellsim's part: normal distances within the
+# probe noise), the journal's records against the points reported, and
+# nothing lost; then with faults injected: replies dropped on the wire (the
+# entries they carried lost on both sides), a small FIFO held up by slow
+# replies (overrun, every dropped entry counted), a drive fault half-way
+# along a row (the row cut short, the job ended with the fault, the
+# journal consistent), SIGTERM mid-row (ended RIG_EABORTED in the row).
+# The profiler (--method profiler; cellsim --gev):
+# the fit against the true part and the journal's count, then with 1 % of
+# the GVSP packets lost: every lost profile a flagged journal record,
+# none shifted (the fit still matches the part). Processes stopped by PID.
+set -u
+. "$(dirname "$0")/lib.sh"
+CF=$(realpath "$1")
+SIM=$(dirname "$CF")/cellsim
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-scanfast.XXXXXX")
+trap 'stop_all; rm -rf "$T"' EXIT
+NOISE=0.002
+MARGIN=10
+"$CF" gen --dir "$T/part" --count 1 --noise 0 >/dev/null || no "cellfit gen failed"
+NOM=$T/part/nominal.igs
+
+# sim NAME ARGS...: cellsim on TCP, sets $P (its port).
+sim() {
+    name=$1; shift
+    "$SIM" --tcp 0 --homed --noise $NOISE "$@" >"$T/$name.out" 2>"$T/$name.err" &
+    PIDS="$PIDS $!"
+    i=0
+    while ! grep -q '^cellsim: ready' "$T/$name.out" && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+    P=$(sed -n 's/^cellsim: tcp 127.0.0.1 //p' "$T/$name.out")
+}
+# truth FIT X0 X1 Y0 Y1: the true check points at least MARGIN inside the
+# rectangle, their normal distances to FIT: "n rms max".
+truth() {
+    "$CF" project "$1" "$T/part/check.xyz" >"$T/ft.txt" || { echo "0 9 9"; return; }
+    paste "$T/part/check.xyz" "$T/ft.txt" | awk -v x0="$2" -v x1="$3" -v y0="$4" -v y1="$5" \
+        -v m=$MARGIN 'function abs(a) { return a < 0 ? -a : a }
+        $1 >= x0 + m && $1 <= x1 - m && $2 >= y0 + m && $2 <= y1 - m {
+            d = abs($6); n++; ss += d * d; if (d > mx) mx = d }
+        END { printf "%d %.6f %.6f\n", n, n ? sqrt(ss / n) : 9, mx + 0 }'
+}
+jf() { json "$T/out" "$1"; }
+ji() { json "$T/info" "$1"; }
+
+# 1. On the fly, clean: 41 rows of 801 points 0.1 mm apart, a trigger
+# every 50 us (the stage at 2000 mm/s).
+sim otf
+REGION=60:140:30:110
+expect 0 "otf scan: 41 rows on the fly, fitted" timeout 60 "$CF" scan --method otf \
+    --stage "tcp:127.0.0.1:$P:1" --probe "tcp:127.0.0.1:$P:2" --nominal "$NOM" \
+    --journal "$T/otf.jnl" --region $REGION --step 0.1 --pitch 2 --period 50 --fit "$T/otf.igs" --json
+"$CF" journal info "$T/otf.jnl" --json >"$T/info"
+pts=$(jf points)
+[ "$(jf method)" = otf ] && [ "$(jf rows_done)" = 41 ] && [ "$(jf speed)" = 2000 ] &&
+    ok "otf: 41 rows at 2000 mm/s" || no "otf: $(cat "$T/out")"
+# Each row fires for at least its 40 ms of travel (801 triggers), and for
+# at most a quarter second more (the stop seen late on a busy host).
+le $((41 * 801)) "${pts:-0}" && le "${pts:-0}" $((41 * 6000)) && ok "otf: $pts points" ||
+    no "otf: $pts points for 41 rows of 801"
+[ "$(ji points)" = "$pts" ] && [ "$(ji records)" = $((pts + 1)) ] && [ "$(ji ended)" = 1 ] &&
+    [ "$(ji end_code)" = 0 ] && ok "otf: the journal holds the $pts points and its end record" ||
+    no "otf journal: $(cat "$T/info")"
+[ "$(jf lost_readings)" = 0 ] && [ "$(jf lost_triggers)" = 0 ] && [ "$(jf both_lost)" = 0 ] &&
+    [ "$(jf dup)" = 0 ] && [ "$(jf overrun)" = 0 ] && [ "$(jf triggers)" = "$pts" ] &&
+    ok "otf: nothing lost, every trigger a point" || no "otf losses: $(cat "$T/out")"
+read -r N RMS MAX <<EOF
+$(truth "$T/otf.igs" 60 140 30 110)
+EOF
+[ "$N" -gt 50 ] && le "$RMS" $NOISE && le "$MAX" "$(awk -v s=$NOISE 'BEGIN { print 4 * s }')" &&
+    ok "otf: fit vs true part at $N check points: rms $RMS, max $MAX mm" ||
+    no "otf: fit vs true part: $N points, rms $RMS max $MAX"
+stop_all
+
+# 2. Replies dropped on the wire: every 300th request's reply loses a byte,
+# the driver retries, the FIFO entries that reply carried are lost on both
+# sides and counted as such; nothing else is lost, no point is wrong.
+sim drop --fault drop@tcp:e300
+expect 0 "otf with dropped replies: the scan completes" timeout 60 "$CF" scan --method otf \
+    --stage "tcp:127.0.0.1:$P:1" --probe "tcp:127.0.0.1:$P:2" --nominal "$NOM" \
+    --journal "$T/drop.jnl" --region $REGION --step 0.1 --pitch 4 --period 50 --fit "$T/drop.igs" --json
+"$CF" journal info "$T/drop.jnl" --json >"$T/info"
+le 1 "$(jf both_lost)" && [ "$(jf lost_readings)" = 0 ] && [ "$(jf lost_triggers)" = 0 ] &&
+    ok "dropped replies: $(jf both_lost) numbers lost on both sides, counted" ||
+    no "dropped replies: $(cat "$T/out")"
+[ "$(ji points)" = "$(jf points)" ] && ok "dropped replies: journal and summary agree ($(jf points))" ||
+    no "dropped replies: journal $(ji points), summary $(jf points)"
+read -r N RMS MAX <<EOF
+$(truth "$T/drop.igs" 60 140 30 110)
+EOF
+le "$RMS" $NOISE && le "$MAX" "$(awk -v s=$NOISE 'BEGIN { print 4 * s }')" &&
+    ok "dropped replies: no point paired wrong (fit vs true rms $RMS, max $MAX)" ||
+    no "dropped replies: fit vs true rms $RMS max $MAX"
+stop_all
+
+# 3. Overrun: a 64-entry FIFO, 50,000 triggers/s, every 30th reply held
+# back 10 ms: the FIFO overflows and the probe counts what it dropped
+# (OVERRUN, reported as dropped_by_probe). The pairing sees those numbers
+# as lost on both sides when a later number reveals the gap; the ones
+# dropped after a row's last delivered entry are revealed by nothing but
+# the probe's count, so both_lost <= dropped_by_probe, and no entry is lost
+# on one side only (position and reading travel in one entry).
+sim ovr --fifo 64 --fault slow@tcp:e30:10
+expect 0 "otf with a FIFO overflowing: the scan completes" timeout 60 "$CF" scan --method otf \
+    --stage "tcp:127.0.0.1:$P:1" --probe "tcp:127.0.0.1:$P:2" --nominal "$NOM" \
+    --journal "$T/ovr.jnl" --region $REGION --step 0.1 --pitch 8 --period 20 --json
+dr=$(jf dropped_by_probe)
+le 1 "${dr:-0}" && le 1 "$(jf overrun)" && le 1 "$(jf both_lost)" && le "$(jf both_lost)" "$dr" &&
+    [ "$(jf lost_readings)" = 0 ] && [ "$(jf lost_triggers)" = 0 ] && [ "$(jf late)" = 0 ] &&
+    [ "$(jf triggers)" = "$(jf points)" ] &&
+    ok "overrun: $dr entries dropped by the probe, $(jf overrun) overrun flags, $(jf both_lost) lost on both sides" ||
+    no "overrun: $(cat "$T/out")"
+stop_all
+
+# 4. A drive fault half-way along row 1 (the 4th accepted move: row 0's
+# approach and run, row 1's approach, row 1's run): the row cut short, the
+# job ended with the fault (exit 1), the journal ended with its code and
+# holding exactly the points reported.
+sim sf --fault stagefault:n4
+expect 1 "otf with a stage fault mid-row: the job ends" timeout 60 "$CF" scan --method otf \
+    --stage "tcp:127.0.0.1:$P:1" --probe "tcp:127.0.0.1:$P:2" --nominal "$NOM" \
+    --journal "$T/sf.jnl" --region $REGION --step 0.1 --pitch 4 --period 50 --json
+"$CF" journal info "$T/sf.jnl" --json >"$T/info"
+[ "$(jf rows_cut)" = 1 ] && [ "$(jf rows_done)" = 1 ] && [ "$(jf code)" = -209 ] &&
+    ok "stage fault: row 1 cut short, code -209 (drive fault)" || no "stage fault: $(cat "$T/out")"
+p=$(jf points)
+[ "$(ji ended)" = 1 ] && [ "$(ji end_code)" = -209 ] && [ "$(ji points)" = "$p" ] &&
+    le 802 "${p:-0}" && le "${p:-0}" 1600 &&
+    ok "stage fault: journal ended with -209, $p points (row 0 and half of row 1)" ||
+    no "stage fault journal: $(cat "$T/info")"
+grep -q "drive fault\|fault" "$T/err" && ok "stage fault: said on stderr" || no "stage fault: stderr $(cat "$T/err")"
+stop_all
+
+# 4b. SIGTERM mid-row (the stop flag the cell's ABORT and watchdog also
+# set): rows of 0.8 s (a trigger every 1 ms, 0.1 mm apart: 100 mm/s); the
+# signal 1.5 s in. The stage stopped, the stream drained, the job ended
+# RIG_EABORTED (-217) in that row, the journal ended with it.
+sim term
+"$CF" scan --method otf --stage "tcp:127.0.0.1:$P:1" --probe "tcp:127.0.0.1:$P:2" --nominal "$NOM" \
+    --journal "$T/term.jnl" --region $REGION --step 0.1 --pitch 4 --period 1000 --json \
+    >"$T/out" 2>"$T/err" &
+SP=$!
+sleep 1.5
+kill -TERM $SP
+i=0
+while kill -0 $SP 2>/dev/null && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
+wait $SP
+rc=$?
+"$CF" journal info "$T/term.jnl" --json >"$T/info"
+[ $rc -eq 1 ] && [ "$(jf code)" = -217 ] && [ "$(ji end_code)" = -217 ] && [ "$(ji points)" = "$(jf points)" ] &&
+    le "$(jf rows_done)" 2 && ok "SIGTERM mid-row: ended -217 after $(jf rows_done) whole rows, journal ended, $(jf points) points" ||
+    no "SIGTERM mid-row: exit $rc; $(cat "$T/out"); journal $(cat "$T/info")"
+stop_all
+
+# 5. The profiler (cellsim --gev, port 3956: one per machine, so a start
+# that finds it taken is retried for a minute).
+SER=SF$$
+gev() {
+    name=$1; shift
+    tries=0
+    while :; do
+        "$SIM" --gev "$SER" --noise $NOISE --gev-width 256 --gev-height 16 --gev-profiles 160 "$@" \
+            >"$T/$name.out" 2>"$T/$name.err" &
+        spid=$!
+        i=0
+        while ! grep -q '^cellsim: ready' "$T/$name.out" && kill -0 $spid 2>/dev/null && [ $i -lt 300 ]; do
+            sleep 0.1; i=$((i + 1))
+        done
+        if grep -q '^cellsim: ready' "$T/$name.out"; then PIDS="$PIDS $spid"; break; fi
+        kill $spid 2>/dev/null; wait $spid 2>/dev/null
+        tries=$((tries + 1))
+        [ $tries -ge 12 ] && break
+        sleep 5
+    done
+    G=$(sed -n 's/^cellsim: gev //p' "$T/$name.out")
+}
+gev g0
+expect 0 "profiler: one pass of 160 profiles of 256 points" timeout 60 "$CF" scan \
+    --probe "gev:127.0.0.1:$SER" --geometry "$G" --frame-rate 40 --nominal "$NOM" \
+    --journal "$T/g0.jnl" --fit "$T/g0.igs" --json
+"$CF" journal info "$T/g0.jnl" --json >"$T/info"
+[ "$(jf method)" = profiler ] && [ "$(jf rows_done)" = 160 ] && [ "$(jf profiles_lost)" = 0 ] &&
+    [ "$(ji points)" = "$(jf points)" ] && [ "$(ji flagged)" = 0 ] &&
+    [ $(($(jf points) + $(jf dropouts))) -eq $((160 * 256)) ] &&
+    ok "profiler: $(jf points) points + $(jf dropouts) dropouts = 160 x 256, all journalled" ||
+    no "profiler: $(cat "$T/out"); journal $(cat "$T/info")"
+read -r N RMS MAX <<EOF
+$(truth "$T/g0.igs" 0 200 0 150)
+EOF
+[ "$N" -gt 500 ] && le "$RMS" $NOISE && le "$MAX" "$(awk -v s=$NOISE 'BEGIN { print 4 * s }')" &&
+    ok "profiler: fit vs true part at $N check points: rms $RMS, max $MAX mm" ||
+    no "profiler: fit vs true: $N points, rms $RMS max $MAX"
+stop_all
+gev g1 --gev-loss 0.01
+expect 0 "profiler at 1 % packet loss: 1600 profiles (100 frames: at about 8 % of frames lost, none lost has odds below 1e-3)" timeout 60 "$CF" scan \
+    --probe "gev:127.0.0.1:$SER" --geometry "$G" --frame-rate 40 --profiles 1600 --nominal "$NOM" \
+    --journal "$T/g1.jnl" --fit "$T/g1.igs" --json
+"$CF" journal info "$T/g1.jnl" --json >"$T/info"
+lost=$(jf profiles_lost)
+le 16 "${lost:-0}" && [ "$(ji flagged)" = "$lost" ] && [ $(($(jf rows_done) + lost)) -eq 1600 ] &&
+    [ "$lost" = $(($(jf frames_lost) * 16)) ] &&
+    ok "1 % loss: $lost profiles ($(jf frames_lost) frames) lost, each a flagged journal record" ||
+    no "1 % loss: $(cat "$T/out"); journal $(cat "$T/info")"
+read -r N RMS MAX <<EOF
+$(truth "$T/g1.igs" 0 200 0 150)
+EOF
+le "$RMS" $NOISE && le "$MAX" "$(awk -v s=$NOISE 'BEGIN { print 4 * s }')" &&
+    ok "1 % loss: no profile shifted (fit vs true rms $RMS, max $MAX)" ||
+    no "1 % loss: fit vs true rms $RMS max $MAX"
+stop_all
+echo "scan_fast: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
