@@ -33,7 +33,7 @@
 #define CP_EXT 0
 #endif
 
-enum { CP_ASCII, CP_PLY_ASCII, CP_PLY_BIN };
+enum { CP_ASCII, CP_PLY_ASCII, CP_PLY_BIN, CP_RAW };
 enum { CP_NUM_OK, CP_NUM_JUNK, CP_NUM_NONFINITE, CP_NUM_RANGE };
 enum { CP_T_I8 = 1, CP_T_U8, CP_T_I16, CP_T_U16, CP_T_I32, CP_T_U32, CP_T_F32, CP_T_F64 };
 
@@ -866,6 +866,65 @@ static int cp_ply_point(cf_points_t *r, double *row)
     return 1;
 }
 
+/* ------------------------------------------- raw float64 (.xyz.bin) */
+
+/* Columns of a raw little-endian float64 file named by its extension:
+ * 5 for .uvxyz.bin, 3 for .xyz.bin, 0 for anything else (docs/formats.md). */
+static int cp_raw_cols(const char *path)
+{
+    size_t n = strlen(path);
+    if (n >= 10 && !strcmp(path + n - 10, ".uvxyz.bin"))
+        return 5;
+    if (n >= 8 && !strcmp(path + n - 8, ".xyz.bin"))
+        return 3;
+    return 0;
+}
+
+/* Whole records straight from the buffer into out: a memcpy on a
+ * little-endian host (the file's order), so the reader runs at memory speed;
+ * every value checked finite, like the text formats. */
+static long cp_raw_read(cf_points_t *r, double *out, long max)
+{
+    size_t rec = sizeof(double) * (size_t)r->cols;
+    long k = 0;
+    while (k < max) {
+        size_t avail = r->len - r->pos;
+        if (avail < rec) {
+            if (r->eof) {
+                if (avail && !k) /* the whole points first, the error next call */
+                    return cp_err(r, CF_EPARSE, 0,
+                                  "file ends inside point %lld (%zu stray bytes; %zu per point)",
+                                  r->vdone + 1, avail, rec);
+                break;
+            }
+            int rc = cp_fill(r);
+            if (rc)
+                return rc;
+            continue;
+        }
+        long take = (long)(avail / rec);
+        take = take > max - k ? max - k : take;
+        const unsigned char *b = (const unsigned char *)r->buf + r->pos;
+        double *o = out + k * r->cols;
+        size_t nv = (size_t)take * (size_t)r->cols;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+        memcpy(o, b, nv * sizeof(double));
+#else
+        for (size_t i = 0; i < nv; i++)
+            o[i] = cp_le(b + 8 * i, CP_T_F64);
+#endif
+        for (size_t i = 0; i < nv; i++)
+            if (!isfinite(o[i]))
+                return cp_err(r, CF_EPARSE, 0, "point %lld: non-finite value",
+                              r->vdone + 1 + (long long)(i / (size_t)r->cols));
+        r->pos += nv * sizeof(double);
+        r->vdone += take;
+        k += take;
+    }
+    r->last = (long)r->vdone;
+    return k;
+}
+
 /* ----------------------------------------------------------------- API */
 
 int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg, size_t msglen)
@@ -899,8 +958,15 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     while (!rc && !r->eof && r->len < 4)
         rc = cp_fill(r);
     const unsigned char *b = (const unsigned char *)r->buf;
+    int raw = r->is_stdin ? 0 : cp_raw_cols(path);
     if (rc) {
         /* message already in r->errmsg */
+    } else if (raw) {
+        r->fmt = CP_RAW;
+        if (want_cols && want_cols != raw)
+            rc = cp_err(r, CF_EPARSE, 0, "raw float64 file with %d values per point, %d wanted",
+                        raw, want_cols);
+        r->cols = raw;
     } else if (r->len >= 2 && b[0] == 0x1F && b[1] == 0x8B) {
         rc = cp_err(r, CF_EUNSUPPORTED, 0, "gzip-compressed: gunzip it first");
     } else if (r->len >= 4 && !memcmp(b, "ply", 3) && (b[3] == '\n' || b[3] == '\r')) {
@@ -933,6 +999,10 @@ long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, siz
         return cf_fail(msg, msglen, CF_EARG, "cf_points_read: bad arguments");
     if (r->err)
         return cf_fail(msg, msglen, r->err, "%s", r->errmsg);
+    if (r->fmt == CP_RAW) {
+        long n = cp_raw_read(r, buf, max_points);
+        return n < 0 ? cf_fail(msg, msglen, (int)n, "%s", r->errmsg) : n;
+    }
     long k = 0;
     while (k < max_points && r->cols > 0) {
         double *row = buf + k * r->cols;

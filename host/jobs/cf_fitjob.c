@@ -473,9 +473,10 @@ typedef struct resid {
  * summary, the count within tol (if > 0), the |d| histogram, (if sr) the
  * excess per knot span of the points out of tolerance (those beyond cut
  * > 0, the points a robust fit rejects, go to their cells only), and (if
- * st) the signed normal deviations. */
+ * st) the signed normal deviations. The |d| histogram (a log10 per point)
+ * only if want_hist: only the robust scale reads it (issue 20). */
 static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, resid_t *out,
-                   cf_stats_t *st)
+                   cf_stats_t *st, int want_hist)
 {
     cf_fitjob_t *j = r->j;
     const cf_fitsrc_t *src = r->src;
@@ -511,7 +512,8 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
             out->mx = d > out->mx ? d : out->mx;
             out->n++;
             out->within += tol > 0 && d <= tol;
-            nf_rhist_add(&out->hist, d);
+            if (want_hist)
+                nf_rhist_add(&out->hist, d);
             if (cut > 0 && d >= cut) {
                 out->outliers++;
                 if (sr)
@@ -625,7 +627,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     *rejected = 0;
     for (long it = 0; o->robust && it < o->robust_iters; it++) {
         set_pass(r, lo, hi, ip++, npass);
-        if ((rc = measure(r, &S->prev, NULL, 0.0, res, NULL)))
+        if ((rc = measure(r, &S->prev, NULL, 0.0, res, NULL, 1)))
             return rc;
         *c = NF_TUKEY_C * nf_rhist_sigma(&res->hist);
         if (!(*c > 0))
@@ -655,7 +657,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     if (S->st && (rc = cf_stats_init(S->st, o->tol)))
         return cf_fail(r->msg, r->ml, rc, "statistics: %s", cf_strerror(rc));
     set_pass(r, lo, hi, npass - 1, npass);
-    if ((rc = measure(r, &S->fit, *srp, *c, res, S->st)))
+    if ((rc = measure(r, &S->fit, *srp, *c, res, S->st, 0)))
         return rc;
     if (*srp)
         nf_spanres_fold(*srp); /* rejected misfit in one place: a feature */

@@ -374,6 +374,93 @@ static void test_bit_identical_to_strtod(void **state)
     remove(path);
 }
 
+/* Raw little-endian float64 (.xyz.bin, .uvxyz.bin): every value back bit for
+ * bit (any finite pattern, across the 1 MB buffer, odd batch sizes), rewind,
+ * and the refusals: a partial last point, a non-finite value, a column count
+ * the extension does not give. */
+static double rand_finite(void)
+{
+    for (;;) {
+        unsigned long long u = next_u64();
+        double x;
+        memcpy(&x, &u, sizeof x);
+        if (isfinite(x))
+            return x;
+    }
+}
+
+static void le_bytes(unsigned char *b, double x)
+{
+    unsigned long long u;
+    memcpy(&u, &x, sizeof u);
+    for (int i = 0; i < 8; i++)
+        b[i] = (unsigned char)(u >> (8 * i));
+}
+
+static void check_raw(const char *name, int cols, long n)
+{
+    char path[600];
+    tmp_path(path, sizeof path, name);
+    double *want = malloc(sizeof(double) * (size_t)(cols * n + 1));
+    unsigned char *b = malloc(8 * (size_t)(cols * n) + 8);
+    double *got = malloc(sizeof(double) * (size_t)(cols * n + 1));
+    assert_true(want && b && got);
+    for (long i = 0; i < cols * n; i++) {
+        want[i] = rand_finite();
+        le_bytes(b + 8 * i, want[i]);
+    }
+    write_bytes(path, b, 8 * (size_t)(cols * n));
+    cf_points_t *r;
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_cols(r), cols);
+    for (int pass = 0; pass < 2; pass++) {
+        long k = 0, m;
+        while ((m = cf_points_read(r, got + cols * k, 1 + k % 997 + (k % 3) * 40000, msg,
+                                   sizeof msg)) > 0) {
+            k += m;
+            assert_int_equal(cf_points_line(r), k);
+        }
+        assert_int_equal(m, 0);
+        assert_int_equal(k, n);
+        for (long i = 0; i < cols * n; i++)
+            assert_same(got[i], want[i], i);
+        assert_int_equal(cf_points_rewind(r), CF_OK);
+    }
+    cf_points_close(r);
+    if (n < 3) { /* the refusals below need three points */
+        remove(path);
+        free(want), free(b), free(got);
+        return;
+    }
+    /* Wrong column count asked. */
+    assert_int_equal(cf_points_open(&r, path, cols == 5 ? 3 : 5, msg, sizeof msg), CF_EPARSE);
+    assert_msg("values per point");
+    /* A partial last point: the whole points before it, then the error. */
+    write_bytes(path, b, 8 * (size_t)(cols * 2 + 1));
+    assert_int_equal(cf_points_open(&r, path, cols, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, got, 10, msg, sizeof msg), 2);
+    assert_int_equal(cf_points_read(r, got, 10, msg, sizeof msg), CF_EPARSE);
+    assert_msg("ends inside point 3");
+    cf_points_close(r);
+    /* A NaN in point 2. */
+    le_bytes(b + 8 * (size_t)(cols + 1), NAN);
+    write_bytes(path, b, 8 * (size_t)(cols * 3));
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, got, 10, msg, sizeof msg), CF_EPARSE);
+    assert_msg("point 2: non-finite");
+    cf_points_close(r);
+    remove(path);
+    free(want), free(b), free(got);
+}
+
+static void test_raw_float64(void **state)
+{
+    (void)state;
+    check_raw("p.xyz.bin", 3, 70000);   /* 1.68 MB: crosses the buffer */
+    check_raw("p.uvxyz.bin", 5, 30011); /* 1.2 MB, a prime count */
+    check_raw("e.xyz.bin", 3, 0);       /* empty: no points */
+}
+
 static void test_rewind(void **state)
 {
     (void)state;
@@ -713,6 +800,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_csv_header),
         cmocka_unit_test(test_batches_across_buffer),
         cmocka_unit_test(test_bit_identical_to_strtod),
+        cmocka_unit_test(test_raw_float64),
         cmocka_unit_test(test_rewind),
         cmocka_unit_test(test_stdin_not_rewindable),
         cmocka_unit_test(test_errors_name_the_line),
