@@ -15,6 +15,7 @@
 #include <string.h>
 
 #define CP_BUF (1L << 20)
+#define CP_PAD 8 /* bytes after the buffer's NUL: cp_digits loads 8 at a time */
 #define CP_MAX_PROPS 32
 #define CP_MAX_ELEMS 16
 
@@ -23,6 +24,15 @@
 #define CP_FAST 0
 #else
 #define CP_FAST 1
+#endif
+
+/* Eight digits at a time (SWAR, as in fast_float) on little-endian hosts
+ * with __builtin_ctzll; elsewhere one digit at a time. Either way the same
+ * m, e10 and digit counts, so the same value. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && defined(__GNUC__)
+#define CP_SWAR 1
+#else
+#define CP_SWAR 0
 #endif
 
 /* With x87 80-bit long double, 19-digit mantissas (%.17g output) have an
@@ -53,7 +63,8 @@ struct cf_points {
     FILE *f;
     int is_stdin;
     char name[256];
-    char *buf; /* CP_BUF + 1 bytes: room for a NUL after a final unterminated line */
+    char *buf; /* CP_BUF + 1 + CP_PAD bytes: a NUL after a final unterminated line, and
+                * room for cp_digits' 8-byte loads past it */
     size_t len, pos;
     long long boff;     /* file offset of buf[0] */
     long long data_off; /* offset of the first point (after a PLY header) */
@@ -165,6 +176,34 @@ static const long double cp_p10l[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,
                                         1e21L, 1e22L, 1e23L, 1e24L, 1e25L, 1e26L, 1e27L};
 #endif
 
+#if CP_SWAR
+static const uint64_t cp_p10u[9] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
+
+/* The run of up to 8 decimal digits at p (the bytes after it are read but
+ * ignored; the reader's buffer has CP_PAD bytes of room): their count, and
+ * their value in *val. Bytes below the first non-digit neither carry nor
+ * borrow, so its high bit in t is exact; the bytes above it are shifted out. */
+static int cp_digits(const char *p, uint64_t *val)
+{
+    uint64_t v;
+    memcpy(&v, p, 8);
+    uint64_t t = ((v + UINT64_C(0x4646464646464646)) | (v - UINT64_C(0x3030303030303030))) &
+                 UINT64_C(0x8080808080808080);
+    int n = t ? __builtin_ctzll(t) >> 3 : 8;
+    if (!n)
+        return 0;
+    v -= UINT64_C(0x3030303030303030);
+    if (n < 8)
+        v <<= 8 * (8 - n); /* the digits to the high bytes, zeros (leading) below */
+    v = v * 10 + (v >> 8);
+    v = (((v & UINT64_C(0x000000FF000000FF)) * (100 + (UINT64_C(1000000) << 32))) +
+         (((v >> 16) & UINT64_C(0x000000FF000000FF)) * (1 + (UINT64_C(10000) << 32)))) >>
+        32;
+    *val = v & 0xFFFFFFFFu;
+    return n;
+}
+#endif
+
 static int cp_digit(char c)
 {
     return (unsigned)(c - '0') < 10u;
@@ -218,6 +257,17 @@ static int cp_num(const char *p, const char **end, double *out)
         p++;
         any = 1;
     }
+#if CP_SWAR
+    for (int n = 8; n == 8 && nd <= 11;) { /* nd + 8 <= 19: nothing dropped here */
+        uint64_t v;
+        if (!(n = cp_digits(p, &v)))
+            break;
+        m = m * cp_p10u[n] + v;
+        nd += n;
+        p += n;
+        any = 1;
+    }
+#endif
     for (; cp_digit(*p); p++, any = 1) {
         if (nd < 19) {
             m = m * 10 + (uint64_t)(*p - '0');
@@ -232,6 +282,18 @@ static int cp_num(const char *p, const char **end, double *out)
         if (!nd)
             for (; *p == '0'; p++, any = 1)
                 e10--;
+#if CP_SWAR
+        for (int n = 8; n == 8 && nd <= 11;) {
+            uint64_t v;
+            if (!(n = cp_digits(p, &v)))
+                break;
+            m = m * cp_p10u[n] + v;
+            nd += n;
+            e10 -= n;
+            p += n;
+            any = 1;
+        }
+#endif
         for (; cp_digit(*p); p++, any = 1) {
             if (nd < 19) {
                 m = m * 10 + (uint64_t)(*p - '0');
@@ -936,11 +998,11 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     cf_points_t *r = calloc(1, sizeof *r);
     if (!r)
         return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
-    r->buf = malloc((size_t)CP_BUF + 1);
+    r->buf = malloc((size_t)CP_BUF + 1 + CP_PAD);
     /* Touch every page now (not with zeros: malloc+memset 0 may become a lazy
      * calloc) so the footprint is fixed at open, whatever the file size. */
     if (r->buf)
-        memset(r->buf, ' ', (size_t)CP_BUF + 1);
+        memset(r->buf, ' ', (size_t)CP_BUF + 1 + CP_PAD);
     r->is_stdin = !strcmp(path, "-");
     snprintf(r->name, sizeof r->name, "%s", r->is_stdin ? "<stdin>" : path);
     r->want = r->cols = want_cols;
