@@ -6,6 +6,7 @@
 #include "cf_err.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cf_surfrow.h"
 #include "nf_err.h"
 #include "nf_knots.h"
 #include "nf_project.h"
@@ -488,6 +489,11 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
     int uv = src->cols == 5;
     if ((!uv || st) && cf_seedgrid_init(&pj, s, SEEDS))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
+    if (cf_surfrow_init(&ev, s)) {
+        cf_seedgrid_free(&pj);
+        return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    }
     int rc = rewind_src(r);
     long got = 0;
     while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
@@ -507,7 +513,10 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
                 if (!uv)
                     q[0] = pr.u, q[1] = pr.v, q[2] = Q[0], q[3] = Q[1], q[4] = Q[2];
             }
-            double d = dist_at(s, q);
+            double P[3];
+            cf_surfrow_eval(&ev, q[0], q[1], P);
+            double d = sqrt((q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
+                            (q[4] - P[2]) * (q[4] - P[2]));
             out->ss += d * d;
             out->mx = d > out->mx ? d : out->mx;
             out->n++;
@@ -527,6 +536,7 @@ static int measure(run_t *r, const nf_surf_t *s, nf_spanres_t *sr, double cut, r
     }
     if (got < 0)
         rc = (int)got;
+    cf_surfrow_free(&ev);
     cf_seedgrid_free(&pj);
     return rc;
 }
