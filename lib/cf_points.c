@@ -183,7 +183,7 @@ static const uint64_t cp_p10u[9] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10
  * ignored; the reader's buffer has CP_PAD bytes of room): their count, and
  * their value in *val. Bytes below the first non-digit neither carry nor
  * borrow, so its high bit in t is exact; the bytes above it are shifted out. */
-static int cp_digits(const char *p, uint64_t *val)
+static inline __attribute__((always_inline)) int cp_digits(const char *p, uint64_t *val)
 {
     uint64_t v;
     memcpy(&v, p, 8);
@@ -258,7 +258,7 @@ static int cp_num(const char *p, const char **end, double *out)
         any = 1;
     }
 #if CP_SWAR
-    for (int n = 8; n == 8 && nd <= 11;) { /* nd + 8 <= 19: nothing dropped here */
+    for (int n = 8; n == 8 && nd <= 11 && cp_digit(*p);) { /* nd + 8 <= 19: nothing dropped here */
         uint64_t v;
         if (!(n = cp_digits(p, &v)))
             break;
@@ -283,7 +283,7 @@ static int cp_num(const char *p, const char **end, double *out)
             for (; *p == '0'; p++, any = 1)
                 e10--;
 #if CP_SWAR
-        for (int n = 8; n == 8 && nd <= 11;) {
+        for (int n = 8; n == 8 && nd <= 11 && cp_digit(*p);) {
             uint64_t v;
             if (!(n = cp_digits(p, &v)))
                 break;

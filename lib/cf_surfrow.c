@@ -17,8 +17,11 @@ int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s)
     e->s = s;
     e->l = -1;
     e->k = -1;
-    if (s->w)
-        return CF_OK; /* rational: nf_surf_eval */
+    /* Rational (weights not all equal): nf_surf_eval. Equal weights cancel
+     * in Eq. 1 (the basis sums to 1), so such a net is polynomial. */
+    for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
+        if (s->w[i] != s->w[0])
+            return CF_OK;
     e->C = malloc(sizeof(double) * 3 * (size_t)s->nu);
     e->stamp = malloc(sizeof(long) * (size_t)s->nu);
     if (!e->C || !e->stamp) {

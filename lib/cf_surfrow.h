@@ -5,7 +5,7 @@
  * when a point first needs it; a point then costs its span, N(u) from the
  * span's reciprocals (no division) and (p+1) x 3 multiply-adds. Same
  * surface point as nf_surf_eval up to rounding (sums regrouped). Rational
- * surfaces go to nf_surf_eval. Memory: 4 doubles per control column. */
+ * surfaces (weights not all equal) go to nf_surf_eval. Memory: 4 doubles per control column. */
 #ifndef CF_SURFROW_H
 #define CF_SURFROW_H
 
