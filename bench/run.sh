@@ -4,7 +4,9 @@
 # machine's memory bandwidth; prints Markdown tables beside the paper's
 # Tables 2-4 (bench/tables.py), projection, and keeps every raw JSON line in
 # BUILD/bench/*.jsonl (BUILD: CELLFIT's directory). Measures, asserts nothing.
-# About 1.5 minutes on 2 cores. Environment: BENCH_REPS (3) runs per cell,
+# About 3 minutes on 2 quiet cores (the end-to-end peers add about a minute).
+# BENCH_LONG=1 adds the 10^8-point runs (docs/performance.md). Environment:
+# BENCH_REPS (3) runs per cell,
 # the fastest kept, while one run takes less than BENCH_REPEAT_S (5) seconds
 # of wall time; BENCH_CHOL_MAX_S (20): banded Cholesky is skipped ("-") where
 # its estimate from N = 10^4 exceeds this; CC (gcc) builds the C helpers.
