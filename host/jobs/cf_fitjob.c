@@ -31,7 +31,8 @@ struct cf_fitjob {
     void *mem;      /* the fitter's arena */
     double *buf, *rows;
     long *src; /* per kept row, its index in the batch (for messages) */
-    long cap;  /* rows the three buffers hold */
+    long cap;  /* rows buf holds */
+    long rcap; /* rows rows and src hold: cap when projecting, else 1 (issue 20) */
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
@@ -191,22 +192,27 @@ static void touch(void *p, size_t n)
 /* Batch buffers for n rows (at most BATCH), touched whole when allocated so
  * that memory never follows the points: a journal of a few hundred points
  * (the cell's scans) needs no 5 MB of them, a file of unknown length gets
- * BATCH. */
-static int buffers(cf_fitjob_t *j, long n)
+ * BATCH. rows and src serve projection (proj); given parameters need one
+ * row of rows (the residual pass's copy) and no src: 3 MB less. */
+static int buffers(cf_fitjob_t *j, long n, int proj)
 {
     n = n < 1 ? BATCH : n > BATCH ? BATCH : n;
-    if (j->cap >= n)
+    long rn = proj ? n : 1;
+    if (j->cap >= n && j->rcap >= rn)
         return 0;
+    n = n > j->cap ? n : j->cap;
+    rn = proj ? n : rn > j->rcap ? rn : j->rcap; /* projecting: a row for every read row */
     free(j->buf), free(j->rows), free(j->src);
     j->buf = malloc(sizeof(double) * 5 * (size_t)n);
-    j->rows = malloc(sizeof(double) * 5 * (size_t)n);
-    j->src = malloc(sizeof(long) * (size_t)n);
+    j->rows = malloc(sizeof(double) * 5 * (size_t)rn);
+    j->src = malloc(sizeof(long) * (size_t)rn);
     j->cap = j->buf && j->rows && j->src ? n : 0;
+    j->rcap = j->cap ? rn : 0;
     if (!j->cap)
         return CF_ENOMEM;
     touch(j->buf, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
-    touch(j->rows, sizeof(double) * 5 * (size_t)n);
-    touch(j->src, sizeof(long) * (size_t)n);
+    touch(j->rows, sizeof(double) * 5 * (size_t)rn);
+    touch(j->src, sizeof(long) * (size_t)rn);
     return 0;
 }
 
@@ -366,7 +372,7 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
             j->lp = calloc(1, sizeof *j->lp);
         if (!j->mem)
             j->mem = malloc((size_t)j->need);
-        if (!j->lp || !j->mem || buffers(j, 1))
+        if (!j->lp || !j->mem || buffers(j, 1, 1))
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
         if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, "live points", msg, ml)))
             return rc;
@@ -689,7 +695,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (buffers(j, src->total) || cf_surf_copy(&S.cur, &j->base)) {
+    if (buffers(j, src->total, src->cols != 5) || cf_surf_copy(&S.cur, &j->base)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }
