@@ -4,8 +4,10 @@
 # machine's memory bandwidth; prints Markdown tables beside the paper's
 # Tables 2-4 (bench/tables.py), projection, and keeps every raw JSON line in
 # BUILD/bench/*.jsonl (BUILD: CELLFIT's directory). Measures, asserts nothing.
-# About 1.5 minutes on 2 cores, plus the fitting loop's section (a few
-# minutes: surfit's search). Environment: BENCH_REPS (3) runs per cell,
+# About 3 minutes on 2 quiet cores (the end-to-end peers add about a minute),
+# plus the fitting loop's section (a few minutes: surfit's search).
+# BENCH_LONG=1 adds the 10^8-point runs (docs/performance.md). Environment:
+# BENCH_REPS (3) runs per cell,
 # the fastest kept, while one run takes less than BENCH_REPEAT_S (5) seconds
 # of wall time; BENCH_CHOL_MAX_S (20): banded Cholesky is skipped ("-") where
 # its estimate from N = 10^4 exceeds this; CC (gcc) builds the C helpers.
@@ -203,27 +205,77 @@ for mn in 10000:100 10000:1000 10000:10000 100000:100 100000:961 100000:1000 100
 done
 table fitpack
 
-# --- end to end: 10^6 ASCII points onto ~10^5 control points -----------------
-say "end to end: cellfit gen (not timed), then cellfit fit --uv"
-i=0
-if ! run "$CF" gen --dir "$OUT/e2e" --nu 316 --nv 316 --count 1000000; then
-    printf '{"bench": "error", "command": "gen", "message": "%s"}\n' "$(errmsg)" >>"$OUT/e2e.jsonl"
-    i=$REPS
-fi
-while [ "$i" -lt "$REPS" ]; do
-    i=$((i + 1))
+# --- end to end: 10^6 points, ASCII and binary, beside the peers (issue 20) --
+# Per net: `cellfit gen` (not timed), bench/genbin converts its points to
+# .uvxyz.bin (not timed), then the wall time of `cellfit fit --uv` on each
+# file, best of REPS; the peers (bench/peers_e2e.py: scipy CG, and CHOLMOD
+# through bench/cholmod_bench) once each on the same points, file I/O not
+# timed. BENCH_LONG=1 adds the 10^8-point runs (N = 10^4 and 10^5: the
+# 10^6-point raster written 100 times, 4 GB each, deleted after) and
+# N = 10^6 from 10^7 points.
+e2e_fit() { # e2e_fit DIR FILE INPUT: one timed fit, its JSON line to e2e.jsonl
     t0=$(now_ns)
-    if ! run "$CF" fit --base "$OUT/e2e/nominal.igs" --points "$OUT/e2e/points.uvxyz" --uv \
-        --out "$OUT/e2e/fitted.igs" --json; then
-        msg=$(errmsg)
-        printf '{"bench": "error", "command": "fit", "message": "%s"}\n' "$msg" >>"$OUT/e2e.jsonl"
-        break
+    if ! run "$CF" fit --base "$1/nominal.igs" --points "$2" --uv --out "$1/fitted.igs" --json; then
+        printf '{"bench": "error", "command": "fit %s", "message": "%s"}\n' "$2" "$(errmsg)" \
+            >>"$OUT/e2e.jsonl"
+        return 1
     fi
     t1=$(now_ns)
     wall=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.4f", (b - a) / 1e9 }')
-    head -n 1 "$OUT/out.txt" | sed "s/^{/{\"bench\": \"e2e\", \"wall_seconds\": $wall, /" \
-        >>"$OUT/e2e.jsonl"
+    head -n 1 "$OUT/out.txt" |
+        sed "s/^{/{\"bench\": \"e2e\", \"input\": \"$3\", \"wall_seconds\": $wall, /" \
+            >>"$OUT/e2e.jsonl"
+}
+"$CC" -std=c11 -O2 -Wall -Wextra -Werror "$HERE/genbin.c" -o "$OUT/genbin"
+mkdir -p "$OUT/e2e"
+for nside in 10 32 100 316; do
+    say "end to end: N = $nside x $nside, 10^6 points, ASCII and binary, and the peers"
+    d=$OUT/e2e/n$nside
+    if ! run "$CF" gen --dir "$d" --nu "$nside" --nv "$nside" --count 1000000 ||
+        ! run "$OUT/genbin" "$d/points.uvxyz" "$d/points.uvxyz.bin"; then
+        printf '{"bench": "error", "command": "gen %s", "message": "%s"}\n' "$nside" \
+            "$(errmsg)" >>"$OUT/e2e.jsonl"
+        continue
+    fi
+    i=0
+    while [ "$i" -lt "$REPS" ]; do
+        i=$((i + 1))
+        e2e_fit "$d" "$d/points.uvxyz" ascii || break
+        e2e_fit "$d" "$d/points.uvxyz.bin" bin || break
+    done
+    if run "$PY" "$HERE/peers_e2e.py" --points "$d/points.uvxyz.bin" --nu "$nside" \
+        --nv "$nside" --cfne "$d/ne.cfne"; then
+        cat "$OUT/out.txt" >>"$OUT/e2e_peers.jsonl"
+        if run "$OUT/cholmod_bench" "$d/ne.cfne"; then
+            head -n 1 "$OUT/out.txt" | sed 's/^{/{"e2e": true, /' >>"$OUT/e2e_peers.jsonl"
+        fi
+    else
+        printf '{"bench": "error", "command": "peers %s", "message": "%s"}\n' "$nside" \
+            "$(errmsg)" >>"$OUT/e2e_peers.jsonl"
+    fi
+    rm -f "$d/ne.cfne"
+    case $nside in 10 | 32) rm -rf "$d" ;; esac # the long runs reuse 100 and 316
 done
+if [ "${BENCH_LONG:-0}" = 1 ]; then
+    for nside in 100 316; do
+        d=$OUT/e2e/n$nside
+        [ -f "$d/points.uvxyz" ] || continue
+        say "end to end, long: 10^8 binary points onto $nside x $nside (4 GB in $d)"
+        if run "$OUT/genbin" "$d/points.uvxyz" "$d/big.uvxyz.bin" 100; then
+            e2e_fit "$d" "$d/big.uvxyz.bin" bin || true
+        fi
+        rm -f "$d/big.uvxyz.bin"
+    done
+    say "end to end, long: 10^7 points onto 1000 x 1000"
+    d=$OUT/e2e/n1000
+    if run "$CF" gen --dir "$d" --nu 1000 --nv 1000 --count 10000000 &&
+        run "$OUT/genbin" "$d/points.uvxyz" "$d/points.uvxyz.bin"; then
+        e2e_fit "$d" "$d/points.uvxyz.bin" bin || true
+        e2e_fit "$d" "$d/points.uvxyz" ascii || true
+    fi
+    rm -rf "$d"
+fi
+rm -rf "$OUT/e2e"
 table e2e
 
 # --- projection: closest points on a curved bicubic part, truth known --------

@@ -268,22 +268,81 @@ def fitpack(out):
 
 def e2e(out):
     good, bad = load(out, "e2e")
-    print("## End to end: `cellfit fit --uv`, 10^6 ASCII points onto 316 x 316 control points\n")
-    print("Wall time of the command, file parsing included (the 54 MB points file is in "
-          "the page cache: `cellfit gen` wrote it, not timed). Issue 6's target: 2 s. The "
-          "paper, Tables 2 + 3 at M = 10^6, N = 10^5: 11.5 s preparation + 21.3 s "
-          "Gauss-Seidel = 32.8 s, no file parsing (the issue quotes about 25 s).\n")
-    if good:
-        d = min(good, key=lambda x: x["wall_seconds"])
-        other = d["seconds"] - d["accumulate_seconds"] - d["solve_seconds"]
-        table(["wall s", "fit seconds", "other s (IGES in and out, residual pass)",
-               "read + accumulate s", "solve s (with the probe)", "solver",
-               "iterations", "rel. residual", "rms mm", "peak RSS MiB", "runs"],
-              [[sec(d["wall_seconds"]), sec(d["seconds"]), sec(other),
-                sec(d["accumulate_seconds"]), sec(d["solve_seconds"]), d["solver"],
-                d["iterations"], "%.1e" % d["rel_residual"], "%.2g" % d["rms"],
-                "%.0f" % (d["peak_rss_bytes"] / 2**20), len(good)]])
-    failures(bad)
+    peers, pbad = load(out, "e2e_peers")
+    print("## End to end: `cellfit fit --uv`, 10^6 points, beside scipy CG and CHOLMOD\n")
+    print("Wall time of the whole command (IGES in, two passes over the file: accumulate, "
+          "then the residual pass for RMS and max; IGES out), the file in the page cache "
+          "(`cellfit gen` and bench/genbin wrote it, not timed): ASCII (`%.9f %.9f %.6f "
+          "%.6f %.6f` lines, 54 MB) and raw float64 (`.uvxyz.bin`, 40 MB). Peers "
+          "(bench/peers_e2e.py) on the same points and net, in-process, file I/O excluded: "
+          "scipy sparse normal equations (R^T R + tiny ridge) with Jacobi CG to 1e-10, and "
+          "the same assembly followed by CHOLMOD (bench/cholmod_bench: analyse + factor + "
+          "solve); their MB is the Python process's peak RSS. Ratio: the better peer's "
+          "seconds over cellfit's.\n")
+    b = best([d for d in good if d.get("points", 0) <= 10**6],
+             lambda d: (d["control_points"], d.get("input", "ascii")), "wall_seconds")
+    cg = {d["control_points"]: d for d in peers if d.get("peer") == "scipy_cg"}
+    asm = {d["control_points"]: d for d in peers if d.get("peer") == "cholmod_assembly"}
+    ch = {d["control_points"]: d for d in peers if d.get("e2e") and d.get("bench") == "cholmod"}
+    rows = []
+    for n in sorted({k[0] for k in b}):
+        def cf(inp):
+            d = b.get((n, inp))
+            return d[0] if d else None
+        a, bn = cf("ascii"), cf("bin")
+        peer = []
+        if n in cg:
+            peer.append(cg[n]["seconds"])
+        if n in asm and n in ch:
+            peer.append(asm[n]["assembly_seconds"] + ch[n]["seconds"])
+        better = min(peer) if peer else None
+
+        def fmt(d):
+            return "-" if not d else "%s / %.0f" % (sec(d["wall_seconds"]),
+                                                     d["peak_rss_bytes"] / 2**20)
+
+        def ratio(d):
+            return "-" if not d or better is None else "%.1fx" % (better / d["wall_seconds"])
+        rows.append(["{:,}".format(n), fmt(a), fmt(bn),
+                     "-" if not a else "%s / %s / %s" % (sec(a["accumulate_seconds"]),
+                                                        sec(a["solve_seconds"]),
+                                                        sec(a["seconds"] - a["accumulate_seconds"]
+                                                            - a["solve_seconds"])),
+                     "-" if not bn else "%s / %s / %s" % (sec(bn["accumulate_seconds"]),
+                                                         sec(bn["solve_seconds"]),
+                                                         sec(bn["seconds"]
+                                                             - bn["accumulate_seconds"]
+                                                             - bn["solve_seconds"])),
+                     "-" if n not in cg else "%s / %.0f" % (sec(cg[n]["seconds"]),
+                                                            cg[n]["peak_rss_mib"]),
+                     "-" if not (n in asm and n in ch) else "%s / %.0f" % (
+                         sec(asm[n]["assembly_seconds"] + ch[n]["seconds"]),
+                         asm[n]["peak_rss_mib"]),
+                     ratio(a), ratio(bn)])
+    table(["N", "cellfit ASCII s / MiB", "cellfit binary s / MiB",
+           "ASCII: read + accumulate / solve / other s", "binary: same",
+           "scipy CG s / MiB", "CHOLMOD s / MiB", "ratio ASCII", "ratio binary"], rows)
+    long = [d for d in good if d.get("points", 0) > 10**6]
+    if long:
+        print("\nLong runs (`BENCH_LONG=1`): 10^8 points = the 10^6-point raster above "
+              "written 100 times into one `.uvxyz.bin` (4 GB, streamed, deleted after); "
+              "N = 10^6 from 10^7 points (`cellfit gen`). One run each.\n")
+        one = {k: v[0] for k, v in b.items()}
+        lrows = []
+        for d in sorted(long, key=lambda x: (x["points"], x["control_points"])):
+            ref = one.get((d["control_points"], d.get("input")))
+            lrows.append(["{:,}".format(d["points"]), "{:,}".format(d["control_points"]),
+                          d.get("input", "ascii"), sec(d["wall_seconds"]),
+                          sec(d["accumulate_seconds"]), sec(d["solve_seconds"]),
+                          "%.2f" % (d["points"] / d["wall_seconds"] / 1e6),
+                          "%.0f" % (d["peak_rss_bytes"] / 2**20),
+                          "-" if not ref else "%.2f" % (d["peak_rss_bytes"]
+                                                        / ref["peak_rss_bytes"]),
+                          "-" if not ref else "%.1f" % (d["wall_seconds"]
+                                                        / ref["wall_seconds"])])
+        table(["M", "N", "input", "wall s", "read + accumulate s", "solve s", "M points/s",
+               "peak RSS MiB", "RSS / 10^6 run", "time / 10^6 run"], lrows)
+    failures(bad + pbad)
 
 
 def project(out):
@@ -348,6 +407,8 @@ def targets(out):
             t, sv, _ = min(c)
             rows.append(["solve to 1e-10, N = 10^%d" % (5 if dec == 10**5 else 6),
                          "<= %g s" % lim, "%s s (%s)" % (sec(t), sv), verdict(t <= lim)])
+    e2 = [d for d in e2 if d.get("control_points") == 99856 and d.get("input", "ascii") == "ascii"
+          and d.get("points") == 10**6]
     if e2:
         w = min(d["wall_seconds"] for d in e2)
         rows.append(["end to end, 10^6 ASCII points onto 10^5 control points", "<= 2 s",

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #define CP_BUF (1L << 20)
+#define CP_PAD 8 /* bytes after the buffer's NUL: cp_digits loads 8 at a time */
 #define CP_MAX_PROPS 32
 #define CP_MAX_ELEMS 16
 
@@ -25,6 +26,15 @@
 #define CP_FAST 1
 #endif
 
+/* Eight digits at a time (SWAR, as in fast_float) on little-endian hosts
+ * with __builtin_ctzll; elsewhere one digit at a time. Either way the same
+ * m, e10 and digit counts, so the same value. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && defined(__GNUC__)
+#define CP_SWAR 1
+#else
+#define CP_SWAR 0
+#endif
+
 /* With x87 80-bit long double, 19-digit mantissas (%.17g output) have an
  * exact check too; see cp_num. */
 #if CP_FAST && LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
@@ -33,7 +43,7 @@
 #define CP_EXT 0
 #endif
 
-enum { CP_ASCII, CP_PLY_ASCII, CP_PLY_BIN };
+enum { CP_ASCII, CP_PLY_ASCII, CP_PLY_BIN, CP_RAW };
 enum { CP_NUM_OK, CP_NUM_JUNK, CP_NUM_NONFINITE, CP_NUM_RANGE };
 enum { CP_T_I8 = 1, CP_T_U8, CP_T_I16, CP_T_U16, CP_T_I32, CP_T_U32, CP_T_F32, CP_T_F64 };
 
@@ -53,7 +63,8 @@ struct cf_points {
     FILE *f;
     int is_stdin;
     char name[256];
-    char *buf; /* CP_BUF + 1 bytes: room for a NUL after a final unterminated line */
+    char *buf; /* CP_BUF + 1 + CP_PAD bytes: a NUL after a final unterminated line, and
+                * room for cp_digits' 8-byte loads past it */
     size_t len, pos;
     long long boff;     /* file offset of buf[0] */
     long long data_off; /* offset of the first point (after a PLY header) */
@@ -165,6 +176,34 @@ static const long double cp_p10l[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,
                                         1e21L, 1e22L, 1e23L, 1e24L, 1e25L, 1e26L, 1e27L};
 #endif
 
+#if CP_SWAR
+static const uint64_t cp_p10u[9] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
+
+/* The run of up to 8 decimal digits at p (the bytes after it are read but
+ * ignored; the reader's buffer has CP_PAD bytes of room): their count, and
+ * their value in *val. Bytes below the first non-digit neither carry nor
+ * borrow, so its high bit in t is exact; the bytes above it are shifted out. */
+static inline __attribute__((always_inline)) int cp_digits(const char *p, uint64_t *val)
+{
+    uint64_t v;
+    memcpy(&v, p, 8);
+    uint64_t t = ((v + UINT64_C(0x4646464646464646)) | (v - UINT64_C(0x3030303030303030))) &
+                 UINT64_C(0x8080808080808080);
+    int n = t ? __builtin_ctzll(t) >> 3 : 8;
+    if (!n)
+        return 0;
+    v -= UINT64_C(0x3030303030303030);
+    if (n < 8)
+        v <<= 8 * (8 - n); /* the digits to the high bytes, zeros (leading) below */
+    v = v * 10 + (v >> 8);
+    v = (((v & UINT64_C(0x000000FF000000FF)) * (100 + (UINT64_C(1000000) << 32))) +
+         (((v >> 16) & UINT64_C(0x000000FF000000FF)) * (1 + (UINT64_C(10000) << 32)))) >>
+        32;
+    *val = v & 0xFFFFFFFFu;
+    return n;
+}
+#endif
+
 static int cp_digit(char c)
 {
     return (unsigned)(c - '0') < 10u;
@@ -218,6 +257,17 @@ static int cp_num(const char *p, const char **end, double *out)
         p++;
         any = 1;
     }
+#if CP_SWAR
+    for (int n = 8; n == 8 && nd <= 11 && cp_digit(*p);) { /* nd + 8 <= 19: nothing dropped here */
+        uint64_t v;
+        if (!(n = cp_digits(p, &v)))
+            break;
+        m = m * cp_p10u[n] + v;
+        nd += n;
+        p += n;
+        any = 1;
+    }
+#endif
     for (; cp_digit(*p); p++, any = 1) {
         if (nd < 19) {
             m = m * 10 + (uint64_t)(*p - '0');
@@ -232,6 +282,18 @@ static int cp_num(const char *p, const char **end, double *out)
         if (!nd)
             for (; *p == '0'; p++, any = 1)
                 e10--;
+#if CP_SWAR
+        for (int n = 8; n == 8 && nd <= 11 && cp_digit(*p);) {
+            uint64_t v;
+            if (!(n = cp_digits(p, &v)))
+                break;
+            m = m * cp_p10u[n] + v;
+            nd += n;
+            e10 -= n;
+            p += n;
+            any = 1;
+        }
+#endif
         for (; cp_digit(*p); p++, any = 1) {
             if (nd < 19) {
                 m = m * 10 + (uint64_t)(*p - '0');
@@ -866,6 +928,65 @@ static int cp_ply_point(cf_points_t *r, double *row)
     return 1;
 }
 
+/* ------------------------------------------- raw float64 (.xyz.bin) */
+
+/* Columns of a raw little-endian float64 file named by its extension:
+ * 5 for .uvxyz.bin, 3 for .xyz.bin, 0 for anything else (docs/formats.md). */
+static int cp_raw_cols(const char *path)
+{
+    size_t n = strlen(path);
+    if (n >= 10 && !strcmp(path + n - 10, ".uvxyz.bin"))
+        return 5;
+    if (n >= 8 && !strcmp(path + n - 8, ".xyz.bin"))
+        return 3;
+    return 0;
+}
+
+/* Whole records straight from the buffer into out: a memcpy on a
+ * little-endian host (the file's order), so the reader runs at memory speed;
+ * every value checked finite, like the text formats. */
+static long cp_raw_read(cf_points_t *r, double *out, long max)
+{
+    size_t rec = sizeof(double) * (size_t)r->cols;
+    long k = 0;
+    while (k < max) {
+        size_t avail = r->len - r->pos;
+        if (avail < rec) {
+            if (r->eof) {
+                if (avail && !k) /* the whole points first, the error next call */
+                    return cp_err(r, CF_EPARSE, 0,
+                                  "file ends inside point %lld (%zu stray bytes; %zu per point)",
+                                  r->vdone + 1, avail, rec);
+                break;
+            }
+            int rc = cp_fill(r);
+            if (rc)
+                return rc;
+            continue;
+        }
+        long take = (long)(avail / rec);
+        take = take > max - k ? max - k : take;
+        const unsigned char *b = (const unsigned char *)r->buf + r->pos;
+        double *o = out + k * r->cols;
+        size_t nv = (size_t)take * (size_t)r->cols;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+        memcpy(o, b, nv * sizeof(double));
+#else
+        for (size_t i = 0; i < nv; i++)
+            o[i] = cp_le(b + 8 * i, CP_T_F64);
+#endif
+        for (size_t i = 0; i < nv; i++)
+            if (!isfinite(o[i]))
+                return cp_err(r, CF_EPARSE, 0, "point %lld: non-finite value",
+                              r->vdone + 1 + (long long)(i / (size_t)r->cols));
+        r->pos += nv * sizeof(double);
+        r->vdone += take;
+        k += take;
+    }
+    r->last = (long)r->vdone;
+    return k;
+}
+
 /* ----------------------------------------------------------------- API */
 
 int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg, size_t msglen)
@@ -877,11 +998,11 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     cf_points_t *r = calloc(1, sizeof *r);
     if (!r)
         return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
-    r->buf = malloc((size_t)CP_BUF + 1);
+    r->buf = malloc((size_t)CP_BUF + 1 + CP_PAD);
     /* Touch every page now (not with zeros: malloc+memset 0 may become a lazy
      * calloc) so the footprint is fixed at open, whatever the file size. */
     if (r->buf)
-        memset(r->buf, ' ', (size_t)CP_BUF + 1);
+        memset(r->buf, ' ', (size_t)CP_BUF + 1 + CP_PAD);
     r->is_stdin = !strcmp(path, "-");
     snprintf(r->name, sizeof r->name, "%s", r->is_stdin ? "<stdin>" : path);
     r->want = r->cols = want_cols;
@@ -899,8 +1020,15 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     while (!rc && !r->eof && r->len < 4)
         rc = cp_fill(r);
     const unsigned char *b = (const unsigned char *)r->buf;
+    int raw = r->is_stdin ? 0 : cp_raw_cols(path);
     if (rc) {
         /* message already in r->errmsg */
+    } else if (raw) {
+        r->fmt = CP_RAW;
+        if (want_cols && want_cols != raw)
+            rc = cp_err(r, CF_EPARSE, 0, "raw float64 file with %d values per point, %d wanted",
+                        raw, want_cols);
+        r->cols = raw;
     } else if (r->len >= 2 && b[0] == 0x1F && b[1] == 0x8B) {
         rc = cp_err(r, CF_EUNSUPPORTED, 0, "gzip-compressed: gunzip it first");
     } else if (r->len >= 4 && !memcmp(b, "ply", 3) && (b[3] == '\n' || b[3] == '\r')) {
@@ -933,6 +1061,10 @@ long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, siz
         return cf_fail(msg, msglen, CF_EARG, "cf_points_read: bad arguments");
     if (r->err)
         return cf_fail(msg, msglen, r->err, "%s", r->errmsg);
+    if (r->fmt == CP_RAW) {
+        long n = cp_raw_read(r, buf, max_points);
+        return n < 0 ? cf_fail(msg, msglen, (int)n, "%s", r->errmsg) : n;
+    }
     long k = 0;
     while (k < max_points && r->cols > 0) {
         double *row = buf + k * r->cols;

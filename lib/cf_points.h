@@ -4,6 +4,9 @@
  *          starts a comment, blank lines skipped, CRLF accepted.
  *   PLY:   ascii or binary_little_endian, vertex element with float/double
  *          x y z and optionally u v (or s t); other elements are skipped.
+ *   raw:   by extension, no header: .xyz.bin (x y z) and .uvxyz.bin
+ *          (u v x y z), little-endian IEEE float64, point after point
+ *          (docs/formats.md); read by memcpy, values checked finite.
  * Values are bit-identical to strtod's. */
 #ifndef CF_POINTS_H
 #define CF_POINTS_H
@@ -31,7 +34,7 @@ int cf_points_cols(const cf_points_t *r);
  * "file:line: ..." in msg. After an error every later call repeats it. */
 long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, size_t msglen);
 
-/* Line of the last point returned (for binary PLY: its vertex number). */
+/* Line of the last point returned (binary PLY and raw: its point number). */
 long cf_points_line(const cf_points_t *r);
 
 /* Start again from the first point. CF_EUNSUPPORTED for stdin, CF_EIO if

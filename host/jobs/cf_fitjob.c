@@ -8,6 +8,7 @@
 #include "cf_holdout.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
+#include "cf_surfrow.h"
 #include "nf_err.h"
 #include "nf_footprint.h"
 #include "nf_knots.h"
@@ -35,7 +36,8 @@ struct cf_fitjob {
     void *mem;      /* the fitter's arena */
     double *buf, *rows;
     long *src; /* per kept row, its index in the batch (for messages) */
-    long cap;  /* rows the three buffers hold */
+    long cap;  /* rows buf holds */
+    long rcap; /* rows rows and src hold: cap when projecting or weighting, else 1 (issue 20) */
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
@@ -202,23 +204,28 @@ static void touch(void *p, size_t n)
 /* Batch buffers for n rows (at most BATCH), touched whole when allocated so
  * that memory never follows the points: a journal of a few hundred points
  * (the cell's scans) needs no 5 MB of them, a file of unknown length gets
- * BATCH. */
-static int buffers(cf_fitjob_t *j, long n)
+ * BATCH. rows and src serve projection (proj); given parameters need one
+ * row of rows (the residual pass's copy) and no src: 3 MB less. */
+static int buffers(cf_fitjob_t *j, long n, int proj)
 {
     n = n < 1 ? BATCH : n > BATCH ? BATCH : n;
-    if (j->cap >= n)
+    long rn = proj || j->o.robust ? n : 1; /* rows built per point: projected or weighted */
+    if (j->cap >= n && j->rcap >= rn)
         return 0;
+    n = n > j->cap ? n : j->cap;
+    rn = proj || j->o.robust ? n : rn > j->rcap ? rn : j->rcap;
     free(j->buf), free(j->rows), free(j->src);
     j->buf = malloc(sizeof(double) * 5 * (size_t)n);
     size_t cols = j->o.robust ? 6 : 5; /* u v x y z, and w for robust passes */
-    j->rows = malloc(sizeof(double) * cols * (size_t)n);
-    j->src = malloc(sizeof(long) * (size_t)n);
+    j->rows = malloc(sizeof(double) * cols * (size_t)rn);
+    j->src = malloc(sizeof(long) * (size_t)rn);
     j->cap = j->buf && j->rows && j->src ? n : 0;
+    j->rcap = j->cap ? rn : 0;
     if (!j->cap)
         return CF_ENOMEM;
     touch(j->buf, sizeof(double) * 5 * (size_t)n); /* resident now, whatever the points */
-    touch(j->rows, sizeof(double) * cols * (size_t)n);
-    touch(j->src, sizeof(long) * (size_t)n);
+    touch(j->rows, sizeof(double) * cols * (size_t)rn);
+    touch(j->src, sizeof(long) * (size_t)rn);
     return 0;
 }
 
@@ -329,7 +336,7 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
             j->lp = calloc(1, sizeof *j->lp);
         if (!j->mem)
             j->mem = malloc((size_t)j->need);
-        if (!j->lp || !j->mem || buffers(j, 1))
+        if (!j->lp || !j->mem || buffers(j, 1, 1))
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
         if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, "live points", msg, ml)))
             return rc;
@@ -440,9 +447,11 @@ typedef struct check {
  * excess per knot span of the points out of tolerance (those beyond cut
  * > 0, the points a robust fit rejects, go to their cells only, and to the
  * knot chooser as data without misfit), the footprint of the feet not
- * clamped to the boundary, and (if st) the signed normal deviations. */
+ * clamped to the boundary, and (if st) the signed normal deviations. The
+ * |d| histogram (a log10 per point) only if want_hist: only the robust
+ * scale reads it (issue 20). */
 static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, resid_t *out,
-                   cf_stats_t *st)
+                   cf_stats_t *st, int want_hist)
 {
     nf_spanres_t *sr = ck ? ck->sr : NULL;
     cf_fitjob_t *j = r->j;
@@ -455,6 +464,11 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     int uv = src->cols == 5;
     if ((!uv || st) && cf_seedgrid_init(&pj, s, SEEDS))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
+    if (cf_surfrow_init(&ev, s)) {
+        cf_seedgrid_free(&pj);
+        return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    }
     int rc = rewind_src(r);
     long got = 0;
     while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
@@ -476,12 +490,16 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 if (!uv)
                     q[0] = pr.u, q[1] = pr.v, q[2] = Q[0], q[3] = Q[1], q[4] = Q[2];
             }
-            double d = dist_at(s, q);
+            double P[3];
+            cf_surfrow_eval(&ev, q[0], q[1], P);
+            double d = sqrt((q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
+                            (q[4] - P[2]) * (q[4] - P[2]));
             out->ss += d * d;
             out->mx = d > out->mx ? d : out->mx;
             out->n++;
             out->within += tol > 0 && d <= tol;
-            nf_rhist_add(&out->hist, d);
+            if (want_hist)
+                nf_rhist_add(&out->hist, d);
             if (cut > 0 && d >= cut) {
                 out->outliers++;
                 if (sr)
@@ -502,6 +520,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     }
     if (got < 0)
         rc = (int)got;
+    cf_surfrow_free(&ev);
     cf_seedgrid_free(&pj);
     return rc;
 }
@@ -612,7 +631,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     memset(&S->rb, 0, sizeof S->rb);
     for (long it = 0; o->robust && it < o->robust_iters; it++) {
         set_pass(r, lo, hi, ip++, npass);
-        if ((rc = measure(r, &S->prev, NULL, 0.0, res, NULL)))
+        if ((rc = measure(r, &S->prev, NULL, 0.0, res, NULL, 1)))
             return rc;
         if ((rc = nf_robust_init(&S->rb, &res->hist, out->robust_floor)))
             return cf_fail(r->msg, r->ml, rc, "robust scale: %s", nf_strerror(rc));
@@ -660,7 +679,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     if (S->st && (rc = cf_stats_init(S->st, o->tol)))
         return cf_fail(r->msg, r->ml, rc, "statistics: %s", cf_strerror(rc));
     set_pass(r, lo, hi, npass - 1, npass);
-    if ((rc = measure(r, &S->fit, ck, *c, res, S->st)))
+    if ((rc = measure(r, &S->fit, ck, *c, res, S->st, 0)))
         return rc;
     if (ck->sr)
         nf_spanres_fold(ck->sr); /* rejected misfit in one place: a feature */
@@ -733,7 +752,7 @@ static int holdout_check(run_t *r, const cf_fitsrc_t *in, cf_fitjob_result_t *ou
     cf_holdout_src(&hs, &hc, in, r->j->o.holdout, 1);
     r->src = &hs;
     resid_t res;
-    int rc = measure(r, &out->surf, NULL, 0.0, &res, NULL);
+    int rc = measure(r, &out->surf, NULL, 0.0, &res, NULL, 1); /* p99 from the histogram */
     r->src = in;
     if (rc)
         return rc;
@@ -774,7 +793,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (buffers(j, src->total) || cf_surf_copy(&S.cur, &j->base)) {
+    if (buffers(j, src->total, src->cols != 5) || cf_surf_copy(&S.cur, &j->base)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }

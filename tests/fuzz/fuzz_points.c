@@ -3,7 +3,11 @@
  * or 5 columns (by its length mod 3: an open costs 1 MiB of fresh pages)
  * and read to the end twice (rewind between). A refusal is
  * one line naming the file; every accepted value is finite; the second pass
- * gives the same points as the first. */
+ * gives the same points as the first. Then a differential check of the
+ * number parser against strtod: the input mapped onto the alphabet of
+ * decimals is one token, written three times on a line; the reader accepts
+ * it exactly when strtod takes all of it to a finite value, and then with
+ * strtod's bits. */
 #include "cf_err.h"
 #include "cf_points.h"
 #include "fuzz.h"
@@ -42,8 +46,43 @@ static long pass(cf_points_t *r, const char *path, uint64_t *sum)
     return total;
 }
 
+static void against_strtod(const uint8_t *data, size_t size)
+{
+    static const char abc[] = "0123456789012345678901234567890123456789.e+-E.";
+    char tok[130], line[400], msg[1024];
+    size_t n = size < sizeof tok - 1 ? size : sizeof tok - 1;
+    for (size_t i = 0; i < n; i++)
+        tok[i] = abc[data[i] % (sizeof abc - 1)];
+    tok[n] = '\0';
+    if (!n)
+        return;
+    char *end;
+    double want = strtod(tok, &end);
+    int ok = *end == '\0' && end != tok && isfinite(want);
+    int len = snprintf(line, sizeof line, "%s %s %s\n", tok, tok, tok);
+    const char *path = fz_file("tok.xyz", (const uint8_t *)line, (size_t)len);
+    cf_points_t *r;
+    double v[3];
+    long k = -1;
+    if (!cf_points_open(&r, path, 3, msg, sizeof msg)) {
+        k = cf_points_read(r, v, 1, msg, sizeof msg);
+        cf_points_close(r);
+    }
+    if (ok != (k == 1)) {
+        fprintf(stderr, "fuzz_points: '%s': strtod %s, reader %s\n", tok,
+                ok ? "accepts" : "refuses", k == 1 ? "accepts" : "refuses");
+        abort();
+    }
+    for (int i = 0; ok && i < 3; i++)
+        if (memcmp(&v[i], &want, sizeof want)) {
+            fprintf(stderr, "fuzz_points: '%s': got %a, strtod %a\n", tok, v[i], want);
+            abort();
+        }
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
+    against_strtod(data, size);
     const char *path = fz_file("in.xyz", data, size);
     static const int want[3] = {0, 3, 5};
     cf_points_t *r;

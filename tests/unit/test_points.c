@@ -301,7 +301,7 @@ static void test_batches_across_buffer(void **state)
 /* A random decimal string in one of many forms. */
 static void rand_token(char *b, size_t n)
 {
-    int mode = (int)(next_u64() % 7);
+    int mode = (int)(next_u64() % 11);
     double x;
     unsigned long long u = next_u64();
     switch (mode) {
@@ -332,6 +332,63 @@ static void rand_token(char *b, size_t n)
         b[k] = '\0';
         break;
     }
+    case 7: { /* an integer exactly halfway between two doubles (2^53 .. 2^63) */
+        int k = 1 + (int)(next_u64() % 10);
+        unsigned long long mant = (1ULL << 52) | (next_u64() >> 12);
+        snprintf(b, n, "%llu%s", (mant << k) + (1ULL << (k - 1)),
+                 (u & 1)   ? ""
+                 : (u & 2) ? ".000"
+                           : "0e-1");
+        break;
+    }
+    case 8: { /* the exact decimal of a halfway point, or one unit off in its last digit */
+        double y = urand() * pow(10, (int)(u % 12) - 6);
+        long double mid = ((long double)y + (long double)nextafter(y, 2 * y + 1)) / 2;
+        int len = snprintf(b, n, "%.100Le", mid), e = len;
+        while (e > 0 && b[e - 1] != 'e')
+            e--;
+        int last = e - 2; /* the last mantissa digit before "e" */
+        while (last > 0 && b[last] == '0')
+            last--;
+        if ((u & 6) == 2 && b[last] > '0' && b[last] <= '9')
+            b[last]--;
+        else if ((u & 6) == 4 && last + 1 < e - 1)
+            b[last + 1] = '1';
+        break;
+    }
+    case 9: { /* the edges: subnormals, DBL_MIN, DBL_MAX and their neighbours */
+        static const double edge[] = {DBL_MIN,
+                                      DBL_MAX,
+                                      4.9406564584124654e-324,
+                                      2.2250738585072009e-308,
+                                      1e-320,
+                                      1.7976931348623157e308};
+        double x0 = edge[u % 6];
+        for (int i = (int)(next_u64() % 4); i > 0; i--)
+            x0 = nextafter(x0, (u & 64) ? 0.0 : HUGE_VAL);
+        if (!isfinite(x0))
+            x0 = DBL_MAX;
+        if (u & 128) { /* a random subnormal */
+            unsigned long long bits = next_u64() >> 12;
+            memcpy(&x0, &bits, sizeof x0);
+        }
+        if (u & 256)
+            snprintf(b, n, "%.17g", x0);
+        else
+            snprintf(b, n, "%.*e", (u & 512) ? 16 : 25, x0);
+        break;
+    }
+    case 10: { /* 19 to 40 significant digits, exponents over the whole range */
+        int nd = 19 + (int)(next_u64() % 22), k = 0;
+        if (u & 1)
+            b[k++] = '-';
+        b[k++] = (char)('1' + next_u64() % 9);
+        b[k++] = '.';
+        for (int i = 1; i < nd; i++)
+            b[k++] = (char)('0' + next_u64() % 10);
+        snprintf(b + k, n - (size_t)k, "e%d", (int)(next_u64() % 600) - 300);
+        break;
+    }
     default: { /* halfway between two doubles, 19-21 digits */
         double y = urand() * pow(10, (int)(u % 30) - 15);
         long double mid = ((long double)y + (long double)nextafter(y, 2 * y + 1)) / 2;
@@ -346,7 +403,7 @@ static void test_bit_identical_to_strtod(void **state)
     (void)state;
     char path[600];
     const long n = 300000; /* values, 3 per line */
-    char(*tok)[64] = malloc(sizeof *tok * (size_t)n);
+    char(*tok)[128] = malloc(sizeof *tok * (size_t)n);
     assert_non_null(tok);
     tmp_path(path, sizeof path, "strtod.txt");
     FILE *f = fopen(path, "wb");
@@ -372,6 +429,93 @@ static void test_bit_identical_to_strtod(void **state)
     cf_points_close(r);
     free(tok);
     remove(path);
+}
+
+/* Raw little-endian float64 (.xyz.bin, .uvxyz.bin): every value back bit for
+ * bit (any finite pattern, across the 1 MB buffer, odd batch sizes), rewind,
+ * and the refusals: a partial last point, a non-finite value, a column count
+ * the extension does not give. */
+static double rand_finite(void)
+{
+    for (;;) {
+        unsigned long long u = next_u64();
+        double x;
+        memcpy(&x, &u, sizeof x);
+        if (isfinite(x))
+            return x;
+    }
+}
+
+static void le_bytes(unsigned char *b, double x)
+{
+    unsigned long long u;
+    memcpy(&u, &x, sizeof u);
+    for (int i = 0; i < 8; i++)
+        b[i] = (unsigned char)(u >> (8 * i));
+}
+
+static void check_raw(const char *name, int cols, long n)
+{
+    char path[600];
+    tmp_path(path, sizeof path, name);
+    double *want = malloc(sizeof(double) * (size_t)(cols * n + 1));
+    unsigned char *b = malloc(8 * (size_t)(cols * n) + 8);
+    double *got = malloc(sizeof(double) * (size_t)(cols * n + 1));
+    assert_true(want && b && got);
+    for (long i = 0; i < cols * n; i++) {
+        want[i] = rand_finite();
+        le_bytes(b + 8 * i, want[i]);
+    }
+    write_bytes(path, b, 8 * (size_t)(cols * n));
+    cf_points_t *r;
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_cols(r), cols);
+    for (int pass = 0; pass < 2; pass++) {
+        long k = 0, m;
+        while ((m = cf_points_read(r, got + cols * k, 1 + k % 997 + (k % 3) * 40000, msg,
+                                   sizeof msg)) > 0) {
+            k += m;
+            assert_int_equal(cf_points_line(r), k);
+        }
+        assert_int_equal(m, 0);
+        assert_int_equal(k, n);
+        for (long i = 0; i < cols * n; i++)
+            assert_same(got[i], want[i], i);
+        assert_int_equal(cf_points_rewind(r), CF_OK);
+    }
+    cf_points_close(r);
+    if (n < 3) { /* the refusals below need three points */
+        remove(path);
+        free(want), free(b), free(got);
+        return;
+    }
+    /* Wrong column count asked. */
+    assert_int_equal(cf_points_open(&r, path, cols == 5 ? 3 : 5, msg, sizeof msg), CF_EPARSE);
+    assert_msg("values per point");
+    /* A partial last point: the whole points before it, then the error. */
+    write_bytes(path, b, 8 * (size_t)(cols * 2 + 1));
+    assert_int_equal(cf_points_open(&r, path, cols, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, got, 10, msg, sizeof msg), 2);
+    assert_int_equal(cf_points_read(r, got, 10, msg, sizeof msg), CF_EPARSE);
+    assert_msg("ends inside point 3");
+    cf_points_close(r);
+    /* A NaN in point 2. */
+    le_bytes(b + 8 * (size_t)(cols + 1), NAN);
+    write_bytes(path, b, 8 * (size_t)(cols * 3));
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, got, 10, msg, sizeof msg), CF_EPARSE);
+    assert_msg("point 2: non-finite");
+    cf_points_close(r);
+    remove(path);
+    free(want), free(b), free(got);
+}
+
+static void test_raw_float64(void **state)
+{
+    (void)state;
+    check_raw("p.xyz.bin", 3, 70000);   /* 1.68 MB: crosses the buffer */
+    check_raw("p.uvxyz.bin", 5, 30011); /* 1.2 MB, a prime count */
+    check_raw("e.xyz.bin", 3, 0);       /* empty: no points */
 }
 
 static void test_rewind(void **state)
@@ -713,6 +857,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_csv_header),
         cmocka_unit_test(test_batches_across_buffer),
         cmocka_unit_test(test_bit_identical_to_strtod),
+        cmocka_unit_test(test_raw_float64),
         cmocka_unit_test(test_rewind),
         cmocka_unit_test(test_stdin_not_rewindable),
         cmocka_unit_test(test_errors_name_the_line),

@@ -1,0 +1,35 @@
+/* cf_surfrow.h: many points of one surface, fast, when they come in rows of
+ * one v (a scanner's raster; any order works). The v row's basis N(v) is
+ * computed once per row, and each control column's sum over it,
+ * C_i = sum_b N_b(v) P_(i, k-q+b) (a curve in u), once per row and column
+ * when a point first needs it; a point then costs its span, N(u) from the
+ * span's reciprocals (no division) and (p+1) x 3 multiply-adds. Same
+ * surface point as nf_surf_eval up to rounding (sums regrouped). Rational
+ * surfaces (weights not all equal) go to nf_surf_eval. Memory: 4 doubles per control column. */
+#ifndef CF_SURFROW_H
+#define CF_SURFROW_H
+
+#include "nf_basis.h"
+#include "nf_config.h"
+#include "nf_surf.h"
+
+typedef struct cf_surfrow {
+    const nf_surf_t *s;
+    double *C;   /* 3 nu: the curve of the current row */
+    long *stamp; /* nu: the row each C_i was computed for */
+    long row;    /* rows seen (stamps) */
+    double v;    /* the current row's v (clamped) */
+    int k;       /* its v span */
+    double Nv[NF_MAX_ORDER];
+    int l; /* the u span of the cached reciprocals, -1 none */
+    double recip[NF_RECIP_LEN];
+    double hu, hv; /* spans per unit parameter (the uniform guess) */
+} cf_surfrow_t;
+
+/* CF_OK or CF_ENOMEM. s must outlive e and keep its net. */
+int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s);
+/* S(u, v), the parameters clamped to the domain like nf_surf_eval's. */
+void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3]);
+void cf_surfrow_free(cf_surfrow_t *e);
+
+#endif
