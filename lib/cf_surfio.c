@@ -27,9 +27,26 @@ cf_surfio_fmt_t cf_surfio_format(const char *path)
     return CF_SURFIO_UNKNOWN;
 }
 
+/* A name without a known extension: STEP if the file starts as one (its
+ * ISO 10303-21 exchange-structure line), otherwise IGES. */
+static cf_surfio_fmt_t sniff(const char *path)
+{
+    char head[16] = {0};
+    FILE *f = path ? fopen(path, "rb") : NULL;
+    if (f) {
+        size_t n = fread(head, 1, sizeof head - 1, f);
+        head[n] = '\0';
+        fclose(f);
+    }
+    return !strncmp(head, "ISO-10303-21", 12) ? CF_SURFIO_STEP : CF_SURFIO_IGES;
+}
+
 int cf_surfio_read(const char *path, long which, nf_surf_t *out, char *msg, size_t msglen)
 {
-    switch (cf_surfio_format(path)) {
+    cf_surfio_fmt_t fmt = cf_surfio_format(path);
+    if (fmt == CF_SURFIO_UNKNOWN && path)
+        fmt = sniff(path);
+    switch (fmt) {
     case CF_SURFIO_IGES:
         if (which < 0 || which > 9999999)
             return cf_fail(msg, msglen, CF_EARG, "%s: IGES DE number %ld", path, which);
@@ -45,7 +62,10 @@ int cf_surfio_read(const char *path, long which, nf_surf_t *out, char *msg, size
 int cf_surfio_write(const char *path, const nf_surf_t *s, const char *name, const char *version,
                     char *msg, size_t msglen)
 {
-    switch (cf_surfio_format(path)) {
+    cf_surfio_fmt_t fmt = cf_surfio_format(path);
+    if (fmt == CF_SURFIO_UNKNOWN && path && *path)
+        fmt = CF_SURFIO_IGES; /* the tools' format before STEP: names like x.igs.replay */
+    switch (fmt) {
     case CF_SURFIO_IGES: return cf_iges_write(path, s, name, msg, msglen);
     case CF_SURFIO_STEP: return cf_step_write(path, s, name, version, msg, msglen);
     default:

@@ -19,15 +19,16 @@ typedef enum cf_surfio_fmt {
 cf_surfio_fmt_t cf_surfio_format(const char *path);
 
 /* Read the surface of path (which = 0: the first; otherwise IGES's DE
- * number or STEP's instance number) into out (cf_surf_free it). An unknown
- * extension is refused (CF_EUNSUPPORTED), errors otherwise as
- * cf_iges_read / cf_step_read. */
+ * number or STEP's instance number) into out (cf_surf_free it). Without a
+ * known extension the content decides (STEP starts "ISO-10303-21", anything
+ * else is read as IGES); errors as cf_iges_read / cf_step_read. */
 int cf_surfio_read(const char *path, long which, nf_surf_t *out, char *msg, size_t msglen);
 
 /* Write s to path in the format its extension names (atomically: path.tmp,
  * then renamed). name: the product/surface name (may be NULL); version: the
- * cellfit version for STEP's FILE_NAME (may be NULL). CF_EUNSUPPORTED for
- * another extension; errors otherwise as cf_iges_write / cf_step_write. */
+ * cellfit version for STEP's FILE_NAME (may be NULL). Another extension is
+ * written as IGES, the tools' format before STEP (`cellfit convert` alone
+ * insists on a known one); errors as cf_iges_write / cf_step_write. */
 int cf_surfio_write(const char *path, const nf_surf_t *s, const char *name, const char *version,
                     char *msg, size_t msglen);
 
