@@ -4,6 +4,7 @@
 #include "cf_iges.h"
 #include "cf_step.h"
 #include <ctype.h>
+#include <stdio.h>
 #include <string.h>
 
 static int ext_is(const char *ext, const char *want)
