@@ -7,8 +7,9 @@
 # journals every point and streams it into the fit of the nominal's net,
 # where beta (Eq. 7 of Brujic et al. 2010) keeps the unmeasured strip at
 # nominal; `cellfit report` compares the measured part with the nominal
-# (tolerance, colour map). Writes into DEMO_DIR (build/demo): fitted.igs,
-# points.xyz, report.json, deviation-map.png (measured points vs nominal),
+# (tolerance, colour map). Writes into DEMO_DIR (build/demo): fitted.igs and
+# fitted.stp (STEP AP242), points.xyz, report.json, report.dfq (Q-DAS),
+# deviations.csv and deviations.ply (per point), deviation-map.png (measured points vs nominal),
 # fitted-vs-nominal.png (the updated surface over the whole panel, sampled
 # in fitted-grid.xyz), scan.jnl, pids; prints a summary and stops every
 # process it started, by PID, also on Ctrl-C or SIGTERM.
@@ -205,7 +206,11 @@ t_scan=$(since "$t")
 t=$(now)
 "$CF" journal export "$D/scan.jnl" --out "$D/points.xyz" || die "journal export failed"
 "$CF" report "$NOM" "$D/points.xyz" --tol "$TOL" --png "$D/deviation-map.png" --json \
+    --csv "$D/deviations.csv" --ply "$D/deviations.ply" --dfq "$D/report.dfq" \
+    --part-number "DEMO-PANEL" --part-name "cellfit demo panel" --part-id "demo-1" \
     >"$T/dev.json" 2>"$T/report.err" || die "report failed: $(cat "$T/report.err")"
+"$CF" convert "$D/fitted.igs" "$D/fitted.stp" 2>"$T/report.err" ||
+    die "convert to STEP failed: $(cat "$T/report.err")"
 awk 'BEGIN { for (j = 0; j <= 150; j++) for (i = 0; i <= 200; i++) printf "%.6f %.6f\n", i / 200, j / 150 }' >"$T/grid.uv"
 "$CF" eval "$D/fitted.igs" "$T/grid.uv" >"$D/fitted-grid.xyz" || die "eval failed"
 "$CF" report "$NOM" "$D/fitted-grid.xyz" --tol "$TOL" --png "$D/fitted-vs-nominal.png" --json \
@@ -251,7 +256,7 @@ jn() { v=$(json "$S" "$1"); echo "${v:-0}"; }
 SCANRATE=$(jn points_per_s | awk '{ printf "%.0f", $1 }')
 [ "$METHOD" = stop ] && SCANRATE=$RATE
 cat >"$D/report.json" <<EOF
-{"points": $NPTS, "planned": $(json "$S" planned), "flagged": $(json "$S" flagged), "nx": $(json "$S" nx), "ny": $(json "$S" ny), "step": $STEP, "region": "$REGION", "control_points": $(json "$T/info.json" control_points), "nu": $(json "$T/info.json" nu), "nv": $(json "$T/info.json" nv), "alpha": $ALPHA, "beta": $BETA, "rms": $(json "$S" rms), "max_abs": $(json "$S" max_abs), "nominal_rms": $(json "$S" nominal_rms), "nominal_max_abs": $(json "$S" nominal_max_abs), "tol": $TOL, "within_tol_pct": $(json "$T/dev.json" within_tol_pct), "deviation_rms": $(json "$T/dev.json" rms), "deviation_min": $(json "$T/dev.json" min), "deviation_max": $(json "$T/dev.json" max), "dent_x": $DX, "dent_y": $DY, "dent_found": $(json "$T/fdev.json" min), "dent_true": $(json "$T/tdev.json" min), "noise": $NOISE, "check_measured": $NCHK, "fit_vs_true_rms": $FT_RMS, "fit_vs_true_max_abs": $FT_MAX, "check_unmeasured": $NUN, "unmeasured_fit_vs_nominal_max_abs": $UN_FN, "unmeasured_true_vs_nominal_max_abs": $UN_TN, "margin": $MARGIN, "speed": $SPEED, "points_per_s": $RATE, "method": "$METHOD", "scan_points_per_s": $SCANRATE, "fit_ready_s": $(jn fit_ready_s), "fit_solve_s": $(jn fit_solve_s), "lost_readings": $(jn lost_readings), "lost_triggers": $(jn lost_triggers), "both_lost": $(jn both_lost), "overrun": $(jn overrun), "dropped_by_probe": $(jn dropped_by_probe), "rows_cut": $(jn rows_cut), "profiles_lost": $(jn profiles_lost), "frames_lost": $(jn frames_lost), "dropouts": $(jn dropouts), "seconds_rig": $t_rig, "seconds_scan_fit": $t_scan, "seconds_report": $t_report, "fitted": "$D/fitted.igs", "points_file": "$D/points.xyz", "png": "$D/deviation-map.png", "png_fitted": "$D/fitted-vs-nominal.png", "journal": "$D/scan.jnl"}
+{"points": $NPTS, "planned": $(json "$S" planned), "flagged": $(json "$S" flagged), "nx": $(json "$S" nx), "ny": $(json "$S" ny), "step": $STEP, "region": "$REGION", "control_points": $(json "$T/info.json" control_points), "nu": $(json "$T/info.json" nu), "nv": $(json "$T/info.json" nv), "alpha": $ALPHA, "beta": $BETA, "rms": $(json "$S" rms), "max_abs": $(json "$S" max_abs), "nominal_rms": $(json "$S" nominal_rms), "nominal_max_abs": $(json "$S" nominal_max_abs), "tol": $TOL, "within_tol_pct": $(json "$T/dev.json" within_tol_pct), "deviation_rms": $(json "$T/dev.json" rms), "deviation_min": $(json "$T/dev.json" min), "deviation_max": $(json "$T/dev.json" max), "dent_x": $DX, "dent_y": $DY, "dent_found": $(json "$T/fdev.json" min), "dent_true": $(json "$T/tdev.json" min), "noise": $NOISE, "check_measured": $NCHK, "fit_vs_true_rms": $FT_RMS, "fit_vs_true_max_abs": $FT_MAX, "check_unmeasured": $NUN, "unmeasured_fit_vs_nominal_max_abs": $UN_FN, "unmeasured_true_vs_nominal_max_abs": $UN_TN, "margin": $MARGIN, "speed": $SPEED, "points_per_s": $RATE, "method": "$METHOD", "scan_points_per_s": $SCANRATE, "fit_ready_s": $(jn fit_ready_s), "fit_solve_s": $(jn fit_solve_s), "lost_readings": $(jn lost_readings), "lost_triggers": $(jn lost_triggers), "both_lost": $(jn both_lost), "overrun": $(jn overrun), "dropped_by_probe": $(jn dropped_by_probe), "rows_cut": $(jn rows_cut), "profiles_lost": $(jn profiles_lost), "frames_lost": $(jn frames_lost), "dropouts": $(jn dropouts), "seconds_rig": $t_rig, "seconds_scan_fit": $t_scan, "seconds_report": $t_report, "fitted": "$D/fitted.igs", "points_file": "$D/points.xyz", "png": "$D/deviation-map.png", "png_fitted": "$D/fitted-vs-nominal.png", "journal": "$D/scan.jnl", "step_file": "$D/fitted.stp", "csv": "$D/deviations.csv", "ply": "$D/deviations.ply", "dfq": "$D/report.dfq"}
 EOF
 
 # 6. The summary.
@@ -267,6 +272,7 @@ echo "dent:    deepest $(f dent_found %+.4f) mm at ($DX, $DY) on the fitted surf
 echo "truth:   fitted vs true part at $NCHK check points >= $MARGIN mm inside the scan: rms $(f fit_vs_true_rms %.4f) mm, max $(f fit_vs_true_max_abs %.4f) mm (noise sigma $NOISE)"
 echo "beta:    unmeasured area ($NUN check points >= $MARGIN mm outside the scan): fitted vs nominal max $(f unmeasured_fit_vs_nominal_max_abs %.4f) mm (the true part is up to $(f unmeasured_true_vs_nominal_max_abs %.4f) mm off there: kept at nominal)"
 echo "time:    rig up $t_rig s, scan + streamed fit $t_scan s, report $t_report s, total $(since "$t_all") s"
-echo "files:   $D/: fitted.igs points.xyz report.json deviation-map.png fitted-vs-nominal.png scan.jnl"
+echo "files:   $D/: fitted.igs fitted.stp points.xyz report.json report.dfq deviations.csv deviations.ply"
+echo "         deviation-map.png fitted-vs-nominal.png scan.jnl"
 stop_all
 echo "stopped: cellsim $SIMPID, socat $(sed -n 's/^socat //p' "$D/pids" | tr '\n' ' ')and cellsim $TRUTHPID (truth)"

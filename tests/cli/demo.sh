@@ -64,6 +64,19 @@ for f in fitted.igs points.xyz report.json deviation-map.png fitted-vs-nominal.p
     [ -s "$D/$f" ] || no "demo: $f missing or empty"
 done
 [ -s "$D/fitted.igs" ] && ok "demo: the files are there"
+# The plant's formats (issue 17): STEP, per-point CSV and PLY, Q-DAS DFQ.
+head -c 300 "$D/fitted.stp" 2>/dev/null | grep -q 'AP242' && ok "demo: fitted.stp is STEP AP242" ||
+    no "demo: fitted.stp missing or not AP242"
+"$CF" eval "$D/fitted.igs" "$D/part/check.uv" >"$T/e1" 2>/dev/null &&
+    "$CF" eval "$D/fitted.stp" "$D/part/check.uv" >"$T/e2" 2>/dev/null && cmp -s "$T/e1" "$T/e2" &&
+    ok "demo: fitted.stp is fitted.igs's surface to the last bit" || no "demo: fitted.stp differs"
+n_csv=$(($(wc -l <"$D/deviations.csv") - 1))
+[ "$n_csv" -eq "$(json "$D/report.json" points)" ] && ok "demo: deviations.csv has a row per point ($n_csv)" ||
+    no "demo: deviations.csv has $n_csv rows"
+grep -q "^element vertex 0*$n_csv\$" "$D/deviations.ply" && ok "demo: deviations.ply holds every point" ||
+    no "demo: deviations.ply's count"
+grep -q '^K0100 5$' "$D/report.dfq" && grep -q '^K0014/1 demo-1$' "$D/report.dfq" &&
+    ok "demo: report.dfq has 5 characteristics and the part ident" || no "demo: report.dfq"
 for f in deviation-map.png fitted-vs-nominal.png; do
     [ "$(head -c 8 "$D/$f" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] && ok "$f is a PNG" ||
         no "$f: not a PNG"
