@@ -18,15 +18,17 @@
 #include "cmd.h"
 #include "hal_rig.h"
 #include <arpa/inet.h>
+#include <errno.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #define SERVE_MAX_STRS 32
 
 typedef struct serve_conf {
     char addr[64];
-    long port, watchdog_ms, max_clients;
+    long port, watchdog_ms, max_clients, idle_ms;
     double max_rate;
     const char *sim_args;
     cf_plcsrv_opts_t so; /* the allow-list lands here */
@@ -192,6 +194,14 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
             return cf_fail(msg, ml, CF_EARG, "%s: results_dir or results_dir.N, N 0 .. %d", k,
                            PLC_MAX_FOLDERS - 1);
         r->results_dir[idx] = keep(c, v);
+    } else if (!strncmp(k, "nominal.", 8)) {
+        if (cli_int(k + 8, 1, CF_PLCRUN_RECIPES - 1, &idx))
+            return cf_fail(msg, ml, CF_EARG, "%s: nominal.N, N 1 .. %d (RECIPE)", k,
+                           CF_PLCRUN_RECIPES - 1);
+        r->recipe[idx] = keep(c, v);
+    } else if (!strcmp(k, "idle_ms")) {
+        if (cli_int(v, 1000, 3600000, &c->idle_ms))
+            return cf_fail(msg, ml, CF_EARG, "idle_ms '%s': need 1000 .. 3600000", v);
     } else if (!strcmp(k, "nominal"))
         r->nominal = keep(c, v);
     else if (!strcmp(k, "points"))
@@ -216,6 +226,48 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
     return 0;
 }
 
+/* dir and its missing parents, as `mkdir -p`: 0, or -1 with errno. */
+static int mkdir_p(const char *dir)
+{
+    char buf[4096];
+    if (strlen(dir) >= sizeof buf)
+        return errno = ENAMETOOLONG, -1;
+    strcpy(buf, dir);
+    for (char *q = buf + 1; *q; q++)
+        if (*q == '/') {
+            *q = 0;
+            if (mkdir(buf, 0775) && errno != EEXIST)
+                return -1;
+            *q = '/';
+        }
+    return mkdir(buf, 0775) && errno != EEXIST ? -1 : 0;
+}
+
+/* The results and journal folders made at start when missing (the first
+ * job must not fail on a folder nobody created); one that cannot be made
+ * stops serve here, not at a job. */
+static int make_folders(const cf_plcrun_t *r)
+{
+    const char *dirs[PLC_MAX_FOLDERS + 1];
+    int n = 0;
+    for (int i = 0; i < PLC_MAX_FOLDERS; i++)
+        if (r->results_dir[i])
+            dirs[n++] = r->results_dir[i];
+    if (r->journal_dir)
+        dirs[n++] = r->journal_dir;
+    for (int i = 0; i < n; i++) {
+        struct stat st;
+        if (!stat(dirs[i], &st) && S_ISDIR(st.st_mode))
+            continue;
+        if (mkdir_p(dirs[i])) {
+            cf_log(CF_LOG_ERROR, "cannot create the folder %s: %s", dirs[i], strerror(errno));
+            return -1;
+        }
+        cf_log(CF_LOG_INFO, "created the folder %s", dirs[i]);
+    }
+    return 0;
+}
+
 static volatile sig_atomic_t stop_flag;
 
 static void on_signal(int sig)
@@ -237,6 +289,8 @@ static const serve_key_t keys[] = {
     {"word_order", "ORDER", "lo-hi or hi-lo (WORD_ORDER at start)", "lo-hi"},
     {"watchdog_ms", "MS", "WATCHDOG_MS at start, 0 off", "0"},
     {"max_clients", "N", "Modbus connections at once (1 .. 64)", "8"},
+    {"idle_ms", "MS", "a connection without a request for this long is closed (1000 .. 3600000)",
+     "60000"},
     {"nominal", "FILE", "the nominal surface (FIT, SCAN_FIT), IGES entity 128", NULL},
     {"points", "FILE", "the points file FIT fits: x y z or u v x y z", NULL},
     {"results_dir", "DIR", "results folder 0 (config: results_dir.N for choice N)", NULL},
@@ -395,6 +449,10 @@ int cmd_serve(int argc, char **argv)
         }
         cf_log(CF_LOG_INFO, "rig: stage %s, probe %s", c.stage, c.probe);
     }
+    if (make_folders(&c.run)) {
+        ec = CLI_FAIL;
+        goto done_rig;
+    }
     cf_runner_t runner;
     cf_plcrun_init(&c.run, &runner);
     cf_plcsrv_opts_t so = c.so;
@@ -408,6 +466,16 @@ int cmd_serve(int argc, char **argv)
     so.alpha = (float)c.alpha;
     so.beta = (float)c.beta;
     so.max_rate = c.max_rate;
+    so.idle_ms = (unsigned)c.idle_ms;
+    /* The config's fit settings are the registers' defaults (FIT_TOL ..
+     * FIT_REPARAM): fit_to_tol loops to TOLERANCE. */
+    so.fit_tol = c.run.fit.loop ? (float)c.tol : 0.0f;
+    so.fit_within = (float)c.run.fit.within;
+    so.fit_max_cp = c.run.fit.max_cp >= NF_MAX_CP ? 0u : (uint32_t)c.run.fit.max_cp;
+    so.fit_refine =
+        c.run.fit.refine == CF_REFINE_UNIFORM ? PLC_REFINE_UNIFORM : PLC_REFINE_RESIDUAL;
+    so.fit_robust = (uint16_t)(c.run.fit.robust != 0);
+    so.fit_reparam = (uint16_t)c.run.fit.reparam;
     cf_log(CF_LOG_INFO, "cellfit serve: board %s, nominal %s, points %s, results %s", BOARD_NAME,
            c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
            c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
@@ -417,6 +485,7 @@ int cmd_serve(int argc, char **argv)
            fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
     cf_plcrun_free(&c.run);
+done_rig:
     if (c.run.rig)
         hal_rig_close(c.run.rig);
 done_sim:

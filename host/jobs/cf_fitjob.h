@@ -59,7 +59,9 @@ typedef struct cf_fitjob_opts {
     cf_refine_t refine;
     int robust; /* Tukey reweighting passes after each fit */
     long robust_iters;
-    int stats; /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
+    int stats;        /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
+    double stats_tol; /* the statistics' tolerance when it is not the loop's (0: tol); the
+                       * cell's verdict tolerance beside its fit loop's goal */
 } cf_fitjob_opts_t;
 
 /* The shell's defaults: alpha, beta of the paper, solver auto, 1e-12 and
