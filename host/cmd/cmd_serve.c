@@ -25,6 +25,7 @@
 #include <sys/stat.h>
 
 #define SERVE_MAX_STRS 32
+#define CF_SERVE_SIM_ARGS "--speed 5000 --seed 1" /* --sim without sim_args */
 
 typedef struct serve_conf {
     char addr[64];
@@ -244,9 +245,10 @@ static int mkdir_p(const char *dir)
 }
 
 /* The results and journal folders made at start when missing (the first
- * job must not fail on a folder nobody created); one that cannot be made
- * stops serve here, not at a job. */
-static int make_folders(const cf_plcrun_t *r)
+ * job must not fail on a folder nobody created). One that cannot be made
+ * is a warning: it may appear later (a share mounted after boot); a job
+ * that needs it is refused when accepted (108) while it is missing. */
+static void make_folders(const cf_plcrun_t *r)
 {
     const char *dirs[PLC_MAX_FOLDERS + 1];
     int n = 0;
@@ -259,13 +261,12 @@ static int make_folders(const cf_plcrun_t *r)
         struct stat st;
         if (!stat(dirs[i], &st) && S_ISDIR(st.st_mode))
             continue;
-        if (mkdir_p(dirs[i])) {
-            cf_log(CF_LOG_ERROR, "cannot create the folder %s: %s", dirs[i], strerror(errno));
-            return -1;
-        }
-        cf_log(CF_LOG_INFO, "created the folder %s", dirs[i]);
+        if (mkdir_p(dirs[i]))
+            cf_log(CF_LOG_WARN, "cannot create the folder %s: %s (jobs that need it are refused)",
+                   dirs[i], strerror(errno));
+        else
+            cf_log(CF_LOG_INFO, "created the folder %s", dirs[i]);
     }
-    return 0;
 }
 
 static volatile sig_atomic_t stop_flag;
@@ -307,7 +308,8 @@ static const serve_key_t keys[] = {
     {"board", "NAME", "must name the board this cellfit is built for", NULL},
     {"stage", "URI", "the rig's stage (docs/rig-devices.md)", NULL},
     {"probe", "URI", "the rig's probe", NULL},
-    {"sim_args", "ARGS", "extra cellsim arguments, space-separated", NULL},
+    {"sim_args", "ARGS", "extra cellsim arguments, space-separated",
+     "--speed 5000 --seed 1 --part NOMINAL"},
     {"journal_dir", "DIR", "folder of the scans' journals", "the results folder"},
     {"z0", "MM", "the probe's beam height", "50"},
     {"cal", "CX,CY,CZ", "the probe's calibration offset, mm", "0,0,0"},
@@ -431,6 +433,18 @@ int cmd_serve(int argc, char **argv)
     memset(&sim, 0, sizeof sim);
     char msg[512];
     if (c.sim) {
+        /* Without sim_args the simulator runs at the doc's speed with the
+         * nominal as its part (cellsim's own default stage is a slow
+         * real-time 200 mm/s). */
+        char simdef[4200];
+        if (!c.sim_args) {
+            const char *nom = c.run.nominal;
+            int part = nom && !strpbrk(nom, " \t") && strlen(nom) < 4096;
+            snprintf(simdef, sizeof simdef, "%s%s%s", CF_SERVE_SIM_ARGS, part ? " --part " : "",
+                     part ? nom : "");
+            c.sim_args = simdef;
+            cf_log(CF_LOG_INFO, "rig: cellsim with the default sim_args \"%s\"", simdef);
+        }
         if (cf_simchild_start(&sim, c.sim_args, 10000, msg, sizeof msg)) {
             ec = cli_error("serve", CLI_FAIL, "%s", msg);
             goto done_log;
@@ -449,10 +463,7 @@ int cmd_serve(int argc, char **argv)
         }
         cf_log(CF_LOG_INFO, "rig: stage %s, probe %s", c.stage, c.probe);
     }
-    if (make_folders(&c.run)) {
-        ec = CLI_FAIL;
-        goto done_rig;
-    }
+    make_folders(&c.run);
     cf_runner_t runner;
     cf_plcrun_init(&c.run, &runner);
     cf_plcsrv_opts_t so = c.so;
@@ -485,7 +496,6 @@ int cmd_serve(int argc, char **argv)
            fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
     cf_plcrun_free(&c.run);
-done_rig:
     if (c.run.rig)
         hal_rig_close(c.run.rig);
 done_sim:
