@@ -298,7 +298,7 @@ static const serve_key_t keys[] = {
     {"tol", "MM", "TOLERANCE at start: the deviation tolerance", "0.05"},
     {"alpha", "A", "ALPHA at start (Eq. 7)", "0.1"},
     {"beta", "B", "BETA at start (Eq. 7)", "0.001"},
-    {"within", "PCT", "with fit_to_tol: the share of points that must be within TOLERANCE", "100"},
+    {"within", "PCT", "with fit_to_tol: the share of points within tol (FIT_WITHIN)", "100"},
     {"max_cp", "N", "with fit_to_tol: control points the loop may reach at most", "the board's"},
     {"max_rounds", "N", "with fit_to_tol: rounds of the loop at most", "12"},
     {"refine", "HOW", "with fit_to_tol: uniform or residual knot insertion", "residual"},
@@ -324,7 +324,9 @@ static const serve_key_t flag_keys[NFLAGS] = {
     {"syslog", NULL, "log to syslog (facility daemon) instead of stderr", NULL},
     {"sim", NULL, "the simulated rig: cellsim started as a child on 127.0.0.1", NULL},
     {"fit_to_tol", NULL,
-     "FIT and SCAN_FIT run the tolerance loop (fit, check, insert knots) to TOLERANCE", NULL},
+     "FIT and SCAN_FIT run the tolerance loop (fit, check, insert knots) to tol (FIT_TOL at "
+     "start)",
+     NULL},
     {"robust", NULL, "FIT and SCAN_FIT fit robustly (Tukey passes against outliers)", NULL},
 };
 

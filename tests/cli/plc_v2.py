@@ -6,7 +6,7 @@
 # / "FAIL ..." lines; tests/cli/plc_v2.sh counts them. Steps:
 # export2 PORT RESDIR; recipe PORT RESDIR NOMINAL2; fitset PORT NCP;
 # defaults PORT TOL WITHIN MAXCP REFINE ROBUST REPARAM; partid PORT RESDIR;
-# wdarm PORT; idle PORT MS.
+# wdarm PORT; idle PORT MS; gonescan PORT SIMPID.
 import glob
 import json
 import os
@@ -236,6 +236,36 @@ def idle(port, ms):
     sk.close()
 
 
+def gonescan(port, simpid):
+    """cellsim killed mid-scan: ERROR_CODE says 203 when the cell sees it
+    (one server tick), not when the scan's driver gives up."""
+    import signal
+    c = Cell(port)
+    s = c.command(1)  # HOME
+    c.wait_done(c.seq, 60)
+    c.write(72, sum((c.fwords(v) for v in (0, 0, 200, 150, 2)), []))
+    s = c.command(4)  # SCAN_FIT
+    check(s.get("result") == 0, "gonescan: SCAN_FIT accepted")
+    t = time.time()
+    while time.time() - t < 20 and c.status()["progress"] < 2:
+        time.sleep(0.02)
+    os.kill(int(simpid), signal.SIGKILL)
+    t0 = time.time()
+    s = c.status()
+    while time.time() - t0 < 20 and s["error"] == 0:
+        time.sleep(0.01)
+        s = c.status()
+    dt = time.time() - t0
+    check(s["error"] == 203 and dt < 1.0,
+          "gonescan: ERROR_CODE 203 %.3f s after cellsim was killed (state %d)" % (dt, s["state"]))
+    while time.time() - t0 < 30 and s["state"] != pc.S_ERROR:
+        time.sleep(0.02)
+        s = c.status()
+    check(s["state"] == pc.S_ERROR and s["error"] == 203,
+          "gonescan: ERROR 203 once the job stopped, %.2f s after (state %d)"
+          % (time.time() - t0, s["state"]))
+
+
 if __name__ == "__main__":
     step, port = sys.argv[1], int(sys.argv[2])
     a = sys.argv[3:]
@@ -252,6 +282,8 @@ if __name__ == "__main__":
             partid(port, a[0])
         elif step == "wdarm":
             wdarm(port)
+        elif step == "gonescan":
+            gonescan(port, a[0])
         elif step == "idle":
             idle(port, a[0])
         else:

@@ -6,7 +6,8 @@
 # part within one second into two folders, a results folder made at start,
 # one that cannot be made refused at EXPORT (108), a bad nominal (301),
 # WD_ARMED with WATCHDOG_MS 0, the idle timeout (--idle-ms), the config's
-# fit settings as the registers' defaults. Servers on 127.0.0.1, port 0.
+# fit settings as the registers' defaults, --sim's default sim_args, and
+# ERROR_CODE 203 at once when cellsim dies mid-scan. Servers on 127.0.0.1, port 0.
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
@@ -70,8 +71,21 @@ kill -TERM "$pid"; wait "$pid"; pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 serve_start e --nominal "$T/bad.igs" --points "$T/points.xyz" --results "$T/new/results"
 py1 errors "$port" fit 301
 
-if grep -E "Sanitizer|runtime error" "$T"/[ade].log >/dev/null; then
-    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[ade].log | head -5
+# cellsim killed mid-scan: ERROR_CODE 203 at once (the job still aborting).
+if [ -x "$(dirname "$CF")/cellsim" ]; then
+    "$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
+    serve_start g --sim --nominal "$T/part/nominal.igs" --results "$T/new/results"
+    simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/g.log")
+    grep -q 'default sim_args "--speed 5000 --seed 1 --part' "$T/g.log" &&
+        ok "--sim without --sim-args: cellsim at 5000 mm/s, the nominal as its part" ||
+        no "sim_args default not logged"
+    [ -n "$simpid" ] && py gonescan "$port" "$simpid" || no "no cellsim pid in g.log"
+else
+    echo "skip gonescan: no cellsim beside $CF"
+fi
+
+if grep -E "Sanitizer|runtime error" "$T"/[adeg].log >/dev/null; then
+    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[adeg].log | head -5
 else
     ok "no sanitizer report in the server logs"
 fi
