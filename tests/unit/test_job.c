@@ -15,7 +15,6 @@
 #include "cf_surf.h"
 #include "cf_test.h"
 #include "cf_uuid.h"
-#include "cf_uuid.h"
 #include "nf_err.h"
 #include "rig_err.h"
 #include <stdio.h>
