@@ -493,9 +493,11 @@ int cmd_serve(int argc, char **argv)
            c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
            c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
     const cf_fitjob_opts_t *fo = &c.run.fit;
-    cf_log(CF_LOG_INFO, "fit: %s%s, robust %s, reparam %ld", fo->loop ? "to TOLERANCE" : "plain",
-           fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : "",
-           fo->robust ? "yes" : "no", fo->reparam);
+    cf_log(CF_LOG_INFO,
+           "fit defaults (FIT_TOL .. FIT_REPARAM): %s%g mm%s, within %g %%, robust %s, reparam %ld",
+           fo->loop ? "loop to " : "plain (FIT_TOL 0; tol ", c.tol,
+           fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : ")",
+           fo->within, fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
     cf_plcrun_free(&c.run);
     if (c.run.rig)
