@@ -106,13 +106,16 @@ static void publish(plc_fsm_t *f)
     st |= f->rejected ? PLC_ST_REJECTED : 0;
     st |= f->homed ? PLC_ST_HOMED : 0;
     st |= f->rig ? PLC_ST_RIG : 0;
-    st |= f->wd_armed ? PLC_ST_WD_ARMED : 0;
+    /* WATCHDOG_MS 0 is off: nothing watches, whatever the heartbeat did. */
+    st |= f->wd_armed && plc_map_u16(m, PLC_R_WATCHDOG_MS) ? PLC_ST_WD_ARMED : 0;
     plc_map_put_u16(m, PLC_R_STATUS, (uint16_t)st);
     plc_map_put_u16(m, PLC_R_ACK_SEQ, f->ack_seq);
     plc_map_put_u16(m, PLC_R_DONE_SEQ, f->done_seq);
     plc_map_put_u16(m, PLC_R_STATE, (uint16_t)f->state);
     plc_map_put_u16(m, PLC_R_PROGRESS, f->progress);
-    plc_map_put_u16(m, PLC_R_ERROR_CODE, f->error);
+    /* A fault that aborts a job (watchdog, rig gone) shows at once, while
+     * ABORTING waits for the job to stop, not only once it has. */
+    plc_map_put_u16(m, PLC_R_ERROR_CODE, f->error ? f->error : f->pending_error);
     plc_map_put_u16(m, PLC_R_CELL_HEARTBEAT, f->cell_hb);
     plc_map_put_u16(m, PLC_R_CMD_RESULT, f->cmd_result);
     plc_map_put_u16(m, PLC_R_JOB_CMD, (uint16_t)f->job);

@@ -5,23 +5,51 @@
 #include "cf_err.h"
 #include "cf_log.h"
 #include "cf_scanjob.h"
+#include "jnl.h"
 #include "nf_err.h"
 #include "rig_err.h"
+#include <errno.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/statvfs.h>
 #include <time.h>
 #include <unistd.h>
 
+/* The nominal RECIPE chooses: 0 `nominal`, N `nominal.N`; NULL: none. */
+static const char *job_nominal(const cf_plcrun_t *rr, const plc_params_t *p)
+{
+    if (p->recipe == 0)
+        return rr->nominal;
+    return p->recipe < CF_PLCRUN_RECIPES ? rr->recipe[p->recipe] : NULL;
+}
+
+/* The PLC's fit settings (map version 2) over the configured rest (solver,
+ * rounds, robust passes): FIT_TOL > 0 runs the loop to it, while the
+ * statistics and the verdict stay at TOLERANCE. */
+#define CF_PLCRUN_MIN_FREE (1024.0 * 1024.0) /* bytes free a job's folder needs beyond its own */
+
 static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_opts_t *o)
 {
-    o->nominal = rr->nominal;
+    o->nominal = job_nominal(rr, p);
     o->points = rr->points;
-    o->fit = rr->fit; /* the configured loop, robust passes, reprojection */
+    o->fit = rr->fit;
     o->fit.alpha = p->alpha;
     o->fit.beta = p->beta;
     o->fit.tol = p->tol;
+    o->fit.stats_tol = 0;
     o->fit.net_u = p->net_u;
     o->fit.net_v = p->net_v;
+    o->fit.loop = p->fit_tol > 0;
+    if (o->fit.loop) {
+        o->fit.tol = p->fit_tol;
+        o->fit.stats_tol = p->tol;
+        o->fit.within = p->fit_within;
+        o->fit.max_cp = p->fit_max_cp ? (long)p->fit_max_cp : NF_MAX_CP;
+        o->fit.refine =
+            p->fit_refine == PLC_REFINE_UNIFORM ? CF_REFINE_UNIFORM : CF_REFINE_RESIDUAL;
+    }
+    o->fit.robust = p->fit_robust != 0;
+    o->fit.reparam = p->fit_reparam;
 }
 
 static const char *journal_dir(const cf_plcrun_t *rr, const plc_params_t *p)
@@ -41,7 +69,7 @@ static void scan_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_scanjob_o
     o->x0 = p->x0, o->y0 = p->y0, o->x1 = p->x1, o->y1 = p->y1, o->step = p->step;
     o->z0 = rr->z0;
     memcpy(o->cal, rr->cal, sizeof o->cal);
-    o->nominal = rr->nominal;
+    o->nominal = job_nominal(rr, p);
     o->job_id = (unsigned long long)time(NULL) * 65536ull + p->seq;
     o->pct0 = 0;
     o->pct1 = p->cmd == PLC_C_SCAN_FIT ? 70 : 100;
@@ -51,8 +79,26 @@ static void scan_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_scanjob_o
     o->period_us = rr->scan_period_us;
 }
 
+/* A folder a job will write into: there, writable, and with min_bytes
+ * free (a full disk found before any motion, not at the journal's end). */
+static int check_folder(const char *what, const char *dir, double min_bytes)
+{
+    struct statvfs vs;
+    if (access(dir, W_OK | X_OK)) {
+        cf_log(CF_LOG_WARN, "%s refused: folder %s: %s", what, dir, strerror(errno));
+        return PLC_E_BAD_PARAM;
+    }
+    if (!statvfs(dir, &vs) && (double)vs.f_bavail * (double)vs.f_frsize < min_bytes) {
+        cf_log(CF_LOG_WARN, "%s refused: folder %s: %.0f bytes free, the job needs %.0f", what, dir,
+               (double)vs.f_bavail * (double)vs.f_frsize, min_bytes);
+        return PLC_E_BAD_PARAM;
+    }
+    return 0;
+}
+
 /* The scan's checks before it is accepted: a plan inside the stage's soft
- * limits (read at start-up: no I/O here), a folder for the journal. */
+ * limits (read at start-up: no I/O here), a folder for the journal that
+ * takes its records. */
 static int check_scan(const cf_plcrun_t *rr, const plc_params_t *p)
 {
     cf_scanjob_opts_t o;
@@ -78,13 +124,31 @@ static int check_scan(const cf_plcrun_t *rr, const plc_params_t *p)
                p->folder);
         return PLC_E_BAD_PARAM;
     }
-    return 0;
+    /* One record a grid point, the header, and a margin for the rest. */
+    double need =
+        (double)JNL_HDR_BYTES + (double)pl.nx * pl.ny * JNL_REC_BYTES + CF_PLCRUN_MIN_FREE;
+    return check_folder("scan", journal_dir(rr, p), need);
 }
 
+/* The fit's checks: the recipe's nominal configured (114), the files
+ * (111), the net and fit settings against the nominal and the board (108,
+ * 110). A nominal that cannot be read is left to the job, which ends at
+ * once in 301 before any motion (run_scan checks it first), so the PLC
+ * sees the documented code with the file named in the log. */
 static int check_fit(const cf_plcrun_t *rr, const plc_params_t *p, int need_points)
 {
     char msg[512];
-    if (!rr->nominal || (need_points && !rr->points))
+    if (p->fit_max_cp > (uint32_t)NF_MAX_CP) {
+        cf_log(CF_LOG_WARN, "fit refused: FIT_MAX_CP %lu beyond the board's %ld",
+               (unsigned long)p->fit_max_cp, (long)NF_MAX_CP);
+        return PLC_E_TOO_BIG;
+    }
+    if (p->recipe && !job_nominal(rr, p)) {
+        cf_log(CF_LOG_WARN, "fit refused: RECIPE %u: no nominal.%u configured", p->recipe,
+               p->recipe);
+        return PLC_E_NO_RECIPE;
+    }
+    if (!job_nominal(rr, p) || (need_points && !rr->points))
         return PLC_E_NO_JOB_FILES;
     cf_job_fit_opts_t o;
     fit_opts(rr, p, &o);
@@ -96,9 +160,7 @@ static int check_fit(const cf_plcrun_t *rr, const plc_params_t *p, int need_poin
     return 0;
 }
 
-/* Parameter checks before a command is accepted (1xx, nothing started).
- * A nominal that cannot be read is left to the job (301), so the PLC sees
- * a job error with the file named in the log. */
+/* Parameter checks before a command is accepted (1xx, nothing started). */
 static int run_check(void *ctx, int cmd, const plc_params_t *p)
 {
     cf_plcrun_t *rr = ctx;
@@ -107,14 +169,14 @@ static int run_check(void *ctx, int cmd, const plc_params_t *p)
         return PLC_E_BAD_PARAM; /* an empty scan region */
     switch (cmd) {
     case PLC_C_SCAN: return check_scan(rr, p);
-    case PLC_C_SCAN_FIT: return (rc = check_scan(rr, p)) ? rc : check_fit(rr, p, 0);
+    case PLC_C_SCAN_FIT: return (rc = check_fit(rr, p, 0)) ? rc : check_scan(rr, p);
     case PLC_C_FIT: return check_fit(rr, p, 1);
     case PLC_C_EXPORT:
         if (p->folder >= PLC_MAX_FOLDERS || !rr->results_dir[p->folder]) {
             cf_log(CF_LOG_WARN, "export refused: results folder %u not configured", p->folder);
             return PLC_E_BAD_PARAM;
         }
-        return 0;
+        return check_folder("export", rr->results_dir[p->folder], CF_PLCRUN_MIN_FREE);
     default: return 0;
     }
 }
@@ -207,6 +269,17 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
     if (!rr->rig || !rr->rig->stage.ops || !rr->rig->probe.ops)
         return PLC_E_NO_RIG;
     rr->job_t0 = cli_now();
+    if (p->cmd == PLC_C_SCAN_FIT) {
+        /* The nominal read before any motion: a bad one is 301 now, not
+         * after the whole scan. */
+        cf_job_fit_opts_t fo;
+        fit_opts(rr, p, &fo);
+        int rc = cf_job_check(&fo, msg, sizeof msg);
+        if (rc) {
+            cf_log(CF_LOG_ERROR, "scan: %s", msg);
+            return rc == NF_EBUDGET ? PLC_E_TOO_BIG : PLC_E_NOMINAL;
+        }
+    }
     const char *dir = journal_dir(rr, p);
     if (!dir || journal_name(dir, p->part, rr->journal, sizeof rr->journal)) {
         cf_log(CF_LOG_ERROR, "scan: no journal name free in %s", dir ? dir : "(none)");
@@ -253,6 +326,19 @@ static void fill_results(cf_plcrun_t *rr, const plc_params_t *p, double secs, pl
     res->points = (uint32_t)rr->last.points;
     res->control_points = (uint32_t)((long)rr->last.surf.nu * rr->last.surf.nv);
     res->duration_ms = (uint32_t)(secs * 1000.0 + 0.5);
+    switch (rr->last.status) {
+    case CF_FITJOB_MET: res->fit_status = PLC_FIT_MET; break;
+    case CF_FITJOB_NOT_MET_DATA_LIMIT: res->fit_status = PLC_FIT_NOT_MET_DATA; break;
+    case CF_FITJOB_NOT_MET_MAX_CP: res->fit_status = PLC_FIT_NOT_MET_MAX_CP; break;
+    case CF_FITJOB_NOT_MET_NO_PROGRESS: res->fit_status = PLC_FIT_NOT_MET_NO_PROGRESS; break;
+    default: res->fit_status = PLC_FIT_NONE; break;
+    }
+    /* What the export records of the job (RESULT_SEQ, JOB_TIME, PART_ID). */
+    rr->last_seq = p->seq;
+    rr->last_program = p->program;
+    rr->last_utc = (long long)p->utc;
+    snprintf(rr->last_part_id, sizeof rr->last_part_id, "%s", p->part_id);
+    rr->last_nominal = job_nominal(rr, p);
 }
 
 static int run_fit(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, plc_results_t *res)
@@ -304,22 +390,30 @@ static int run_fit(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, pl
 static int run_export(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
 {
     cf_plcrun_t *rr = ctx;
-    char name[64], msg[512];
+    char name[128], msg[512];
     if (!rr->have_last)
         return PLC_E_INTERNAL; /* the state machine holds results: we must too */
     if (ctl && ctl->progress)
         ctl->progress(ctl->ctx, 0);
-    long long utc = (long long)time(NULL);
-    cf_job_folder_name(rr->last_part, utc, name, sizeof name);
+    /* A folder of its own per export: the job's time and sequence name
+     * it, a UUID keeps two exports of one part in one second apart. */
+    long long utc = rr->last_utc ? rr->last_utc : (long long)time(NULL);
+    if (cf_job_unique_name(rr->last_part, utc, rr->last_seq, name, sizeof name)) {
+        cf_log(CF_LOG_ERROR, "export: no random UUID for the folder name");
+        return PLC_E_EXPORT;
+    }
     snprintf(rr->last_export, sizeof rr->last_export, "%s/%s", rr->results_dir[p->folder], name);
     cf_job_meta_t meta = {rr->last_part,
-                          p->program,
-                          p->seq,
-                          rr->nominal,
+                          rr->last_program,
+                          rr->last_seq,
+                          rr->last_nominal ? rr->last_nominal : rr->nominal,
                           rr->last_scan ? NULL : rr->points,
                           BOARD_NAME,
                           utc,
-                          rr->last_scan ? rr->last_journal : NULL};
+                          rr->last_scan ? rr->last_journal : NULL,
+                          rr->last_part_id,
+                          p->seq,
+                          (long long)time(NULL)};
     if (cf_job_export(&rr->last, &meta, rr->last_export, msg, sizeof msg)) {
         cf_log(CF_LOG_ERROR, "export: %s", msg);
         return PLC_E_EXPORT;

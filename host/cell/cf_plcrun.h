@@ -3,15 +3,20 @@
  *   scan     = the raster over SCAN_X0..SCAN_Y1 at SCAN_STEP measured into
  *              a new journal "<part>_<UTC>.jnl" in the journal folder (or
  *              the results folder RESULTS_FOLDER chooses) (cf_scanjob.h);
- *   fit      = FIT: the configured points file against the nominal
+ *   fit      = FIT: the configured points file against the nominal RECIPE
+ *              chooses (0: `nominal`, N: `nominal.N`)
  *              (cf_job); SCAN_FIT: the journal just measured (cf_scanjob);
- *              both through the fit job with the configured settings
- *              (tolerance loop, robust, reprojection; rr->fit) and the
- *              PLC's weights, net and tolerance; results from the
- *              deviation statistics;
- *   export   = the last fit's IGES and report JSON (with the journal's
- *              path) into the results folder RESULTS_FOLDER chooses, in
- *              "<part>_<UTC timestamp>".
+ *              both through the fit job with the PLC's weights, net,
+ *              tolerance and fit settings (FIT_TOL > 0: the tolerance
+ *              loop to FIT_WITHIN %, FIT_MAX_CP, FIT_REFINE; FIT_ROBUST,
+ *              FIT_REPARAM; the config's are the registers' defaults,
+ *              rr->fit the rest); results from the deviation statistics
+ *              at TOLERANCE, FIT_STATUS from the loop;
+ *   export   = the last fit's IGES and report JSON (the journal's path,
+ *              its job's sequence, UTC time and PART_ID) into the results
+ *              folder RESULTS_FOLDER chooses, in a new folder
+ *              "<part>_<UTC>_<RESULT_SEQ>_<UUID>" made whole in a hidden
+ *              temporary one and renamed (never overwritten).
  * The rig's lines belong to the job's thread while a phase runs (rig_mu);
  * an abort sets the server's stop flag, which the stage driver polls while
  * it waits for a move or homing (hal_stage_t.should_stop) and the scan
@@ -25,8 +30,11 @@
 #include "hal_rig.h"
 #include <pthread.h>
 
+#define CF_PLCRUN_RECIPES 16 /* RECIPE 0 (`nominal`) .. 15 (`nominal.15`) */
+
 typedef struct cf_plcrun {
     const char *nominal, *points;             /* fit inputs (config) */
+    const char *recipe[CF_PLCRUN_RECIPES];    /* nominal.N (config); [0] unused: nominal */
     cf_fitjob_opts_t fit;                     /* fit settings (config; PLC params override) */
     const char *results_dir[PLC_MAX_FOLDERS]; /* RESULTS_FOLDER choices */
     const char *journal_dir;                  /* scans' journals; NULL: the results folder */
@@ -38,10 +46,14 @@ typedef struct cf_plcrun {
     cf_job_result_t last;                     /* the latched fit's result */
     int have_last, last_scan, sim_lost;
     unsigned long last_part;
-    double job_t0;           /* start of the running job (SCAN_FIT's duration) */
-    char journal[4096];      /* the last scan's journal */
-    char last_journal[4096]; /* the journal of the latched fit ("" for FIT) */
-    char last_export[4096];  /* folder of the last export */
+    unsigned last_seq, last_program;        /* the latched fit's job: RESULT_SEQ */
+    long long last_utc;                     /* its JOB_TIME */
+    char last_part_id[PLC_PART_ID_LEN + 1]; /* its PART_ID */
+    const char *last_nominal;               /* the nominal (recipe) it used */
+    double job_t0;                          /* start of the running job (SCAN_FIT's duration) */
+    char journal[4096];                     /* the last scan's journal */
+    char last_journal[4096];                /* the journal of the latched fit ("" for FIT) */
+    char last_export[4096];                 /* folder of the last export */
     /* issue 19: SCAN's method (cf_scanfast.h: 0 stop-and-go, 1 on the fly)
      * and trigger period (config scan_method, scan_period_us) */
     int scan_method;

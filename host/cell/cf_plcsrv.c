@@ -519,6 +519,13 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
     plc_map_put_f32(&s.map, PLC_R_TOLERANCE, o->tol);
     plc_map_put_f32(&s.map, PLC_R_ALPHA, o->alpha);
     plc_map_put_f32(&s.map, PLC_R_BETA, o->beta);
+    plc_map_put_f32(&s.map, PLC_R_FIT_TOL, o->fit_tol);
+    if (o->fit_within > 0)
+        plc_map_put_f32(&s.map, PLC_R_FIT_WITHIN, o->fit_within);
+    plc_map_put_u32(&s.map, PLC_R_FIT_MAX_CP, o->fit_max_cp);
+    plc_map_put_u16(&s.map, PLC_R_FIT_REFINE, o->fit_refine);
+    plc_map_put_u16(&s.map, PLC_R_FIT_ROBUST, o->fit_robust);
+    plc_map_put_u16(&s.map, PLC_R_FIT_REPARAM, o->fit_reparam);
 
     int ret = -1, lfd = -1, nc = 0;
     uint32_t t_refused = now_ms() - 1000;

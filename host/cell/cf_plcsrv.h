@@ -61,6 +61,11 @@ typedef struct cf_plcsrv_opts {
     unsigned watchdog_ms;
     const char *port_file;  /* the port actually bound is written here */
     float tol, alpha, beta; /* parameter defaults in the registers */
+    /* fit setting defaults in the registers (FIT_TOL .. FIT_REPARAM);
+     * fit_within 0: the state machine's (100 %) */
+    float fit_tol, fit_within;
+    uint32_t fit_max_cp;
+    uint16_t fit_refine, fit_robust, fit_reparam;
     /* clients allowed: address & mask == net for one of the nallow entries
      * (host byte order); nallow 0: any */
     int nallow;

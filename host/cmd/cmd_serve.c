@@ -20,15 +20,18 @@
 #include "cmd.h"
 #include "hal_rig.h"
 #include <arpa/inet.h>
+#include <errno.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #define SERVE_MAX_STRS 32
+#define CF_SERVE_SIM_ARGS "--speed 5000 --seed 1" /* --sim without sim_args */
 
 typedef struct serve_conf {
     char addr[64];
-    long port, watchdog_ms, max_clients;
+    long port, watchdog_ms, max_clients, idle_ms;
     double max_rate;
     const char *sim_args;
     cf_plcsrv_opts_t so; /* the allow-list lands here */
@@ -198,6 +201,14 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
             return cf_fail(msg, ml, CF_EARG, "%s: results_dir or results_dir.N, N 0 .. %d", k,
                            PLC_MAX_FOLDERS - 1);
         r->results_dir[idx] = keep(c, v);
+    } else if (!strncmp(k, "nominal.", 8)) {
+        if (cli_int(k + 8, 1, CF_PLCRUN_RECIPES - 1, &idx))
+            return cf_fail(msg, ml, CF_EARG, "%s: nominal.N, N 1 .. %d (RECIPE)", k,
+                           CF_PLCRUN_RECIPES - 1);
+        r->recipe[idx] = keep(c, v);
+    } else if (!strcmp(k, "idle_ms")) {
+        if (cli_int(v, 1000, 3600000, &c->idle_ms))
+            return cf_fail(msg, ml, CF_EARG, "idle_ms '%s': need 1000 .. 3600000", v);
     } else if (!strcmp(k, "nominal"))
         r->nominal = keep(c, v);
     else if (!strcmp(k, "points"))
@@ -230,6 +241,48 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
     return 0;
 }
 
+/* dir and its missing parents, as `mkdir -p`: 0, or -1 with errno. */
+static int mkdir_p(const char *dir)
+{
+    char buf[4096];
+    if (strlen(dir) >= sizeof buf)
+        return errno = ENAMETOOLONG, -1;
+    strcpy(buf, dir);
+    for (char *q = buf + 1; *q; q++)
+        if (*q == '/') {
+            *q = 0;
+            if (mkdir(buf, 0775) && errno != EEXIST)
+                return -1;
+            *q = '/';
+        }
+    return mkdir(buf, 0775) && errno != EEXIST ? -1 : 0;
+}
+
+/* The results and journal folders made at start when missing (the first
+ * job must not fail on a folder nobody created). One that cannot be made
+ * is a warning: it may appear later (a share mounted after boot); a job
+ * that needs it is refused when accepted (108) while it is missing. */
+static void make_folders(const cf_plcrun_t *r)
+{
+    const char *dirs[PLC_MAX_FOLDERS + 1];
+    int n = 0;
+    for (int i = 0; i < PLC_MAX_FOLDERS; i++)
+        if (r->results_dir[i])
+            dirs[n++] = r->results_dir[i];
+    if (r->journal_dir)
+        dirs[n++] = r->journal_dir;
+    for (int i = 0; i < n; i++) {
+        struct stat st;
+        if (!stat(dirs[i], &st) && S_ISDIR(st.st_mode))
+            continue;
+        if (mkdir_p(dirs[i]))
+            cf_log(CF_LOG_WARN, "cannot create the folder %s: %s (jobs that need it are refused)",
+                   dirs[i], strerror(errno));
+        else
+            cf_log(CF_LOG_INFO, "created the folder %s", dirs[i]);
+    }
+}
+
 static volatile sig_atomic_t stop_flag;
 
 static void on_signal(int sig)
@@ -251,13 +304,15 @@ static const serve_key_t keys[] = {
     {"word_order", "ORDER", "lo-hi or hi-lo (WORD_ORDER at start)", "lo-hi"},
     {"watchdog_ms", "MS", "WATCHDOG_MS at start, 0 off", "0"},
     {"max_clients", "N", "Modbus connections at once (1 .. 64)", "8"},
+    {"idle_ms", "MS", "a connection without a request for this long is closed (1000 .. 3600000)",
+     "60000"},
     {"nominal", "FILE", "the nominal surface (FIT, SCAN_FIT), IGES entity 128", NULL},
     {"points", "FILE", "the points file FIT fits: x y z or u v x y z", NULL},
     {"results_dir", "DIR", "results folder 0 (config: results_dir.N for choice N)", NULL},
     {"tol", "MM", "TOLERANCE at start: the deviation tolerance", "0.05"},
     {"alpha", "A", "ALPHA at start (Eq. 7)", "0.1"},
     {"beta", "B", "BETA at start (Eq. 7)", "0.001"},
-    {"within", "PCT", "with fit_to_tol: the share of points that must be within TOLERANCE", "100"},
+    {"within", "PCT", "with fit_to_tol: the share of points within tol (FIT_WITHIN)", "100"},
     {"max_cp", "N", "with fit_to_tol: control points the loop may reach at most", "the board's"},
     {"max_rounds", "N", "with fit_to_tol: rounds of the loop at most", "12"},
     {"refine", "HOW", "with fit_to_tol: uniform or residual knot insertion", "residual"},
@@ -267,7 +322,8 @@ static const serve_key_t keys[] = {
     {"board", "NAME", "must name the board this cellfit is built for", NULL},
     {"stage", "URI", "the rig's stage (docs/rig-devices.md)", NULL},
     {"probe", "URI", "the rig's probe", NULL},
-    {"sim_args", "ARGS", "extra cellsim arguments, space-separated", NULL},
+    {"sim_args", "ARGS", "extra cellsim arguments, space-separated",
+     "--speed 5000 --seed 1 --part NOMINAL"},
     {"scan_method", "M", "SCAN's method: stop (stop-and-go) or otf (on the fly)", "stop"},
     {"scan_period_us", "US",
      "scan_method otf: the trigger period; the stage runs at SCAN_STEP / it", "50"},
@@ -302,7 +358,9 @@ static const serve_key_t flag_keys[NFLAGS] = {
     {"syslog", NULL, "log to syslog (facility daemon) instead of stderr", NULL},
     {"sim", NULL, "the simulated rig: cellsim started as a child on 127.0.0.1", NULL},
     {"fit_to_tol", NULL,
-     "FIT and SCAN_FIT run the tolerance loop (fit, check, insert knots) to TOLERANCE", NULL},
+     "FIT and SCAN_FIT run the tolerance loop (fit, check, insert knots) to tol (FIT_TOL at "
+     "start)",
+     NULL},
     {"robust", NULL, "FIT and SCAN_FIT fit robustly (Tukey passes against outliers)", NULL},
 };
 
@@ -412,6 +470,18 @@ int cmd_serve(int argc, char **argv)
     memset(&sim, 0, sizeof sim);
     char msg[512];
     if (c.sim) {
+        /* Without sim_args the simulator runs at the doc's speed with the
+         * nominal as its part (cellsim's own default stage is a slow
+         * real-time 200 mm/s). */
+        char simdef[4200];
+        if (!c.sim_args) {
+            const char *nom = c.run.nominal;
+            int part = nom && !strpbrk(nom, " \t") && strlen(nom) < 4096;
+            snprintf(simdef, sizeof simdef, "%s%s%s", CF_SERVE_SIM_ARGS, part ? " --part " : "",
+                     part ? nom : "");
+            c.sim_args = simdef;
+            cf_log(CF_LOG_INFO, "rig: cellsim with the default sim_args \"%s\"", simdef);
+        }
         if (cf_simchild_start(&sim, c.sim_args, 10000, msg, sizeof msg)) {
             ec = cli_error("serve", CLI_FAIL, "%s", msg);
             goto done_log;
@@ -430,6 +500,7 @@ int cmd_serve(int argc, char **argv)
         }
         cf_log(CF_LOG_INFO, "rig: stage %s, probe %s", c.stage, c.probe);
     }
+    make_folders(&c.run);
     cf_runner_t runner;
     cf_plcrun_init(&c.run, &runner);
     if (cf_plant_start(&c.plant, &c.run, c.run.results_dir[0], &runner, &runner, msg, sizeof msg)) {
@@ -448,13 +519,25 @@ int cmd_serve(int argc, char **argv)
     so.alpha = (float)c.alpha;
     so.beta = (float)c.beta;
     so.max_rate = c.max_rate;
+    so.idle_ms = (unsigned)c.idle_ms;
+    /* The config's fit settings are the registers' defaults (FIT_TOL ..
+     * FIT_REPARAM): fit_to_tol loops to TOLERANCE. */
+    so.fit_tol = c.run.fit.loop ? (float)c.tol : 0.0f;
+    so.fit_within = (float)c.run.fit.within;
+    so.fit_max_cp = c.run.fit.max_cp >= NF_MAX_CP ? 0u : (uint32_t)c.run.fit.max_cp;
+    so.fit_refine =
+        c.run.fit.refine == CF_REFINE_UNIFORM ? PLC_REFINE_UNIFORM : PLC_REFINE_RESIDUAL;
+    so.fit_robust = (uint16_t)(c.run.fit.robust != 0);
+    so.fit_reparam = (uint16_t)c.run.fit.reparam;
     cf_log(CF_LOG_INFO, "cellfit serve: board %s, nominal %s, points %s, results %s", BOARD_NAME,
            c.run.nominal ? c.run.nominal : "(none)", c.run.points ? c.run.points : "(none)",
            c.run.results_dir[0] ? c.run.results_dir[0] : "(none)");
     const cf_fitjob_opts_t *fo = &c.run.fit;
-    cf_log(CF_LOG_INFO, "fit: %s%s, robust %s, reparam %ld", fo->loop ? "to TOLERANCE" : "plain",
-           fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : "",
-           fo->robust ? "yes" : "no", fo->reparam);
+    cf_log(CF_LOG_INFO,
+           "fit defaults (FIT_TOL .. FIT_REPARAM): %s%g mm%s, within %g %%, robust %s, reparam %ld",
+           fo->loop ? "loop to " : "plain (FIT_TOL 0; tol ", c.tol,
+           fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : ")",
+           fo->within, fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
     cf_plant_stop(&c.plant);
     cf_plcrun_free(&c.run);

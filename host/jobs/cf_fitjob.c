@@ -676,7 +676,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         ck->ks = &S->ks;
         ck->fp = &S->fp;
     }
-    if (S->st && (rc = cf_stats_init(S->st, o->tol)))
+    if (S->st && (rc = cf_stats_init(S->st, o->stats_tol > 0 ? o->stats_tol : o->tol)))
         return cf_fail(r->msg, r->ml, rc, "statistics: %s", cf_strerror(rc));
     set_pass(r, lo, hi, npass - 1, npass);
     if ((rc = measure(r, &S->fit, ck, *c, res, S->st, 0)))

@@ -67,10 +67,12 @@ typedef struct cf_fitjob_opts {
     cf_refine_t refine;
     int robust; /* Tukey reweighting passes after each fit */
     long robust_iters;
-    int stats;       /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
-    double min_gain; /* auto: least gain of a round, points of percent (nf_loopctl) */
-    double noise;    /* robust: the probe's noise, mm, a floor under the scale */
-    long holdout;    /* >= 2: every holdout-th scan row left out and measured (cf_holdout) */
+    int stats;        /* 1: signed normal deviations of the points into cf_stats (tol > 0) */
+    double min_gain;  /* auto: least gain of a round, points of percent (nf_loopctl) */
+    double noise;     /* robust: the probe's noise, mm, a floor under the scale */
+    long holdout;     /* >= 2: every holdout-th scan row left out and measured (cf_holdout) */
+    double stats_tol; /* the statistics' tolerance when it is not the loop's (0: tol); the
+                       * cell's verdict tolerance beside its fit loop's goal */
 } cf_fitjob_opts_t;
 
 /* The robust scale's floor as a share of tol: max(noise, this tol). Points

@@ -1,5 +1,6 @@
 /* cf_job.c: the cell's fit job on files (through cf_fitjob) and the export
  * of its result (cf_job.h). */
+#define _GNU_SOURCE /* renameat2: a rename that never replaces */
 #include "cf_job.h"
 #include "cf_err.h"
 #include "cf_iges.h"
@@ -7,10 +8,14 @@
 #include "cf_points.h"
 #include "cf_surf.h"
 #include "cf_surfio.h"
+#include "cf_uuid.h"
 #include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 int cf_job_open(const cf_job_fit_opts_t *o, cf_fitjob_t **j, char *msg, size_t ml)
 {
@@ -70,28 +75,51 @@ void cf_job_folder_name(unsigned long part, long long utc, char *buf, size_t n)
     snprintf(buf, n, "%lu_%s", part, ts);
 }
 
-int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *dir, char *msg,
-                  size_t ml)
+int cf_job_unique_name(unsigned long part, long long utc, unsigned seq, char *buf, size_t n)
 {
-    char path[4096], tmp[4200];
-    if (mkdir(dir, 0775) && errno != EEXIST)
-        return cf_fail(msg, ml, CF_EIO, "%s: cannot create: %s", dir, strerror(errno));
-    snprintf(path, sizeof path, "%s/fitted.igs", dir);
-    int rc = cf_iges_write_at(path, &r->surf, "cellfit serve", meta->utc, msg, ml);
+    char base[64], uuid[CF_UUID_LEN];
+    int rc = cf_uuid_new(uuid);
     if (rc)
         return rc;
-    snprintf(path, sizeof path, "%s/report.json", dir);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
+    cf_job_folder_name(part, utc, base, sizeof base);
+    snprintf(buf, n, "%s_%u_%s", base, seq, uuid);
+    return CF_OK;
+}
+
+static void iso_utc(long long utc, char *buf, size_t n)
+{
+    time_t t = (time_t)utc;
+    struct tm tm;
+    snprintf(buf, n, "1970-01-01T00:00:00Z");
+    if (gmtime_r(&t, &tm))
+        strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &tm);
+}
+
+static int write_report(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *path,
+                        char *msg, size_t ml)
+{
+    FILE *f = fopen(path, "w");
     if (!f)
-        return cf_fail(msg, ml, CF_EIO, "%s: cannot write: %s", tmp, strerror(errno));
+        return cf_fail(msg, ml, CF_EIO, "%s: cannot write: %s", path, strerror(errno));
     const cf_stats_t *st = r->stats;
+    char iso[32];
     cf_json_t j;
     cf_json_begin(&j, f);
     cf_json_int(&j, "part", (long)meta->part);
+    if (meta->part_id)
+        cf_json_str(&j, "part_id", meta->part_id);
     cf_json_int(&j, "program", (long)meta->program);
     cf_json_int(&j, "seq", (long)meta->seq);
     cf_json_int(&j, "utc", (long)meta->utc);
+    iso_utc(meta->utc, iso, sizeof iso);
+    cf_json_str(&j, "time", iso);
+    if (meta->export_seq)
+        cf_json_int(&j, "export_seq", (long)meta->export_seq);
+    if (meta->export_utc) {
+        cf_json_int(&j, "export_utc", (long)meta->export_utc);
+        iso_utc(meta->export_utc, iso, sizeof iso);
+        cf_json_str(&j, "export_time", iso);
+    }
     cf_json_str(&j, "board", meta->board);
     cf_json_str(&j, "nominal", meta->nominal);
     cf_json_str(&j, "points_file", meta->points ? meta->points : "");
@@ -108,9 +136,48 @@ int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const cha
     cf_json_num(&j, "seconds", r->seconds);
     cf_stats_json_fields(st, &j);
     cf_json_end(&j);
-    if (fclose(f) || rename(tmp, path)) {
-        remove(tmp);
+    if (fflush(f) || fsync(fileno(f)) || ferror(f)) {
+        fclose(f);
         return cf_fail(msg, ml, CF_EIO, "%s: cannot write: %s", path, strerror(errno));
     }
-    return 0;
+    if (fclose(f))
+        return cf_fail(msg, ml, CF_EIO, "%s: cannot write: %s", path, strerror(errno));
+    return CF_OK;
+}
+
+/* The temporary folder and what is in it, gone. */
+static void remove_tmp(const char *tmp)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/fitted.igs", tmp);
+    remove(path);
+    snprintf(path, sizeof path, "%s/report.json", tmp);
+    remove(path);
+    rmdir(tmp);
+}
+
+int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *dir, char *msg,
+                  size_t ml)
+{
+    char path[4200], tmp[4096];
+    const char *slash = strrchr(dir, '/');
+    size_t plen = slash ? (size_t)(slash - dir) + 1 : 0;
+    if (strlen(dir) + 32 >= sizeof tmp || !dir[plen])
+        return cf_fail(msg, ml, CF_EIO, "%s: not a usable folder name", dir);
+    snprintf(tmp, sizeof tmp, "%.*s.%s.tmp.%ld", (int)plen, dir, dir + plen, (long)getpid());
+    remove_tmp(tmp); /* a leftover of a crashed export of ours */
+    if (mkdir(tmp, 0775))
+        return cf_fail(msg, ml, CF_EIO, "%s: cannot create (as %s): %s", dir, tmp, strerror(errno));
+    snprintf(path, sizeof path, "%s/fitted.igs", tmp);
+    int rc = cf_iges_write_at(path, &r->surf, "cellfit serve", meta->utc, msg, ml);
+    if (!rc) {
+        snprintf(path, sizeof path, "%s/report.json", tmp);
+        rc = write_report(r, meta, path, msg, ml);
+    }
+    /* No replacing: rename would put an empty dir's name to ours. */
+    if (!rc && renameat2(AT_FDCWD, tmp, AT_FDCWD, dir, RENAME_NOREPLACE))
+        rc = cf_fail(msg, ml, CF_EIO, "%s: cannot create: %s", dir, strerror(errno));
+    if (rc)
+        remove_tmp(tmp);
+    return rc;
 }

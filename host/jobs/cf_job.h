@@ -39,17 +39,27 @@ void cf_job_result_free(cf_job_result_t *r);
 /* Identification of an exported result (goes into report.json). */
 typedef struct cf_job_meta {
     unsigned long part;
-    unsigned program, seq;
+    unsigned program, seq; /* seq: the job's sequence (RESULT_SEQ) */
     const char *nominal, *points, *board;
-    long long utc;       /* seconds since 1970 */
-    const char *journal; /* the scan's journal (SCAN_FIT), or NULL */
+    long long utc;        /* the job's time (JOB_TIME), seconds since 1970 */
+    const char *journal;  /* the scan's journal (SCAN_FIT), or NULL */
+    const char *part_id;  /* PART_ID, or NULL */
+    unsigned export_seq;  /* the EXPORT command's sequence (0: none) */
+    long long export_utc; /* when it was exported (0: none) */
 } cf_job_meta_t;
 
 /* Folder name for a result: "<part>_<YYYYMMDDTHHMMSSZ>" into buf. */
 void cf_job_folder_name(unsigned long part, long long utc, char *buf, size_t n);
 
-/* Create dir (one level; its parent must exist) and write dir/fitted.igs
- * and dir/report.json. CF_EIO with msg on failure. */
+/* A folder name that no other export takes: "<part>_<UTC>_<seq>_<UUID>"
+ * (UUID: cf_uuid_new). CF_OK, or CF_EIO when no random UUID is to be had. */
+int cf_job_unique_name(unsigned long part, long long utc, unsigned seq, char *buf, size_t n);
+
+/* Write dir/fitted.igs and dir/report.json as one: both into a hidden
+ * temporary sibling ".DIR.tmp.PID" (dir's parent must exist), then renamed
+ * to dir, which must not exist: an export never overwrites one, and a
+ * reader never sees a folder half written. CF_EIO with msg on failure
+ * (the temporary removed), also when dir exists. */
 int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *dir, char *msg,
                   size_t ml);
 

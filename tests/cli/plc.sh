@@ -70,7 +70,7 @@ plc = tcp:127.0.0.1:1
 nominal = $T/nominal.igs
 points = $T/points.xyz
 results_dir = $T/results
-results_dir.1 = $T/missing/results
+results_dir.1 = $T/points.xyz/results
 word_order = lo-hi
 watchdog_ms = 0
 log_level = info
@@ -116,7 +116,7 @@ pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 port=$a_port
 pid=$a_pid
 py net "$port"
-py errors "$port" folder 305
+py errors "$port" folder 108
 grep -q "info command FIT seq" "$T/a.log" && grep -q "error watchdog: PLC heartbeat" "$T/w.log" &&
     ok "log: levelled lines for commands and the watchdog" || no "log lines missing"
 # A job keeps running while clients come and go: mbpoll connects and

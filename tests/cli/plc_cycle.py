@@ -5,7 +5,7 @@
 # tests/cli/plc.sh counts them. Steps: identity PORT; cycle PORT RESULTS_DIR
 # NPOINTS MBPOLL [DIR_OUT]; abort PORT (invalid commands idle and busy, then
 # an abort mid-job); watchdog PORT; net PORT; errors PORT folder|fit CODE;
-# limit PORT MAX_CLIENTS MBPOLL. Run with /usr/bin/python3 (Debian's python3-pymodbus).
+# limit PORT MAX_CLIENTS MBPOLL. errors folder 1xx: the EXPORT refused. Run with /usr/bin/python3 (Debian's python3-pymodbus).
 import glob
 import json
 import os
@@ -321,6 +321,16 @@ def errors(port, missing_folder, code):
         s = c.wait_done(c.seq)
         check(s["status"] & RESULTS, "errors: a fit to export")
         s = c.command(EXPORT)
+        if code < 200:  # checked when accepted: refused, nothing started
+            check(s["result"] == code and s["state"] == IDLE and s["status"] & RESULTS,
+                  "errors: EXPORT to folder 1 refused with %d, IDLE, results kept (%s)"
+                  % (code, s))
+            c.write(FOLDER, [0])
+            s = c.command(EXPORT)
+            s = c.wait_done(c.seq)
+            check(not s["status"] & ERROR, "errors: EXPORT to folder 0 then works")
+            check(c.command(ACK_RESULTS)["result"] == 0, "errors: acknowledged")
+            return
         check(s["result"] == 0, "errors: EXPORT to folder 1 accepted")
     else:
         s = c.command(FIT)

@@ -29,7 +29,7 @@ trap 'stop_all; rm -rf "$T"' EXIT
 py() { py_step plc_slots.py 120 "$@"; } # py STEP ARGS...
 
 # A FIT of 200,000 projected points: a job of a few tenths of a second.
-"$CF" gen --dir "$T" --nu 16 --nv 12 --points 200000 --noise 0.002 >/dev/null
+"$CF" gen --dir "$T" --nu 16 --nv 12 --count 200000 --noise 0.002 >/dev/null
 grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
 mkdir -p "$T/results"
 

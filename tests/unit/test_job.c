@@ -14,6 +14,7 @@
 #include "cf_points.h"
 #include "cf_surf.h"
 #include "cf_test.h"
+#include "cf_uuid.h"
 #include "nf_err.h"
 #include "rig_err.h"
 #include <stdio.h>
@@ -207,8 +208,18 @@ static void test_export(void **state)
     cf_job_result_t res;
     assert_int_equal(cf_job_fit(&o, NULL, &res, msg, sizeof msg), CF_OK);
     tmp_path(dir, sizeof dir, name);
-    cf_job_meta_t meta = {4711, 12, 5, nominal, uvfile, "sim", 1700000000LL, NULL};
+    cf_job_meta_t meta = {4711,         12,   5,         nominal, uvfile,      "sim",
+                          1700000000LL, NULL, "SN 42/A", 9,       1700000003LL};
     assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_OK);
+    /* Never over an existing folder: refused. */
+    assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_EIO);
+    /* Unique names: same part and second, another UUID. */
+    char u1[128], u2[128];
+    assert_int_equal(cf_job_unique_name(4711, 1700000000LL, 5, u1, sizeof u1), CF_OK);
+    assert_int_equal(cf_job_unique_name(4711, 1700000000LL, 5, u2, sizeof u2), CF_OK);
+    assert_int_equal(strncmp(u1, "4711_20231114T221320Z_5_", 24), 0);
+    assert_true(cf_uuid_valid(u1 + 24));
+    assert_string_not_equal(u1, u2);
     snprintf(path, sizeof path, "%s/fitted.igs", dir);
     nf_surf_t back;
     assert_int_equal(cf_iges_read(path, 0, &back, msg, sizeof msg), CF_OK);
@@ -225,6 +236,15 @@ static void test_export(void **state)
     assert_non_null(strstr(js, "\"part\": 4711"));
     assert_non_null(strstr(js, "\"points\": 3000"));
     assert_non_null(strstr(js, "\"verdict\": \"pass\""));
+    /* The job's identity: its sequence, its UTC second as a number and in
+     * ISO 8601 (1700000000 is 2023-11-14 22:13:20 UTC), the part ID, the
+     * export's own sequence and time. */
+    assert_non_null(strstr(js, "\"seq\": 5"));
+    assert_non_null(strstr(js, "\"utc\": 1700000000"));
+    assert_non_null(strstr(js, "\"time\": \"2023-11-14T22:13:20Z\""));
+    assert_non_null(strstr(js, "\"part_id\": \"SN 42/A\""));
+    assert_non_null(strstr(js, "\"export_seq\": 9"));
+    assert_non_null(strstr(js, "\"export_time\": \"2023-11-14T22:13:23Z\""));
     remove(path);
     rmdir(dir);
     /* A folder that cannot be made: CF_EIO naming it. */

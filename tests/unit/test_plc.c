@@ -542,7 +542,10 @@ static void test_busy_writes(void **state)
     /* Read-only and range errors keep their own exceptions. */
     assert_int_equal(plc_fsm_write(&F, PLC_R_MAGIC, 1, &hb, 0, &act), PLC_EX_ADDRESS);
     assert_int_equal(plc_fsm_write(&F, PLC_R_PLC_HEARTBEAT, 1, &hb, 0, &act), 0);
-    assert_true(M.reg[PLC_R_STATUS] & PLC_ST_WD_ARMED);
+    /* The heartbeat changed, but WATCHDOG_MS is 0 (off): WD_ARMED stays
+     * clear, as nothing can trip (issue 15). */
+    assert_true(F.wd_armed);
+    assert_false(M.reg[PLC_R_STATUS] & PLC_ST_WD_ARMED);
     assert_int_equal(cmd(PLC_C_FIT), PLC_ACT_NONE); /* the 1xx refusal, not an exception */
     assert_int_equal(F.cmd_result, PLC_E_BUSY);
     /* COMMAND + sequence + heartbeat in one request, as PLC programs write
@@ -683,6 +686,10 @@ static void test_fault(void **state)
     assert_int_equal(plc_fsm_fault(&F, PLC_E_RIG_GONE, 1), PLC_ACT_ABORT);
     assert_int_equal(F.state, PLC_S_ABORTING);
     assert_false(M.reg[PLC_R_STATUS] & (PLC_ST_RIG | PLC_ST_HOMED));
+    /* Shown at once, while the job still stops (issue 15: not only when
+     * the scan's driver gives up seconds later). */
+    assert_int_equal(M.reg[PLC_R_ERROR_CODE], PLC_E_RIG_GONE);
+    assert_false(M.reg[PLC_R_STATUS] & PLC_ST_ERROR);
     assert_int_equal(plc_fsm_event(&F, PLC_EV_FAIL, PLC_E_RIG_LINK, NULL), PLC_S_ERROR);
     assert_int_equal(M.reg[PLC_R_ERROR_CODE], PLC_E_RIG_GONE); /* the fault, not the scan's */
     assert_int_equal(M.reg[PLC_R_DONE_SEQ], job);
