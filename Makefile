@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # cellfit top-level Makefile.
 #   make              build/cellfit and build/firmware/*.o (BOARD=linux-cell)
 #   make test         every test: unit (sim board), ASan+UBSan, clang, CLI,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cholmod_bench.c: CHOLMOD (SuiteSparse) on the normal equations cellfit
  * exports (`cellfit bench export --cp N --out FILE`): analyse + factorise,
  * then solve for the 3 right-hand sides (x y z), each timed; the relative

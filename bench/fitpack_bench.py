@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """bench/fitpack_bench.py: FITPACK (scipy LSQBivariateSpline, surfit) on the
 height field of `cellfit bench fit`, same points, same knots; one JSON line.
 

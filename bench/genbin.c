@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* genbin.c: the benchmark's binary point files (docs/formats.md, raw
  * little-endian float64): `genbin IN.uvxyz OUT.uvxyz.bin [TIMES]` reads the
  * ASCII points `cellfit gen` wrote (strtod, '#' lines skipped) and writes

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bench/knotsel_loop.c: the knot chooser's loop (nf_knotsel + nf_loopctl,
  * tests/ref_kloop.c) on a height field file, for bench/loop_bench.py.
  *

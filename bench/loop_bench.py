@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """bench/loop_bench.py: the fitting loop to a tolerance on terrain-like
 height fields, three ways side by side, one table (issue 14). Measures,
 asserts nothing.

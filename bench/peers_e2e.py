@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 # bench/peers_e2e.py: the end-to-end peers of `cellfit fit --uv` (issue 20):
 # the same points (the .uvxyz.bin file, read by numpy: file I/O NOT timed),
 # the same bicubic net (uniform clamped knots on [0,1]^2, nu x nv control

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # bench/run.sh CELLFIT: issue 6's benchmarks (`make bench`): accumulation,
 # solvers, CHOLMOD and FITPACK on the same problems, end to end, and the
 # machine's memory bandwidth; prints Markdown tables beside the paper's

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # bench/scan.sh BUILD: the scan benchmark (make bench-scan; issue 19):
 # on-the-fly pairing in process (build/scan-bench otf) and over cellsim's
 # Modbus TCP (otf-rig: the probe's streaming FIFO), and the laser line

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* scan_bench.c: build/scan-bench, the scan benchmark (bench/scan.sh runs
  * it; one JSON line a run, nothing asserted):
  *   gev URI 'GEOMETRY' POINTS [RATE]  profiles from the profiler through

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # bench/scan_speed.sh CELLFIT: how fast `cellfit scan` measures on cellsim
 # (beside CELLFIT): a 21 x 16 raster (step 10 mm, 336 points) over the
 # panel, per wire (Modbus TCP for stage and probe; Modbus RTU stage and

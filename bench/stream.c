@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* stream.c: the memory bounds cellfit's phases are quoted against, one core,
  * one JSON line:
  *   triad   a[i] = b[i] + s c[i] over 3 x 64 MB (STREAM's triad, 24 bytes

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """bench/tables.py: Markdown tables of bench/run.sh's JSON lines, beside the
 paper's figures (Brujic, Ainsworth & Ristic 2010, Tables 2-4: Xeon 3.2 GHz).
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fit_array.c: libcellfit from a program: fit a nominal surface's control
  * net to points held in an array, read the fitted surface back and write
  * it as IGES. The points lie on a surface of the nominal's own spline space

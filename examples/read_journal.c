@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* read_journal.c: libcellfit from a program: read the measured points of a
  * cell's journal (every record's checksum verified) and print their count
  * and bounding box; with a nominal IGES surface as the second argument, fit

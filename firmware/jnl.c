@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* jnl.c: the journal of measured points: encoding, append with the sync
  * policy, recovery and the streaming reader (jnl.h, docs/journal.md). */
 #include "jnl.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* jnl.h: the journal of measured points, append-only over a rig_store_t: a
  * header record (job, nominal, kinematic calibration), then fixed-size
  * records, each with its CRC-32, in little-endian byte order whatever the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* jnl_crc.c: CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320, initial
  * and final XOR 0xFFFFFFFF), a nibble at a time from a 16-entry table: 64
  * bytes of flash instead of 1 KiB, fast enough for 80-byte records. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_accum.c: streaming accumulation of R^T R and R^T Q (Eq. 9-11). */
 #include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
 

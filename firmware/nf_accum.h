@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_accum.h: the hot loop of Section 3.1: one measured point (one row of R)
  * into the stripes and R^T Q. Two things make it fast without changing a
  * single sum's terms beyond rounding order:

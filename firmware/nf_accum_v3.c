@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_accum_v3.c: nf_accum.c compiled again for x86-64-v3 (AVX2, FMA; flags from
  * mk/arch.mk), its hot entry points named *_v3 and chosen at run time
  * (nf_isa.h). Without dispatch this file is empty. */

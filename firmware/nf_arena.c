@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_arena.c: bump allocation from a caller-owned block (no heap). */
 #include "nf_arena.h"
 #include <stdint.h>

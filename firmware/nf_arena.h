@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_arena.h: bump allocator over memory the caller owns (a static array on
  * a board, one host allocation of exactly the job's byte formula). Nothing
  * is freed piecemeal; a mark/release pair drops scratch storage. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_base.c: the points' plane by power iteration on their scatter matrix,
  * and the plane patch over their extent (Piegl & Tiller 2001, Section 3.2). */
 #include "nf_base.h"

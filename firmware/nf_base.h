@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_base.h: the base surface when nothing but the points is given: a plane
  * patch over the points (Piegl & Tiller 2001, Section 3.2: project onto the
  * maximum-area plane). The plane comes from the points' 3 x 3 scatter

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_basis.c: B-spline basis functions (The NURBS Book A2.1-A2.3). */
 #include "nf_basis.h"
 #include "nf_err.h"

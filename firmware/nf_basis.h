@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_basis.h: B-spline basis on one knot vector (The NURBS Book, A2.1-A2.3)
  * and Greville abscissae. Knots are clamped: U[0..p] equal, U[n+1..n+p+1]
  * equal, with n+1 control points. */

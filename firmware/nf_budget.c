@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_budget.c: the byte formula of nf_budget.h as a runtime function. */
 #include "nf_budget.h"
 #include <limits.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_budget.h: the public byte formula. Every byte the fitter uses comes
  * from the arena, and the arena a job needs is a function of the control
  * net (Nu, Nv, p, q) and the solver alone, never of the number of points.

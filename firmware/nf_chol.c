@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_chol.c: banded Cholesky (George and Liu; the paper's Table 4 method).
  * A = U^T U with U upper, half bandwidth bw = q Nu + p, stored row-major
  * with bw + 1 entries per row: band[i*(bw+1) + t] = U[i][i+t]. Fill-in

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_config.h: compile-time configuration of the fitter. The board header
  * (boards/<board>/board_config.h, found on the include path) comes first;
  * this file fills what it leaves out and proves the budget is coherent. */

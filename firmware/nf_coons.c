@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_coons.c: four boundary curves made compatible, and the bilinearly
  * blended Coons patch as an exact NURBS surface (Piegl & Tiller 2001,
  * Section 2.1; The NURBS Book 10.5). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_coons.h: Coons base surfaces from four boundary curves (Piegl & Tiller
  * 2001, Sections 2.1-2.2; The NURBS Book 10.5). The curves are
  *   C0(u) on v = 0, C1(u) on v = 1, D0(v) on u = 0, D1(v) on u = 1,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_coons3.c: the bicubically blended Coons patch of Piegl & Tiller (2001,
  * Section 2.2): cross-boundary derivative curves fitted to points, twist
  * compatibility at the corners, derivative scaling, and the patch as an

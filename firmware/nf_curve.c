@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_curve.c: NURBS curve evaluation and exact transformations (The NURBS
  * Book A2.1-A2.3, A4.2, A5.4, A5.9), on homogeneous points. */
 #include "nf_curve.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_curve.h: NURBS curves (The NURBS Book, Ch. 2-5): evaluation, first and
  * second derivatives (A4.2), reversal, affine reparametrisation, knot
  * refinement (A5.4) and degree elevation (A5.9). Like nf_surf_t, a curve does

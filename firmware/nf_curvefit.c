@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_curvefit.c: streamed least-squares fit of a cubic B-spline curve (normal
  * equations, Cholesky, ridge toward a straight line). */
 #include "nf_curvefit.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_curvefit.h: least-squares fit of a clamped cubic B-spline curve with
  * uniform knots on [0, 1] to streamed points (t, Q), t their parameter:
  * the n x n normal equations N^T N P = N^T Q (one matrix, three right-hand

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_err.c: one string for each fitter error code. */
 #include "nf_err.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_err.h: error codes of the fitter core; 0 is success, negatives errors.
  * Every value has one meaning and one string (nf_strerror). */
 #ifndef NF_ERR_H

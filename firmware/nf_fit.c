@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_fit.c: streaming assembly of the generalised normal equations (Eq. 7). */
 #include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_fit.h: one fitting job. Measured points stream in one row of R at a
  * time (Section 3.1); the job assembles the generalised normal equations
  *   [R^T R + alpha (B - I)^T (B - I) + beta I] P = R^T Q + beta P0   (Eq. 7)

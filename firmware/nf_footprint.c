@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_footprint.c: occupancy of the parameter domain by the data, and the
  * control points no data determine (issue 14, honest edges). */
 #include "nf_footprint.h"

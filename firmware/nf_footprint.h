@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_footprint.h: the data footprint in parameter space (issue 14, honest
  * edges). An occupancy grid of NF_FP_SUB x NF_FP_SUB cells per knot span
  * pair counts the points as they stream in; from it come the counts a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_gs.c: Gauss-Seidel on the stripes (Eq. 8, Section 3.2). The paper
  * stops when no control point moved by more than a relative 1e-4; we stop
  * on the residual ||b - A P|| / ||b|| instead, which bounds what matters. */

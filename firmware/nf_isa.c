@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_isa.c: the path of the hot kernels, chosen once, and the plain-named
  * entry points that forward to the baseline or the v3 copy (nf_isa.h). */
 #include "nf_isa.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_isa.h: run-time choice of the instruction set of the hot kernels.
  * The default x86-64 build runs on every x86-64 CPU (baseline: SSE2). The
  * modules whose loops dominate a fit (nf_accum.c, nf_fit.c's point paths,

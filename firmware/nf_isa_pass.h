@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_isa_pass.h: included first by each module that has a v3 copy (see
  * nf_isa.h). With dispatch, it renames the hot entry points of all those
  * modules for this pass: name_base in nf_X.c, name_v3 in nf_X_v3.c (which

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_isa_v3.c: the v3 copy's own probe (nf_isa.h), compiled with the v3
  * copy's flags (mk/arch.mk: -mavx2 -mfma and the board's -ffp-contract). */
 #include "nf_isa_pass.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_knots.c: residual-driven knot choice (per-span excess, worst spans halved). */
 #include "nf_knots.h"
 #include "nf_basis.h"

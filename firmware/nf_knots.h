@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_knots.h: where to insert knots in the fitting loop (Brujic et al. 2010,
  * Section 2.2: fit, reparameterise, insert knots until the tolerance holds).
  * Residual-driven refinement: per knot span in u and per span in v, the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_knotsel.c: per-span misfit of the check pass and the knot lines chosen
  * from it (gain per control point added, data on both sides of each knot). */
 #include "nf_knotsel.h"

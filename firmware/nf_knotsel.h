@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_knotsel.h: knot lines where the residual lives, per control point added
  * (the knot step of the fitting loop, Brujic et al. 2010, Section 2.2: fit,
  * reparameterise, insert knots until the tolerance holds).

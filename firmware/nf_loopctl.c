@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_loopctl.c: alpha per refinement level and the verdict of each round of
  * the fitting loop. */
 #include "nf_loopctl.h"

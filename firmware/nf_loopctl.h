@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_loopctl.h: the rules of the fitting loop around the knot chooser
  * (nf_knotsel.h): alpha scaled with the knot spacing at each refinement
  * level (Eq. 7's Greville term), and the verdict after each round: met, or

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_pcg.c: conjugate gradients on the stripes, preconditioned by symmetric
  * Gauss-Seidel M = (D + L) D^-1 (D + U) = C C^T, C = (D + L) D^-1/2, in
  * split form with Eisenstat's trick: since A = (D + L) + (D + U) - D,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_probe.c: does the data determine the net? A homogeneous solve A e = 0
  * from a random start converges to the part of the start lying in the null
  * space of A; a survivor means some control points are free (no data, data

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_project.c: point inversion on a NURBS surface (The NURBS Book, Section
  * 6.1, Eqs. 6.6-6.8), the step from measured points to their parameters
  * (Piegl & Tiller 2001, Section 3; Brujic et al. 2010, Section 2.2). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_project.h: parameters of measured points by projection onto a surface
  * (Piegl & Tiller 2001, Section 3; NURBS Book 6.1; Brujic et al. 2010,
  * Section 2.2): the closest point S(u, v) to Q, found by Newton iteration

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_quad.c: quadrilateral decomposition, maximum-area plane, 2-D grid
  * range search, projection onto quadrilaterals and thinning (Piegl &
  * Tiller 2001, Sections 3.1-3.4), with Newton point inversion after it. */

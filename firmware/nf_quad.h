@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_quad.h: fast projection by a quadrilateral decomposition (Piegl &
  * Tiller 2001, Section 3): a crack-free blanket of quadrilaterals within a
  * relative tolerance of the surface (3.1), the maximum-area plane and a 2-D

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_refine.c: knot insertion on NURBS surfaces (The NURBS Book, Sections
  * 5.2-5.3: A5.1/A5.3 for one knot inserted r times, A5.4/A5.5 for many
  * knots), on homogeneous control points so that weights are exact.

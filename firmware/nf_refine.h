@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_refine.h: knot insertion on NURBS surfaces (Boehm's algorithm; The
  * NURBS Book 5.2-5.3, A5.3 and A5.5), the step of the fitting loop that
  * gives the control net more freedom where the fit needs it (Brujic et al.

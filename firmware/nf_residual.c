@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_residual.c: r = b - A x and its relative norm, per coordinate. */
 #include "nf_solve.h"
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_robust.c: |residual| histogram, MAD scale with a floor, Tukey weights. */
 #include "nf_robust.h"
 #include "nf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_robust.h: robust reweighting for the fit (iteratively reweighted least
  * squares against laser spikes and other gross outliers), with a floor
  * under the scale so that clean data keep weight 1 (nf_robust_t). The scale of the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_solve.h: solvers of A P = b on the stripe store (three right-hand sides
  * interleaved). Each takes its scratch from the arena per nf_budget.h, leaves
  * the solution in x (which holds the starting guess on entry) and reports the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_stripe.c: the stripe store S of A = R^T R (Eq. 9-11) and its products. */
 #include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
 

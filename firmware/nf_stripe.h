@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_stripe.h: stripe storage of the symmetric normal matrix (Section 3.1).
  * A = R^T R has non-zeros only at offsets delta = e + f Nu, |e| <= p,
  * |f| <= q (Eq. 11): 2q+1 stripes of width 2p+1. By symmetry we keep the

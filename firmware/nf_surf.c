@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_surf.c: NURBS surface validation and evaluation (Eq. 1; NURBS Book A4.3, A4.4). */
 #include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* nf_surf.h: NURBS surfaces (Eq. 1). The surface does not own memory: knots,
  * control points and weights point into storage the caller provides (a
  * static array on a board, the arena, or the host's heap). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_err.c: one string per PLC error code. */
 #include "plc_err.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_err.h: the error codes the cell shows a PLC (register ERROR_CODE and
  * CMD_RESULT), in ranges as on industrial vision sensors: 1xx a command
  * refused (the cell's state is unchanged), 2xx communication, 3xx the

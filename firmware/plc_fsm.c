@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_fsm.c: the job state machine, the handshake, the results latch and
  * the watchdog (plc_fsm.h); the tables below are the whole behaviour, and
  * docs/plc-register-map.md prints them. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_fsm.h: the cell's job state machine as a PLC sees it, driven through
  * the register map (plc_map.h):
  *   - one table of states x commands (accept and go where, or refuse with

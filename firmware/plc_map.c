@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_map.c: the register table, 32-bit packing and write validation. */
 #include "plc_map.h"
 #include <string.h>

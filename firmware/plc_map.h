@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_map.h: the cell's Modbus holding registers as one table (address,
  * name, type, access, range, units), the 32-bit packing in either word
  * order, and write validation: a write to a read-only or unmapped register,

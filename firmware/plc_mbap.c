@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_mbap.c: MBAP framing and request PDUs of the PLC server (plc_mbap.h). */
 #include "plc_mbap.h"
 #include <string.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* plc_mbap.h: Modbus TCP framing and request handling of the cell's PLC
  * server as pure functions over bytes (no socket, no clock, no lock, no
  * heap), so the server (host/cf_plcsrv.c) keeps only sockets and timing,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* rig.h: what a scan job needs from the world, declared by the firmware and
  * implemented outside it (hal/ on the cell controller, a board port on a
  * microcontroller): a motion stage, a displacement probe, append-only

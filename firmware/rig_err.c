@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* rig_err.c: one string for each rig error code. */
 #include "rig_err.h"
 

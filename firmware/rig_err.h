@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* rig_err.h: error codes of the rig interfaces (rig.h) and of the scan and
  * journal that use them; 0 is success, negatives errors, disjoint from
  * nf_err_t (-1..-99) and cf_err_t (-101..). One string each (rig_strerror).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* scan.c: the scan job (scan.h): plan, kinematics, the per-point loop and
  * what each fault means. */
 #include "scan.h"

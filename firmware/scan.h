@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* scan.h: the scan job: a raster plan over a region of the part (serpentine
  * rows), and per grid point a stage move, a probe reading, the 3-D point by
  * the kinematic model below, a journal record (jnl.h) and a call into the

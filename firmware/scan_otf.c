@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* scan_otf.c: on-the-fly pairing of latched positions and streamed
  * readings by trigger number (scan_otf.h): a ring of SCAN_OTF_WINDOW slots
  * indexed by number, retired in number order. */

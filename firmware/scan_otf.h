@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* scan_otf.h: on-the-fly pairing: positions latched by the trigger box and
  * readings streamed by the probe (rig.h) are matched BY TRIGGER NUMBER in a
  * window of the last SCAN_OTF_WINDOW triggers, never by arrival order; each

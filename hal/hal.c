@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal.c: hal_open dispatch on the URI scheme, and the hal_* calls, which
  * answer RIG_EUNSUPPORTED for an operation the backend's wire lacks. */
 #include "hal.h"

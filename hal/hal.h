@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal.h: one small transport interface for the cell's devices, with one
  * backend per wire (libmodbus's backend table is the model):
  *   rtu:PATH:BAUD:8N1:SLAVE      Modbus RTU on a serial device (libmodbus)

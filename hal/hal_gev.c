@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_gev.c: the GigE Vision profiler (hal_gev.h) on Aravis: open by
  * address, features, the stream with packet resend, frame ids unwrapped
  * and every lost frame counted. */

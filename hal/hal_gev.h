@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_gev.h: a laser line profiler over GigE Vision (Aravis), opened by
  * gev:ADDRESS[:SERIAL] (hal_uri): its GenICam features set (PixelFormat
  * Mono16, Width points per profile, Height profiles per frame, frame rate,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_modbus.c: Modbus RTU and TCP backend (libmodbus): timeouts from
  * hal_opts, bounded retries with exponential backoff, late replies waited
  * out and flushed after a timeout, and reconnection done here by closing

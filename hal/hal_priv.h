@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_priv.h: what the hal/ backends and drivers share and nothing else
  * includes: the detail buffer, monotonic time and sleeping. */
 #ifndef HAL_PRIV_H

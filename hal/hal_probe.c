@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_probe.c: the laser displacement probe over its ASCII protocol on any
  * byte-stream transport (tty:, serial:): "M0" CR LF asks for a reading,
  * "M0,+01.234" is mm, "M0,FFFFFFF" out of range (RIG_ENOSURF), "ER,M0,nn"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_probe_mb.c: the displacement probe read over Modbus input registers
  * (hal_regmap.h): distance as an int32 in micrometres, a status register
  * whose bits say valid, out of range (RIG_ENOSURF) or sensor error; the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_regmap.h: the register maps of the Modbus motion stage and the Modbus
  * displacement probe, and the ASCII probe's messages, as tabled in
  * docs/rig-devices.md (the table a person wiring a real device works

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_rig.c: open the stage and the probe from their URIs and hand them
  * out as rig.h tables, for host code (cellfit rig, the scan job). */
 #include "hal_rig.h"

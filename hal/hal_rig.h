@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_rig.h: the rig's device drivers on top of hal transports, each
  * implementing a rig.h table: the Modbus motion stage (hal_stage_), the
  * laser displacement probe over its ASCII protocol on any byte stream

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_serial.c: the serial: byte-stream backend on libserialport. Reads
  * and writes block with the transport's timeouts; a dropped line (write
  * EIO, sp_input_waiting failing) is reopened by name for up to

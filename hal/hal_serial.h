@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_serial.h: the serial: backend (libserialport) beyond hal.h: listing
  * the ports the system has, with their USB ids, and the error mapping
  * (exposed for tests). */

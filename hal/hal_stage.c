@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_stage.c: the Modbus motion stage driver (rig_stage_ops_t): a move
  * is one read of status, position and move counter, one write of target
  * and command (registers 0-4, so it is atomic), a check that the stage

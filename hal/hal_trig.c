@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_trig.c: the USB trigger/encoder box driver: packet and identity
  * decoding with CRC and sequence checks, and the vendor requests over the
  * usb: transport (protocol in docs/rig-usb.md). */

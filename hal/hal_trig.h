@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_trig.h: driver for the USB trigger/encoder box (docs/rig-usb.md): the
  * vendor protocol's wire constants, packet decoding with CRC and sequence
  * checks (pure, tested without a device), and the calls that talk to a box

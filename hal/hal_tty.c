@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_tty.c: byte-stream backend on a tty or pseudo-terminal with termios
  * (raw, baud, parity, stop bits), poll() timeouts, and reconnection by
  * reopening the path when the line is lost (EIO, hang-up): for the ptys

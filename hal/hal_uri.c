@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_uri.c: strict parsing of device URIs (rtu:, tcp:, serial:, tty:, usb:, gev:)
  * into hal_uri_t; every refusal gives a one-line reason naming the field. */
 #include "hal.h"

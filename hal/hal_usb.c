@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_usb.c: the usb: backend on libusb: open by VID:PID (and serial
  * number), claim interface 0, control and bulk transfers with the
  * transport's timeout. A device gone (NO_DEVICE) is looked for again and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hal_usb.h: the usb: backend (libusb) beyond hal.h: the error mapping,
  * exposed for tests. */
 #ifndef HAL_USB_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cellfit.h: the public C API of libcellfit: fit the control net of a
  * nominal NURBS surface to measured points (Brujic, Ainsworth & Ristic
  * 2010, Eq. 7: least squares with the Greville (alpha) and stay-near-nominal

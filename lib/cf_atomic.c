@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_atomic.c: write-to-temporary-then-rename (cf_atomic.h). */
 #include "cf_atomic.h"
 #include "cf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_atomic.h: a file written whole or not at all: the data goes to a
  * temporary sibling ("PATH.tmp.PID"), which is flushed, synced and renamed
  * over PATH only when everything was written; on any failure the temporary

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_cli.c: shared helpers of the cellfit subcommands. */
 #include "cf_cli.h"
 #include <errno.h>

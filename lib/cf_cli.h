@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_cli.h: what the command-line programs (cellfit, cellsim) share: exit
  * codes, one-line error reports, strict number parsing, a monotonic clock.
  * Option tables and usage: cf_opt.h; JSON output: cf_json.h. */

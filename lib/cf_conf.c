@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_conf.c: "key = value" configuration files (cf_conf.h). */
 #include "cf_conf.h"
 #include "cf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_conf.h: the cell's configuration file: one "key = value" a line,
  * blanks around both trimmed, '#' starts a comment line, blank lines
  * skipped; values run to the end of the line (no quoting). Each pair goes

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_cpu.c: CELLFIT_CPU picks the hot kernels' path (cf_cpu.h). */
 #include "cf_cpu.h"
 #include "cf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_cpu.h: CELLFIT_CPU, the environment's say on the hot kernels' path
  * (firmware/nf_isa.h): "baseline" (any x86-64 CPU), "x86-64-v3" (AVX2 and
  * FMA; refused on a CPU without them) or "auto"/unset (the best the CPU

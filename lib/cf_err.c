@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_err.c: strings for host error codes (and the firmware's). */
 #include "cf_err.h"
 #include "nf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_err.h: error codes of the host tools (files, parsing, usage). Negative
  * values; 0 is success. Messages with file and line go into a caller's
  * buffer, the code says which kind of failure it was. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fmt.c: "%.17g" by exact integer arithmetic (see cf_fmt.h). */
 #include "cf_fmt.h"
 #include <stdint.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fmt.h: a double as the text printf's "%.17g" gives, fast. Seventeen
  * significant digits read back to the same double; glibc takes about 7,000
  * instructions a number for it (multi-precision), which made writing a

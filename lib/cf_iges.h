@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_iges.h: IGES 5.3 entity 128 (rational B-spline surface), read and write.
  * Fixed-80-column ASCII IGES only; binary and compressed forms are refused. */
 #ifndef CF_IGES_H

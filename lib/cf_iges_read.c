@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_iges_read.c: IGES 5.3 entities 128 (rational B-spline surface) and
  * 126 (rational B-spline curve), read (cf_iges.h; the writer is
  * cf_iges_write.c). The reader makes one pass: Start (skipped), Global (delimiters), Directory

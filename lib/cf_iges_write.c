@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_iges_write.c: IGES 5.3 entities 128 (rational B-spline surface) and
  * 126 (rational B-spline curve), written as complete files (cf_iges.h; the
  * reader is cf_iges_read.c): fixed 80-column records, %.17g numbers, the

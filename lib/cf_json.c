@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_json.c: the nesting JSON writer (cf_json.h). */
 #include "cf_json.h"
 #include "cf_fmt.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_json.h: the JSON writer every `--json` output and report file goes
  * through: objects, arrays, numbers (%.17g, null when not finite),
  * integers, strings (escaped), booleans and null, nested to a fixed depth.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_log.c: levelled log lines to stderr or syslog (cf_log.h). */
 #define _DEFAULT_SOURCE /* syslog's LOG_* names, vsyslog */
 #include "cf_log.h"

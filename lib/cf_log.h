@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_log.h: levelled log lines for the cell's daemon (`cellfit serve`):
  * to stderr ("2026-12-01T17:00:00.123Z info plc: ...") or to syslog
  * (facility daemon, ident "cellfit"). Safe from several threads: one

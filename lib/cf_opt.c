@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_opt.c: option tables (cf_opt.h). */
 #include "cf_opt.h"
 #include "cf_cli.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_opt.h: command-line options from one table per command: parsing
  * (--name VALUE, --name=VALUE, flags, positional arguments, "--"), the
  * usage that --help prints (every option with its default), error lines

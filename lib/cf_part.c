@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_part.c: the synthetic part (nominal panel plus dent, warp, bump, ridge). */
 #include "cf_part.h"
 #include "nf_basis.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_part.h: a synthetic part for demos and the simulated rig: a nominal
  * bicubic panel (the CAD surface) and the "as manufactured" part, which
  * deviates from it by a dent and a warp along z. Both are functions of the

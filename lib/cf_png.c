@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_png.c: PNG writer (zlib deflate, per-row adaptive filters, CRC-32),
  * RGB canvas and 8x13 bitmap font. The zlib stream is produced while rows are
  * pushed: deflate's output gathers in one 64 KB buffer and each full buffer

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_png.h: PNG output through zlib: 8-bit RGB images, each row under the
  * PNG filter that suits it best, compressed by deflate (a 1200 x 900
  * deviation map: tens of KB, against 3.2 MB stored), plus an RGB canvas with

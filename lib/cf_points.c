@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_points.c: streaming point-file reader (ASCII lines; PLY ascii and
  * binary_little_endian). One fixed buffer refilled with fread; a line is
  * parsed in place, after moving its start to the front of the buffer when it

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_points.h: streaming reader of point files. Memory stays fixed whatever
  * the file size: one read buffer, lines of at most CF_POINTS_MAX_LINE bytes.
  *   ASCII: one point per line, numbers separated by blanks or one comma, '#'

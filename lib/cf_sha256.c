@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_sha256.c: SHA-256 (cf_sha256.h), FIPS 180-4: constants of Section
  * 4.2.2, functions of Section 4.1.2, padding of 5.1.1, the hash of 6.2.2. */
 #include "cf_sha256.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_sha256.h: SHA-256 (FIPS 180-4, Section 6.2), for the checksums of the
  * result files recorded with each job (results.db, the plant database). */
 #ifndef CF_SHA256_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_step.h: STEP AP242 (ISO 10303-21 exchange files) for NURBS surfaces,
  * read and written by our own code (the entity set is small).
  *

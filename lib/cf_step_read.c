@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_step_read.c: the B-spline surface of a STEP file (ISO 10303-21): the
  * DATA section indexed by instance number, then the surface's instance
  * (B_SPLINE_SURFACE_WITH_KNOTS, or the rational complex entity) parsed with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_step_write.c: an nf_surf_t as a STEP AP242 file (ISO 10303-21): the
  * surface as the one face of an open shell, with the product structure and
  * the millimetre unit context CAD systems look for (see cf_step.h). */

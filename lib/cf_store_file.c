@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_store_file.c: rig_store_t on a POSIX file (cf_store_file.h). */
 #include "cf_store_file.h"
 #include <errno.h>

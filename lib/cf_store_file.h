@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_store_file.h: the journal's storage (rig_store_t) on a file of the
  * cell controller: appends with O_APPEND, sync is fsync, reads are pread,
  * truncate is ftruncate. A full disk (ENOSPC, EDQUOT, EFBIG) is RIG_EFULL,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_surf.c: heap storage for surfaces on the host side. */
 #include "cf_surf.h"
 #include "cf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_surf.h: heap-owned NURBS surfaces for the host tools. */
 #ifndef CF_SURF_H
 #define CF_SURF_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_surfio.c: surface read and write dispatched on the file's extension. */
 #include "cf_surfio.h"
 #include "cf_err.h"

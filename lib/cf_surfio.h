@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_surfio.h: surface files by extension: ".igs"/".iges" IGES entity 128
  * (cf_iges), ".stp"/".step" STEP AP242 (cf_step), case-insensitive. The one
  * place every reader and writer of a surface (fit --out, base --out,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_surfrow.c: fast evaluation of a surface at points in rows of one v
  * (the residual pass of a fit: issue 20). S(u, v) = sum_a N_a(u) C_a(v)
  * with C_a(v) = sum_b N_b(v) P_ab (Eq. 1 with the sums regrouped). */

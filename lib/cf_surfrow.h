@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_surfrow.h: many points of one surface, fast, when they come in rows of
  * one v (a scanner's raster; any order works). The v row's basis N(v) is
  * computed once per row, and each control column's sum over it,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_uuid.c: version 4 UUIDs from /dev/urandom (cf_uuid.h). */
 #include "cf_uuid.h"
 #include "cf_err.h"

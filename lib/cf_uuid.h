@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_uuid.h: random (version 4) UUIDs, for job identities that stay unique
  * across cells, restarts and clock changes (RFC 9562, Section 5.4). */
 #ifndef CF_UUID_H

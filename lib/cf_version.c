@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_version.c: version strings (cf_version.h); the build writes cf_rev.h. */
 #include "cf_version.h"
 #include "cf_rev.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_version.h: the release and the git revision this build came from, for
  * `--version`, IGES headers, report.json and the journal header. */
 #ifndef CF_VERSION_H

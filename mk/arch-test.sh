@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # mk/arch-test.sh NAME "EMU" CELLFIT NATIVE_CELLFIT UNIT_TEST...: a build for
 # another CPU run under an emulator (qemu-user), from mk/arch.mk:
 #  - westmere only: the emulated CPU really lacks AVX (an AVX2 program built

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/arch.mk: any cell controller (issue 16).
 #   native x86-64 builds   firmware/ gets NF_ISA_DISPATCH=1 and the hot
 #                          modules' v3 copies (firmware/nf_*_v3.c) are built

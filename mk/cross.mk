@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/cross.mk: boards (included at the end of the top Makefile).
 #   make BOARD=<b> firmware   native boards: build/firmware/*.o as before;
 #                             cross boards (board.mk sets BOARD_CROSS := 1):

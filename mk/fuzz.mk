@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/fuzz.mk: libFuzzer targets for every parser of outside input (issue 7,
 # docs/reliability.md), one tests/fuzz/fuzz_<name>.c each:
 #   make fuzz             clang -fsanitize=fuzzer,address,undefined into

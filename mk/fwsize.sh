@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # mk/fwsize.sh: prove a linked image fits its board. Every allocated section
 # must lie in a memory region of the linker map, and each region's use
 # (.data counted twice: in RAM and as its load image in flash) within its

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/gev.mk: the GigE Vision laser line profiler (issue 19): hal/hal_gev.c
 # (the driver) and sim/sim_gev.c (cellsim's fake camera) compile against
 # Aravis (Debian libaravis-dev, scripts/deps.sh build), and everything that

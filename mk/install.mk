@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/install.mk: what a plant installs (included by the top Makefile).
 #   make install [PREFIX=/usr/local] [DESTDIR=STAGE]   programs, man pages,
 #       the public header, libcellfit.a, cellfit.pc, bash completion, the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/knotsel.mk: the knot chooser's loop (firmware/nf_knotsel, nf_loopctl)
 # as a benchmark driver, and the loop benchmark beside FITPACK's surfit
 # (bench/loop_bench.py; prints a table, asserts nothing).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/plant.mk: results at the cell (SQLite) and for the plant (PostgreSQL
 # through libpq, MQTT through libmosquitto): host/cell/cf_resdb.c,
 # cf_forward.c, cf_record.c and `cellfit results`. The libraries reach

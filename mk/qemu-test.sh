@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # mk/qemu-test.sh: run a board image under QEMU with semihosting and check
 # what it prints against the properties of its built-in fits
 # (boards/common/bd_selftest.h), independently of the image's own verdict.

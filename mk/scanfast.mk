@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/scanfast.mk: the fast scan methods' targets (issue 19): make demo runs
 # on the fly by default (scripts/demo.sh, DEMO_METHOD); demo-stop keeps the
 # stop-and-go probe, demo-profiler runs cellsim's GigE Vision profiler.

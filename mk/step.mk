@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/step.mk: build/surf-convert, the test driver tests/cli/step.sh makes its
 # rational inputs with (IGES <-> STEP by extension through lib/cf_surfio,
 # --rational SEED gives the net pseudo-random weights); the conversions under

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # mk/usb.mk: the USB parts (issue 4): build/sim-umock, the umockdev testbed
 # that plays the FTDI-attached laser probe and the USB trigger box (GLib and
 # libumockdev, so not part of cellsim, whose build links sim/*.c only).

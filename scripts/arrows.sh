@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # scripts/arrows.sh [ROOT]: the include arrows between folders, and none
 # running up. Layers (README, Layout): host/cmd and host/api on top, then
 # host/cell, host/jobs, host/report, lib, firmware; hal on firmware; sim

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # scripts/demo.sh CELLFIT: the cell's main job end to end on the simulated
 # rig. cellsim (beside CELLFIT) plays the stage on Modbus RTU and the laser
 # probe on its ASCII protocol, each over a socat pty pair (the wires a real

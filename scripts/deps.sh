@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # scripts/deps.sh: install the Debian packages cellfit needs that this machine
 # lacks. Usage: scripts/deps.sh [build|test|demo|bench|arch|all]. Says what
 # it installs; does nothing when everything is present.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 # scripts/font8x13.py: the source of cf_png.c's 8x13 bitmap font, drawn here
 # as pictures ('#' a dot), printed as the C table (13 rows a glyph, bit 7
 # the leftmost of 7 columns). Rows: 0 blank, 1-9 capitals and digits

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # scripts/lint.sh: clang-format (the project's .clang-format) and cppcheck on
 # every C file we own, and no include arrow running up (scripts/arrows.sh).
 # Fails on any difference or finding.
@@ -25,5 +26,9 @@ cppcheck --quiet --error-exitcode=1 --enable=warning,performance,portability --i
     -D__GNUC__ boards/common boards/mps2-an500 boards/nucleo-h743zi || bad=1
 # Include arrows between folders run one way (README, Layout).
 sh scripts/arrows.sh || bad=1
+# Every source file carries its licence (LICENSE, MIT) in its first two lines.
+for f in $(git ls-files '*.c' '*.h' '*.cpp' '*.sh' '*.py' '*.mk' Makefile .ci/run 2>/dev/null); do
+    head -n 2 "$f" | grep -q 'SPDX-License-Identifier: MIT' || { echo "lint: $f has no SPDX line"; bad=1; }
+done
 [ $bad -eq 0 ] && echo "lint: clang-format and cppcheck clean ($(echo $files | wc -w) files)"
 exit $bad

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # scripts/man.sh: the man pages, generated from the programs' own option
 # tables (`CMD --help-man`, the same tables `--help` prints), so they never
 # drift from the code. Usage: scripts/man.sh CELLFIT CELLSIM OUTDIR

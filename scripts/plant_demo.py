@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # scripts/plant_demo.py: the PLC side and the figures of `make plant-demo`.
 #   drive PORT SECONDS PART0: FIT, EXPORT, ACK_RESULTS in a loop through the
 #       registers (pymodbus) for SECONDS, parts PART0, PART0 + 1, ...

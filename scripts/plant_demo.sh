@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # scripts/plant_demo.sh CELLFIT [SECONDS]: `make plant-demo`: a plant on one
 # machine: one PostgreSQL server and one Mosquitto broker of its own on
 # 127.0.0.1 free ports, 4 cells (`cellfit serve --sim`, each with a PLC

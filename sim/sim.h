@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim.h: cellsim, the simulated rig: a motion stage (Modbus holding
  * registers), a displacement probe (Modbus input registers and an ASCII
  * protocol) over a known part, faults on demand, and the servers that put

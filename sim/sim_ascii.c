@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_ascii.c: the ASCII protocol of the simulated laser probe, as common
  * laser displacement sensors speak it: "M0" -> "M0,+45.123" (mm),
  * out of range "M0,FFFFFFF", "RG" -> "RG,+30.000,+60.000" (measuring

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_fault.c: faults on demand: KIND[@WIRE]:WHEN[:MS] specs, each with
  * its own event counter, firing at the K-th event, every K-th, or with a
  * seeded probability. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_gev.c: the simulated profiler (sim_gev.h): a map of the distances
  * the profiler sees over one pass of the part, computed once, and the fake
  * camera's fill-pattern callback that turns rows of it into Mono16 range

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_gev.h: the simulated laser line profiler: Aravis's fake GigE Vision
  * camera on 127.0.0.1, its frames filled with range profiles of the part
  * (docs/rig-profiler.md). The profiler rides on the stage along x at

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_main.c: cellsim, the simulated rig on the real wire protocols:
  * options, the part, the stage and probe models, the servers, the control
  * file, and the "ready" lines tests wait for. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_mb.c: the simulator's Modbus server side: request PDUs (functions
  * 03, 04, 06, 16) answered from the stage and probe models, exceptions
  * for the rest (the probe unit's holding registers and FIFO are its

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_net.c: cellsim's select() loop: Modbus TCP clients, Modbus RTU and
  * ASCII lines on ttys; each request is counted for the faults, answered by
  * sim_mb.c or sim_ascii.c, framed, damaged as the faults say, and sent at

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_net.h: cellsim's servers: Modbus TCP on 127.0.0.1 (several clients,
  * one select() loop), Modbus RTU and ASCII on tty paths (socat pty ends),
  * replies held back for slow-reply faults, lines closed and reopened for

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_part.c: the part under the simulated probe: a nominal surface (the
  * built-in panel or an IGES entity 128) plus cf_part's dent and warp, and
  * its height above a point (x, y): the nominal's (u, v) with S_xy(u, v) =

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_probe.c: the simulated displacement probe. Kinematic model
  * (docs/rig-devices.md): the beam starts at (sx + ox, sy + oy, z0), stage
  * position (sx, sy) and calibration offset (ox, oy), and points along -z;

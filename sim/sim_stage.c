@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_stage.c: the simulated motion stage behind its holding registers
  * (hal_regmap.h): both axes move together at a set speed, so a move takes
  * max(|dx|, |dy|) / speed plus a settle time, busy then in position;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_stream.c: the simulated probe's streaming mode (hal_regmap.h's
  * PRB_H_* and PRB_FIFO_*): a trigger input simulated inside cellsim fires
  * every period from arming; at each trigger the probe measures the part at

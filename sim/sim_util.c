@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_util.c: the simulator's clock and seeded random numbers (xorshift64,
  * Box-Muller), one stream per purpose so that faults do not shift noise. */
 #include "sim.h"

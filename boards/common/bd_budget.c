@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_budget.c: host helper printing a board's fitter budget from the byte
  * formula, compiled against that board's board_config.h (mk/cross.mk runs
  * it after every cross link; `make boards-budget` for all boards). A host

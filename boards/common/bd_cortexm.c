@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_cortexm.c: Cortex-M startup without CMSIS: vector table, reset handler
  * (FPU on, .data copied, .bss zeroed, stack painted) and a default handler.
  * The linker script (boards/<b>/link.ld.in) provides the symbols below. */

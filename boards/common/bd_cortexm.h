@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_cortexm.h: what the Cortex-M startup code (bd_cortexm.c) offers the
  * board's main: stack measurement, halting, and the fault hook. */
 #ifndef BD_CORTEXM_H

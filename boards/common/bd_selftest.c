@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_selftest.c: the built-in fits. Points are sampled from a "true" bicubic
  * surface on the same knots as the base, so with alpha = beta = 0 the least-
  * squares fit has the true net as its unique answer: a property to check,

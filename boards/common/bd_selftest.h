@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_selftest.h: the built-in job every firmware image runs, so that the
  * image is a complete program and its numbers can be checked: fits of data
  * sampled from a known surface in the fitted spline space. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_semihost.c: semihosting calls (ARM IHI 0070 / "Semihosting for AArch32
  * and AArch64"): operation in r0, argument in r1, BKPT 0xAB on M profile. */
 #include "bd_semihost.h"

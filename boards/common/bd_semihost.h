@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_semihost.h: ARM semihosting, the debugger's (or QEMU's) console and
  * exit. Only for boards run under a debugger or emulator: without one, the
  * BKPT instruction faults. */

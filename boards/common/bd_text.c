@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_text.c: appending strings, integers and doubles to a fixed buffer. */
 #include "bd_text.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bd_text.h: tiny text formatting for board reports. No printf: newlib's
  * printf family pulls in malloc and tens of KiB of flash. */
 #ifndef BD_TEXT_H

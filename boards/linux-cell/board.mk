@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # boards/linux-cell/board.mk: native build for the cell controller.
 BOARD_CC      ?= $(CC)
 # Baseline x86-64 (any cell controller's CPU); the hot kernels get an

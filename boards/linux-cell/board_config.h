@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* boards/linux-cell/board_config.h: the cell controller (x86-64 Linux PC).
  * Budgets for firmware/nf_config.h; see docs/memory.md for the byte formula. */
 #ifndef BOARD_CONFIG_H

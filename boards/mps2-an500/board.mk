@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # boards/mps2-an500/board.mk: ARM MPS2 AN500 (Cortex-M7, FPv5 double
 # precision) as QEMU emulates it; cross-built like nucleo-h743zi, plus
 # semihosting output, and run by `make boards-test`.

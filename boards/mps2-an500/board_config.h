@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* boards/mps2-an500/board_config.h: ARM MPS2 with the AN500 FPGA image
  * (Cortex-M7, double-precision FPU) as QEMU emulates it: the board the
  * Cortex-M7 port is tested on. Only #define lines (link.ld.in includes it). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* boards/mps2-an500/main.c: the QEMU test image. Runs the built-in fits,
  * prints the report through semihosting and ends the emulator with the
  * verdict as its exit status (mk/qemu-test.sh checks both). */

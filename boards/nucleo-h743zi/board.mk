@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # boards/nucleo-h743zi/board.mk: STM32H743ZI, Cortex-M7 with the double-
 # precision FPv5 unit; cross-built with arm-none-eabi-gcc and newlib-nano.
 # mk/cross.mk links build/nucleo-h743zi/firmware.elf from these.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* boards/nucleo-h743zi/board_config.h: NUCLEO-H743ZI (STM32H743ZI, Cortex-M7
  * with double-precision FPU, 2 MiB flash, 1 MiB SRAM in several regions).
  * Only #define lines: the linker script is preprocessed against this file. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* boards/nucleo-h743zi/main.c: the NUCLEO-H743ZI image. Runs the built-in
  * fits at reset and leaves the report in RAM for a debugger to read
  * (`x/s bd_report`, `p bd_result`): with no debugger attached at run time

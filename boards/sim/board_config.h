@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* boards/sim/board_config.h: the board the tests run on. Deliberately small
  * so that budget refusals are reachable with small jobs. */
 #ifndef BOARD_CONFIG_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cellfit_api.c: libcellfit's public API (include/cellfit.h) over the fit
  * job's pass of Eq. 7 (cf_fitpass: the firmware fitter in stripe storage,
  * in a block it is given), the projection start grid (cf_seedgrid) and the

@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_forward.c: the forwarder (cf_forward.h): one thread, its own SQLite
  * connection, one libpq connection and one libmosquitto client driven from
  * that thread (mosquitto_loop: no library thread, no locks around it). */
 #define _DEFAULT_SOURCE /* gethostname, clock_gettime beside C11 */
-#if !CF_NO_PLANT /* built only with SQLite, libpq and libmosquitto (mk/plant.mk) */
+#if !CF_NO_PLANT        /* built only with SQLite, libpq and libmosquitto (mk/plant.mk) */
 #include "cf_forward.h"
 #include "cf_log.h"
 #include "cf_resdb.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_forward.h: the forwarder: a thread beside the cell's job loop, with its
  * own connection to results.db, that drains the outbox (cf_resdb.h) to the
  * plant: each job row into PostgreSQL's `jobs` table (created if missing;

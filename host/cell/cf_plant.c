@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plant.c: serve's results and plant settings, start and stop
  * (cf_plant.h). */
 #include "cf_plant.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plant.h: serve's settings for results and the plant, and their start
  * and stop: the cell's results.db (cf_resdb.h), the recording runner table
  * (cf_record.h) and the forwarder (cf_forward.h). Keys (config file, or

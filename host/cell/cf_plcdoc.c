@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plcdoc.c: Markdown rows of the register map and the state table. */
 #include "cf_plcdoc.h"
 #include "plc_fsm.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plcdoc.h: the register map and the state table as Markdown rows, from
  * the firmware's tables (plc_map.h, plc_fsm.h): `cellfit serve --print-map`
  * prints them, docs/plc-register-map.md holds them, tests/test_plc.c checks

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plcrun.c: the job runner of `cellfit serve` (cf_plcrun.h): PLC
  * parameters to cf_job / cf_scanjob options, their outcome to PLC codes. */
 #include "cf_plcrun.h"

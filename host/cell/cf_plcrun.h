@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plcrun.h: the job runner `cellfit serve` uses (cf_plcsrv.h's table):
  *   home     = reference the stage (a latched drive fault is reset first);
  *   scan     = the raster over SCAN_X0..SCAN_Y1 at SCAN_STEP measured into

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plcsrv.c: Modbus TCP server of the cell (cf_plcsrv.h): the select()
  * loop over clients, each client's frame collected (plc_mbap_need) and
  * answered (plc_mbap_pdu) under the mutex, the connection slots (eviction,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_plcsrv.h: the cell's Modbus TCP server. Several clients at once (a
  * PLC and HMIs) are served by one thread with select() over non-blocking
  * sockets; each client's bytes are framed by the MBAP header here (no call

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_record.c: the recording runner table (cf_record.h). */
 #include "cf_record.h"
 #include "cf_log.h"

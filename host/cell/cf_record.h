@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_record.h: every job of `cellfit serve` (HOME aside) recorded in the
  * cell's results.db (cf_resdb.h), by a runner table (cf_plcsrv.h) wrapped
  * around the job runner's (cf_plcrun.h): a job's UUID and start time when

@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_resdb.c: the cell's results database (cf_resdb.h) on SQLite: schema
  * and migrations, the synced record of a job with its outbox entries, the
  * outbox's bound, and the queries behind `cellfit results`. */
 #define _DEFAULT_SOURCE /* gmtime_r and clock_gettime beside C11 */
-#if !CF_NO_PLANT /* built only with SQLite, libpq and libmosquitto (mk/plant.mk) */
+#if !CF_NO_PLANT        /* built only with SQLite, libpq and libmosquitto (mk/plant.mk) */
 #include "cf_resdb.h"
 #include <sqlite3.h>
 #include <stdio.h>

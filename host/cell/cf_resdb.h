@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_resdb.h: the cell's results database (SQLite, results/results.db):
  * one row per job in `jobs`, and the durable `outbox` of deliveries to the
  * plant (PostgreSQL, MQTT) that cf_forward.h drains. A row and its outbox

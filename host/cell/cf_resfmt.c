@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_resfmt.c: a results row as JSON or CSV (cf_resfmt.h). The figures are
  * printed with 17 significant digits, so a consumer reads back the very
  * value the PLC read (a float widened to a double). */

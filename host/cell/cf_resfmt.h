@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_resfmt.h: a results row (cf_resdb.h) as one JSON object on one line
  * (the MQTT payload, `cellfit results --json`) or as CSV (`--csv`). */
 #ifndef CF_RESFMT_H

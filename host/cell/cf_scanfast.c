@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_scanfast.c: the on-the-fly and profiler scan methods (cf_scanfast.h):
  * rows from the stream into the journal and the caller, losses counted. */
 #include "cf_scanfast.h"

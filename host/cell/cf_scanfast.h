@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_scanfast.h: scanning at a sensor's pace (issue 19), the two fast
  * methods beside the stop-and-go raster of firmware/scan.c:
  *   on the fly  each raster row run at constant speed, the probe streaming

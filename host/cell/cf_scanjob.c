@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_scanjob.c: the scan job on the rig and the fit of its journal
  * (cf_scanjob.h). */
 #include "cf_scanjob.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_scanjob.h: the cell's scan job for `cellfit serve`: the raster over
  * a region measured on the rig (firmware/scan.h) into a new journal file
  * (cf_store_file.h), with progress and a stop check; and the fit of such a

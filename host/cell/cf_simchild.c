@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_simchild.c: cellsim as serve's child (cf_simchild.h). */
 #define _DEFAULT_SOURCE /* prctl's PR_SET_PDEATHSIG, kill */
 #include "cf_simchild.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_simchild.h: cellsim as a child process of `cellfit serve --sim`: found
  * beside the running cellfit binary, started on a free TCP port of
  * 127.0.0.1 (plus the caller's extra arguments), its port read from its

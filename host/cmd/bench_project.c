@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bench_project.c: `cellfit bench project --count M [--cp N] [--degree P]
  * [--quad-tol REL] [--offset MM] [--order random|raster] [--json]`: projection of
  * points generated near a known surface (Piegl & Tiller 2001, Section 3:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bench_project.h: `cellfit bench project`, the projection benchmark. */
 #ifndef BENCH_PROJECT_H
 #define BENCH_PROJECT_H

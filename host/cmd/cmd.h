@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd.h: the cellfit subcommands, one file each (host/cmd/cmd_*.c),
  * dispatched by main.c. */
 #ifndef CMD_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_base.c: `cellfit base`: a base surface for parameterising scattered
  * x y z points (Piegl & Tiller 2001, Section 2), written as IGES 128 for
  * `cellfit fit --base`: a plane patch over the points' plane (no curves),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_bench.c: `cellfit bench accumulate|solve|fit|export` (project:
  * bench_project.c): single measurements
  * on generated, seeded data streamed without files (issue 6). Prints

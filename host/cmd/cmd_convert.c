@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_convert.c: `cellfit convert IN OUT`: a surface from one neutral
  * format to another, chosen by the file names' extensions (.igs/.iges IGES
  * entity 128, .stp/.step STEP AP242), the same surface to the last bit. */

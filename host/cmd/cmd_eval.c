@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_eval.c: `cellfit eval SURF UVFILE`: x y z (%.17g) for each u v line. */
 #include "cf_cli.h"
 #include "cf_iges.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_fit.c: `cellfit fit`: fit the control net of a base surface's space
  * to a points file through the fit job (cf_fitjob: Eq. 7, reprojection,
  * robust passes, the tolerance loop of Section 2.2), write the best fit

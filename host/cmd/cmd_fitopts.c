@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_fitopts.c: the fit job's shared options (cmd_fitopts.h): one table
  * fragment, one check and one set of JSON fields for every command that
  * fits, so --tol and its companions mean the same everywhere. */

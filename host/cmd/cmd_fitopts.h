@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_fitopts.h: the fit job's options that `cellfit fit`, `journal fit`
  * and `scan --fit` share, with one meaning each: --reparam, --tol,
  * --within, --max-cp, --max-rounds, --refine, --min-gain, --noise,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_gen.c: `cellfit gen`: write the synthetic part's nominal surface and
  * points measured on the real part (raster in the nominal's parameters,
  * Gaussian noise along z, optional gross outliers; optional narrow bump and

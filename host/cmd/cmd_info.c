@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_info.c: `cellfit info SURF.igs`: what a surface is and what a fit of
  * its space costs on this board. */
 #include "cf_cli.h"

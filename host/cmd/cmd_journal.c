@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_journal.c: `cellfit journal export|info|recover|fit`: the journal of
  * measured points read back one record at a time: its points as x y z, a
  * summary, recovery of a torn tail, and the streaming fit of its points onto

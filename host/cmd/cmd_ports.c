@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_ports.c: `cellfit ports`: the serial ports this machine has (with
  * their USB ids), and two checks of devices behind them: the laser probe
  * on a serial port (M0 readings, libserialport) and the USB trigger box

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_project.c: `cellfit project SURF.igs XYZFILE [--entity N]`: for each
  * measured point x y z, the parameters of its closest point on the surface
  * and the signed distance to it (Piegl & Tiller 2001, Section 3; NURBS Book

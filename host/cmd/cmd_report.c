@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_report.c: `cellfit report SURF POINTS --tol T [--png MAP.png]
  * [--csv FILE] [--ply FILE] [--dfq FILE] [--json]`: signed normal distances
  * of measured points to a surface (projection, positive along Su x Sv),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_results.c: `cellfit results list|show|export|outbox`: the cell's
  * results database (results/results.db, cf_resdb.h) queried: the jobs,
  * one job by its UUID, every column for a spreadsheet or the MES, the

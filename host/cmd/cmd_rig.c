@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_rig.c: `cellfit rig`: talk to the stage and the probe by hand or from
  * tests: status, home, move X Y, probe readings, fault reset, stop, on the
  * devices the --stage and --probe URIs name (hal.h). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_scan.c: `cellfit scan`: measure a part on the rig: open the stage and
  * the probe (hal/), plan a serpentine raster over the nominal's extent in
  * x y (or --region), run the scan job (firmware/scan.c) journalling every

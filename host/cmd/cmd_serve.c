@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_serve.c: `cellfit serve`: the cell headless, driven by a PLC over
  * Modbus TCP (docs/plc-register-map.md). Options (one table, cf_opt)
  * override the config file (key = value, cf_conf.h; keys are the long

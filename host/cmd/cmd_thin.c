@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cmd_thin.c: `cellfit thin SURF.igs POINTS --quad-tol T [--radius R] [--entity N]
  * --out FILE [--json]`: thinning (Piegl & Tiller 2001, Section 3.3): the
  * surface is decomposed into quadrilaterals to the relative tolerance T

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* main.c: the cellfit command-line tool: one table of subcommands, each
  * with its own option table (cf_opt.h) behind `cellfit CMD --help`. */
 #include "cf_cli.h"

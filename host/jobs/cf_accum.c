@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_accum.c: a chunk of points split between the job and its shard, the
  * shard's half on a second thread (firmware/ has no threads). */
 #include "cf_accum.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_accum.h: accumulation of a chunk of points on two cores. The job f
  * takes the first half, its shard sh (nf_fit_shard_init) the second, each
  * on its own thread and its own stripes; nf_fit_shard_merge sums them at the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fitjob.c: the one fit job (cf_fitjob.h): passes over a point source
  * into the stripes (Eq. 7), reprojection, robust reweighting, the check of
  * each round and the tolerance loop of Section 2.2; the best round kept. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fitjob.h: the fit job: every fit of measured points onto a nominal
  * runs here, whoever asks (`cellfit fit`, `journal fit`, `scan --fit`, the
  * cell's FIT and SCAN_FIT). Brujic et al. 2010: Eq. 7 accumulated one

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fitpass.c: one pass of Eq. 7 over u v x y z [w] rows in a caller's
  * block (cf_fitpass.h): the fitter (and a second core's shard) set up in
  * the block, rows accumulated, the sums merged and solved, and the

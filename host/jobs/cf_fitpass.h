@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fitpass.h: one pass of Eq. 7 (Brujic et al. 2010) over rows of
  * u v x y z [w] in a memory block the caller gives: begin (the fitter on a
  * surface's space, its net as P0, in the block), rows (any number of

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fitsrc.c: point sources of the fit job: points file, journal (cf_fitsrc.h). */
 #include "cf_fitsrc.h"
 #include "cf_err.h"

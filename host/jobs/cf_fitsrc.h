@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_fitsrc.h: where the fit job's points come from, behind one small
  * interface it can rewind and read in batches: a points file (x y z, or
  * u v x y z with the parameters given) or a journal of measured points

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_holdout.c: every K-th scan row held out of a point source
  * (cf_holdout.h): a filter over another source's batches, in place. */
 #include "cf_holdout.h"

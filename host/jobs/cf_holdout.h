@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_holdout.h: every K-th scan row of a point source held out of a fit
  * (`cellfit fit --holdout K`): one source yields the rows kept for the fit,
  * a second over the same points yields the rows held out, measured against

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_job.c: the cell's fit job on files (through cf_fitjob) and the export
  * of its result (cf_job.h). */
 #define _GNU_SOURCE /* renameat2: a rename that never replaces */

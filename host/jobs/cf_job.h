@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_job.h: the cell's fit job on files, for `cellfit serve`: the nominal
  * (refined to the net asked) and a points file (x y z, projected, or
  * u v x y z) through the fit job (cf_fitjob: plain, robust, reprojected or

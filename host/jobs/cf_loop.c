@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_loop.c: next net of the fitting loop (uniform or residual-driven knot
  * insertion, within the limits) and the round records. */
 #include "cf_loop.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_loop.h: the refinement step and the round records of `cellfit fit
  * --tol` (Brujic et al. 2010, Section 2.2: fit, reparameterise, insert
  * knots until the tolerance holds; docs/loop.md). The next net is the fit

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_seedgrid.c: start points for projection: the quadrilateral
  * decomposition (nf_quad), else the nearest seed sample by a 3-D cell grid. */
 #include "cf_seedgrid.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_seedgrid.h: start points for projection in O(1) per point. First
  * choice: the quadrilateral decomposition of nf_quad (Piegl & Tiller 2001,
  * Section 3: the nearest quadrilateral by a 2-D grid in the maximum-area

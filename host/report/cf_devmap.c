@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_devmap.c: deviation map raster and its report image. Points are binned
  * into cells (sum, count, extreme); at render time the gaps the sampling
  * leaves between measured cells (scan lines, probe points) are closed, not

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_devmap.h: the colour deviation map of an inspection report: a top view
  * of the measured points on a plane (by default the least-squares plane of
  * the points, i.e. the view that shows the part with the largest area), each

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_dfq.c: Q-DAS ASCII transfer format (cf_dfq.h). */
 #include "cf_dfq.h"
 #include "cf_atomic.h"

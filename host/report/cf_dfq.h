@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_dfq.h: a job's results as a Q-DAS ASCII transfer file (AQDEF, .dfq),
  * the format SPC systems import: the part (K1001 number, K1002 name), per
  * characteristic its number, name, nominal, lower and upper limits and unit

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_ptsout.c: per-point deviation files (cf_ptsout.h). */
 #include "cf_ptsout.h"
 #include "cf_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_ptsout.h: per-point deviations written as the points stream by, for a
  * spreadsheet (CSV with a header line) and for CloudCompare or MeshLab
  * (binary little-endian PLY, a colour per point on the map's scale). Memory

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_stats.c: streaming deviation statistics. Sums are compensated
  * (Neumaier) so mean and RMS stay exact to a few ulps over 10^9 points; the
  * percentile bins are log-spaced because the scale of the deviations is not

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_stats.h: streaming statistics of signed deviations (normal distances of
  * measured points to a surface, mm) in a fixed-size structure: the memory is
  * the same for ten points or a billion.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_umock.c: sim-umock, the simulated USB devices for tests: builds a
  * umockdev testbed with an FTDI serial adapter (the laser probe behind it)
  * and the USB trigger box, runs the program under test as its child inside

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_umock.h: the umockdev-based simulated USB devices (build/sim-umock):
  * an FTDI serial adapter with the laser probe behind it, and the USB
  * trigger/encoder box, each with its faults on demand. Shared by

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_umock_serial.c: the FTDI 0403:6001 adapter at /dev/ttyUSB0 with the
  * laser probe behind it. The testbed's pty master plays the probe's ASCII
  * protocol (M0 -> M0,+01.234 / ER,M0,nn / M0,FFFFFFF; RG -> RG,-50.000,+50.000,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* sim_umock_usb.c: the USB trigger/encoder box (1209:cf01, docs/rig-usb.md)
  * as a live usbdevfs ioctl handler: URBs submitted by an unmodified libusb
  * program are queued and completed on reap (control IN/OUT from the vendor

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/badinput.sh CELLFIT: bad input is refused, never crashes, hangs
 # or gives a wrong surface (issue 7): exit 2, exactly one line on stderr
 # naming the file, the line or record where there is one, and what is

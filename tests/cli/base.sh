@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/base.sh CELLFIT: `cellfit base` end to end (issue 3): the
 # synthetic part's x y z points and its boundary curves (IGES 126), every
 # kind of base surface built from them, a fit through each, and the fit

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/bench.sh CELLFIT: `cellfit bench accumulate` on one and two
 # cores: exit codes, the one-line errors, the JSON fields, and that the
 # two-core accumulation, solved, gives the one-core residual (the shard's

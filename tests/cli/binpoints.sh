@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/binpoints.sh CELLFIT: raw little-endian float64 point files
 # (.uvxyz.bin, .xyz.bin; docs/formats.md) through `cellfit fit`: the same
 # points as the ASCII file (converted here by Python's float(), which

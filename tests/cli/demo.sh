@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/demo.sh CELLFIT: scripts/demo.sh (what `make demo` runs) on a
 # small stop-and-go scan (DEMO_METHOD=stop): the files and report fields it promises; the fit against the
 # simulator's true part (normal distances of cellfit gen's true check points

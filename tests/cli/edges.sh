@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/edges.sh CELLFIT: `cellfit base` without --curves (issue 3):
 # boundary curves fitted to the points near the edges of their rectangle,
 # a bilinear (and bicubic, tensor) Coons base from them, and a fit through

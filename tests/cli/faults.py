@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/faults.py CELLFIT [POWER_CUTS]: the fault-injection matrix and the
 # power cuts of issue 7 (docs/reliability-faults.md), run by faults.sh.
 #

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/faults.sh CELLFIT: the fault-injection matrix (every cellsim
 # fault, a full disk and an unwritable output x homing, scanning, fitting,
 # exporting: defined ending, the code, a consistent journal holding every

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/formats.sh CELLFIT: the formats a plant uses, read by independent
 # readers: `cellfit report --csv --ply --dfq` (Python's csv and struct,
 # formats_check.py), `cellfit convert` to STEP and back (the surface the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """tests/cli/formats_check.py: independent readers for cellfit report's
 per-point CSV, binary PLY and Q-DAS DFQ (Python's csv and struct, not our
 C code). Usage: formats_check.py REPORT.json CSV PLY DFQ; prints one

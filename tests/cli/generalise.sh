@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/generalise.sh CELLFIT: the tolerance loop on terrain-like height
 # fields (issue 14), with --refine auto (the default) and --holdout: regular
 # grids (tests/cli/terrain.py) with a curved cliff and with a 1 mm ridge,

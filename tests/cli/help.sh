@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/help.sh CELLFIT: the command line from option tables (issue 13):
 # every command and sub-command answers --help (exit 0, "usage:"), every
 # option its --help lists is in its --help-man (roff) section too, an

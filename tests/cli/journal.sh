@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/journal.sh CELLFIT: the journal of measured points end to end:
 # `cellfit journal export/info/recover/fit` on journals written through the
 # real file store, exit codes and one-line errors naming the damaged record,

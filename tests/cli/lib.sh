@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # tests/cli/lib.sh: what every tests/cli/*.sh script shares, sourced after
 # `set -u`: the pass/fail count and its ok/no lines, expect (exit code, with
 # stdout and stderr kept in $T/out and $T/err), json (a field of a one-line

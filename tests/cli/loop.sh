@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/loop.sh CELLFIT: end-to-end checks of the fitting loop of
 # `cellfit fit --tol` (fit, reparameterise, insert knots until the
 # tolerance holds; Brujic et al. 2010, Section 2.2) and of `--robust`:

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/otf.sh CELLFIT: on-the-fly scanning over cellsim's wires (the
 # probe's streaming mode on Modbus TCP, then on its ASCII protocol over a
 # socat pty pair), end to end: build/scan-bench otf-rig sends the stage across each row

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/plant.py STEP ...: the PLC side and the independent checks of
 # tests/cli/plant.sh. Steps:
 #   job PORT PART OUT [HOOK]: FIT (HOOK, a shell command, run while it is

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/plant.sh CELLFIT: results from the cell to the plant with the
 # real engines: a Mosquitto broker and a PostgreSQL server of the test's
 # own on 127.0.0.1 free ports, `cellfit serve --sim` driven by a PLC

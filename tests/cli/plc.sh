@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/plc.sh CELLFIT: `cellfit serve` driven from third-party Modbus
 # TCP clients through its registers only (docs/plc-register-map.md):
 # pymodbus (tests/cli/plc_cycle.py) runs a full fit cycle, invalid commands

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_cycle.py STEP PORT [ARGS]: a third-party Modbus TCP client
 # (pymodbus) driving `cellfit serve` through its registers only, the way a
 # PLC does (docs/plc-register-map.md). Prints "ok ..." / "FAIL ..." lines;

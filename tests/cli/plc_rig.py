@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_rig.py STEP PORT SIMPORT [ARGS]: `cellfit serve` on the
 # simulated rig (cellsim), driven through its registers only by pymodbus
 # (and mbpoll as a second client), the way a PLC does; the simulator's own

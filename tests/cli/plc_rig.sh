@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_rig.sh CELLFIT: `cellfit serve --sim` (cellsim started as
 # its child, beside CELLFIT) driven through its registers only by pymodbus
 # and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig,

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_slots.py STEP PORT [ARGS]: `cellfit serve` under what a shop
 # floor and an attacker do to its connections and its handshake (issue 15),
 # seen from raw sockets and pymodbus. Prints "ok ..." / "FAIL ..." lines;

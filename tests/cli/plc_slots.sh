@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_slots.sh CELLFIT: `cellfit serve` against dead connections
 # and PLC programs as they are written (issue 15, tests/cli/plc_slots.py):
 # every slot held by a silent connection plus a slowloris, yet a fresh

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_soak.py soak PORT SIMPORT SERVE_PID TX MAX_GAP_MS: a soak of
 # `cellfit serve --sim`: TX register transactions (reads of the status and
 # results blocks, heartbeat writes) from four pymodbus clients in their own

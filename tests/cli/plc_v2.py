@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_v2.py STEP PORT [ARGS]: the registers of map version 2 as a
 # job uses them, driven by pymodbus like a PLC (docs/plc-register-map.md):
 # the fit settings, RECIPE, FIT_STATUS, PART_ID and JOB_TIME in report.json,

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/plc_v2.sh CELLFIT: the registers of map version 2 as `cellfit
 # serve`'s jobs use them (tests/cli/plc_v2.py, pymodbus as the PLC): fit
 # settings and FIT_STATUS, RECIPE (nominal.N, 114), FIT_MAX_CP (110),

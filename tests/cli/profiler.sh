@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/profiler.sh CELLFIT: the laser line profiler over GigE Vision,
 # end to end on loopback: cellsim --gev hosts Aravis's fake camera on
 # 127.0.0.1 (docs/rig-profiler.md) and build/gev-check (tests/gev_check.c)

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/quad.sh CELLFIT: end-to-end checks of the quadrilateral-based
 # commands (Piegl & Tiller 2001, Section 3): `cellfit thin` (exit codes,
 # one-line errors, JSON, kept points are input points, each once, a finer

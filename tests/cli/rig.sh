@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/rig.sh CELLFIT: the hal transports and drivers against cellsim
 # (beside CELLFIT) on the real wire protocols: Modbus TCP on 127.0.0.1,
 # Modbus RTU and the probe's ASCII protocol over socat pty pairs; each

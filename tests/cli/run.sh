@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/run.sh CELLFIT: end-to-end checks of the cellfit command line:
 # exit codes, one-line errors, JSON fields, agreement with the synthetic
 # part's truth, memory flat in the number of points, and (when OpenCASCADE

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/scan.sh CELLFIT: `cellfit scan` end to end on the real simulator
 # (cellsim beside CELLFIT, Modbus TCP on 127.0.0.1): the raster and the
 # kinematic model against the simulator's offset and the nominal, the

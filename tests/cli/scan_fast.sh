@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/scan_fast.sh CELLFIT: `cellfit scan` at a sensor's pace (issue
 # 19) on cellsim, end to end. On the fly (--method otf; stage and probe on
 # Modbus TCP, the probe streaming one reading per trigger): the fitted

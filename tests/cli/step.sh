@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/step.sh CELLFIT: STEP AP242 against OpenCASCADE. Synthetic parts
 # from `cellfit gen` (IGES, degrees 1, 2, 3 and 5), made rational with
 # pseudo-random weights, converted to STEP by build/surf-convert (cf_surfio,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """tests/cli/terrain.py NAME NX NY OUT [NOISE]: a terrain-like height field
 on a regular grid of NX columns by NY rows over [0, 100]^2 mm, written row
 by row (lines of equal y) as x y z, with Gaussian noise of NOISE mm in z

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/cli/usb.sh CELLFIT: the serial (libserialport) and usb (libusb)
 # backends end to end, on simulated devices: sim-umock (built beside
 # cellfit by make all) runs `cellfit ports` inside a umockdev testbed with

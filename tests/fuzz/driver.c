@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* driver.c: a main for the fuzz targets without libFuzzer (gcc, valgrind,
  * make test): feeds each file named on the command line to
  * LLVMFuzzerTestOneInput once, so the corpus and the inputs that once found

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz.h: what the libFuzzer targets share: the entry point's prototype, a
  * temporary file per process for the parsers that read a path, a checked
  * one-line error message, and a fake hal/ transport that plays a device

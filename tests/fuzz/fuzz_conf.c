@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_conf.c: libFuzzer target for the cell's configuration file
  * (cf_conf.c) and the settings `cellfit serve` takes from it
  * (cmd_serve.c, run with --print-map so it never starts serving). Keys

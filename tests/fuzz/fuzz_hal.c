@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_hal.c: the fake transport and virtual clock of fuzz_hal.h. */
 #include "fuzz_hal.h"
 #include "fuzz.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_hal.h: a fake hal/ transport for the device-driver fuzz targets: the
  * device's side of the wire is the fuzz input. Byte streams read it a byte
  * at a time (0xFF: the device stays silent for a timeout); register reads

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_iges.c: libFuzzer target for the IGES reader (cf_iges.c): the input
  * is a file, read as a surface (entity 128: the first, and DE 1) and as a
  * curve (entity 126: the first two). A refusal must be one line naming the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_jnl.c: libFuzzer target for journal recovery and reading (jnl.c)
  * over a RAM store holding the input. The first byte may ask for a valid
  * header (bit 0), valid CRCs on every record (bit 1) and sequence numbers

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_mbap.c: libFuzzer target for the PLC server's own framing and
  * request handling (firmware/plc_mbap.c, as host/cf_plcsrv.c drives it):
  * the input is a TCP byte stream cut into reads of any size, with clock

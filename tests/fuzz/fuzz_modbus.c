@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_modbus.c: libFuzzer target for the Modbus device drivers: register
  * replies decoded into the stage's limits, status and positions
  * (hal_stage.c) and the Modbus probe's range and readings

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_plc.c: libFuzzer target for the PLC register-write handler: the
  * register map's write validation and the job state machine (plc_map.c,
  * plc_fsm.c), driven by a sequence of Modbus writes and reads, clock

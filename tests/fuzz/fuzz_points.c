@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_points.c: libFuzzer target for the point-file reader (cf_points.c,
  * ASCII and PLY): the input is a file, opened with 0 (the file decides), 3
  * or 5 columns (by its length mod 3: an open costs 1 MiB of fresh pages)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_probe.c: libFuzzer target for the laser probe's ASCII protocol
  * (hal_probe.c): the input is what the probe sends back, to the range
  * query at init and then to reading after reading, with silences (0xFF),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_step.c: libFuzzer target for the STEP reader (cf_step_read.c): the
  * input is a file, read as a surface (the first B-spline surface, and
  * instance #20). A refusal must be one line naming the file; an acceptance

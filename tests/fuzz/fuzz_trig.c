@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_trig.c: libFuzzer target for the USB trigger box's packets
  * (hal_trig.c): hal_trig_decode on the raw input, then the identity reply
  * and bulk reads with sequence tracking over the fake USB transport of

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_uri.c: libFuzzer target for device URIs (hal_uri.c): the input as
  * a string. An accepted URI has its fields in range; a refusal is one line
  * naming the URI. */

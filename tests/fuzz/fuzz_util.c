@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fuzz_util.c: the shared helpers of the fuzz targets (fuzz.h). */
 #include "fuzz.h"
 #include <stdio.h>

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/occt/build.sh OUTDIR: build OUTDIR/occt_eval (IGES) and
 # OUTDIR/occt_step (STEP) against Debian's OpenCASCADE packages. Exits 3 with "occt: not available" when the headers
 # or libraries are missing, so callers can skip the check.

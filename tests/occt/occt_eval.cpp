@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 // occt_eval.cpp: evaluate an IGES surface with OpenCASCADE, as an independent
 // check of cf_iges and nf_surf_eval. Reads the file with IGESControl_Reader,
 // takes the first face's underlying surface (with the face's location), then

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 // occt_step.cpp: read a STEP file with OpenCASCADE's STEPControl_Reader, as
 // an independent check of cf_step: the file must transfer to exactly one
 // face (the count, the face's edges and BRepCheck's verdict go to stderr); for each "u v" line on

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # tests/pkg/install.sh BUILD: what a plant's IT does with cellfit: `make
 # install DESTDIR=STAGE PREFIX=/usr` lays out the tree; the examples build
 # against it with pkg-config and run (an exact fit from an array, a journal

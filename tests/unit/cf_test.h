@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cf_test.h: cmocka includes and the numeric assertions the tests share. */
 #ifndef CF_TEST_H
 #define CF_TEST_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* gev_check.c: build/gev-check, the client side of tests/cli/profiler.sh:
  * opens the simulated profiler through hal_gev, receives frames, and checks
  * them against the part itself (sim_part_z from a fresh seed search, not

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ref_dense.c: dense, naive reference computations for the tests. */
 #include "ref_dense.h"
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ref_dense.h: independent reference results for the tests. The B-spline
  * basis here is the recursive Cox-de Boor definition over all functions
  * (not the span algorithms of firmware/), the normal equations of Eq. 7 are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ref_kloop.c: the fit -> check -> insert loop on firmware calls alone. */
 #include "ref_kloop.h"
 #include "nf_budget.h"

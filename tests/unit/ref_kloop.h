@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ref_kloop.h: the fitting loop at the firmware level, for the knot tests
  * and the loop benchmark: fit (Eq. 7, nf_fit) -> check (distance of every
  * point at its parameters, nf_knotsel accumulation) -> insert (the chooser

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ref_memstore.c: the fault-injecting RAM store of the journal tests. */
 #include "ref_memstore.h"
 #include <string.h>

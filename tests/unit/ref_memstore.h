@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ref_memstore.h: a rig_store_t in RAM for the journal tests, with the
  * faults SQLite's crash-test VFS models: the disk fills after `limit` bytes
  * (a partial write is kept, then RIG_EFULL), and a power cut keeps what was

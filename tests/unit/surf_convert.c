@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* surf_convert.c: a test driver for tests/cli/step.sh until `cellfit
  * convert` exists in the command layer: reads a surface (IGES or STEP, by
  * extension, through cf_surfio) and writes it in the format OUT's extension

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_accum.c: the accumulation paths of nf_accum.c (bicubic vector
  * kernels, factored runs of one v, raster row mode, short-run scatter, the
  * batched nf_fit_add_rows) and shards on two threads, each against the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_basis.c: basis functions, spans, Greville points and surface
  * evaluation against hand-computed values and independent definitions. */
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_coons.c: boundary curves, Coons base surfaces and the plane base
  * (Piegl & Tiller 2001, Section 2; nf_curve, nf_coons, nf_base), and IGES
  * entity 126. References are independent: the Cox-de Boor recursion for

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_curvefit.c: the streamed cubic B-spline curve fit (nf_curvefit):
  * exact reproduction of a curve in the same spline space (sampled by an
  * independent Cox-de Boor recursion), a straight line stays straight,

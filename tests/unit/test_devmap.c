@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_devmap.c: the deviation map. The view plane of known tilted planes
  * (a long strip and a square plate, where the in-plane variances are equal),
  * the colour scale's segments, and rendered images of synthetic parts: a

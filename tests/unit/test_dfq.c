@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_dfq.c: the Q-DAS file read back line by line with sscanf (not with
  * the writer's code): K0100 count, part fields, every characteristic's
  * number, name, limits, unit, and its value, date/time and part ident. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_dispatch.c: the two paths of the hot kernels (firmware/nf_isa.h),
  * forced in turn on the same fits: accumulation (raster rows, random order
  * in bins, weighted single points), finish, the three solvers, evaluation

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_fit.c: stripe accumulation and the three solvers against a dense,
  * independently built Eq. 7 (ref_dense.c); exact reproduction; the alpha and
  * beta terms; refusal of undetermined systems and of jobs over budget. */

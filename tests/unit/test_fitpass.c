@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_fitpass.c: one pass of Eq. 7 in a given block (cf_fitpass) against
  * the dense normal equations of ref_dense.c solved by Gaussian elimination:
  * u v x y z rows on one and two cores, weighted rows (an integer weight

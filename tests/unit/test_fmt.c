@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_fmt.c: cf_fmt17 against glibc's snprintf "%.17g", byte for byte:
  * random doubles over every decimal scale of the fast range and past it,
  * exact ties (dyadic values with an 18th digit 5), powers of ten and their

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_foot.c: the true foot (issue 14): projection onto a thin, strongly
  * twisted strip and onto a plate folded back over itself near an edge, 10^4
  * random points within 3 mm of each, against an independent brute force

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_footprint.c: the data footprint (nf_footprint) and the pinned
  * control points (nf_fit_pin, issue 14 honest edges): counts against cells
  * computed independently, the per-control-point beta against a dense solve

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_hal_uri.c: the device URI parser (every scheme, strict refusals with
  * their reasons), the errno to rig_err_t mapping of the Modbus backend, the
  * ASCII probe's reply parser, hal_* on a backend that lacks an operation,

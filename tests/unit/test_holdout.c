@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_holdout.c: every K-th scan row held out of a point source
  * (cf_holdout) against a brute-force split: an in-memory source of rows of
  * equal y (some a single point, one across a batch boundary, y jittering

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_iges.c: IGES entity 128 reading and writing. Fixtures are small files
  * written by hand the way CAD systems write them (D exponents, Hollerith
  * strings holding delimiters, many entities, a 144 over the 128, custom

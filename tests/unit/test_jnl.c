@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_jnl.c: the journal of measured points: CRC-32 against published check
  * values and a bitwise reference, round trips, torn tails at every byte,
  * damage before the tail, power cuts (SQLite's crash-test idea), a full

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_job.c: the serve job on files (cf_job) by exact reproduction: points
  * sampled on a nominal surface are fitted with alpha = 0 and come back as
  * the nominal itself (deviations at rounding level), also after the net is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_knotsel.c: the knot chooser (nf_knotsel) and the loop's rules
  * (nf_loopctl): per-span counts against a brute-force span search; knots
  * where the misfit is, none where the data rows do not support a span,

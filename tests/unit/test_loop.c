@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_loop.c: the bookkeeping of the fitting loop: per-span excess of the
  * points out of tolerance and the knots chosen from it (against a
  * brute-force span search and a sorted ranking), the ridge rule, and the

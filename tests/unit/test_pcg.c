@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_pcg.c: the split PCG operator of nf_pcg.c (bicubic 4-wide kernels and
  * generic sweeps) against a dense forward/backward substitution, the stripe
  * product against the dense one, and the whole PCG solve against a dense

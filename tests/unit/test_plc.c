@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_plc.c: the PLC interface without a network: the register table
  * (no overlaps, every row in docs/plc-register-map.md), 32-bit packing in
  * both word orders against hand-made words, write validation, every command

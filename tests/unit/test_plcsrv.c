@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_plcsrv.c: the PLC server's framing and PDUs (firmware/plc_mbap.c)
  * against frames written out byte by byte here, and the server itself
  * (host/cf_plcsrv.c) on 127.0.0.1, port 0, in a thread of this process,

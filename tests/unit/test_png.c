@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_png.c: the PNG writer, checked by a decoder written here (chunk walk,
  * bitwise CRC-32 without a table, zlib's inflate, the PNG filters undone)
  * and, when python3 is installed, by Python's zlib with its own unfiltering;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_points.c: the streaming point reader. Expected values are typed in,
  * or are doubles the test printed with %.17g itself (C guarantees strtod
  * gives them back), or strtod's own result for the same token. Also prints

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_project.c: point projection (nf_project, nf_seed_*) against results
  * known by construction (S + h n, points on the surface, an exactly linear
  * plane) and against brute-force dense sampling with local refinement, in

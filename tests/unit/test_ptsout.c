@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_ptsout.c: per-point CSV and binary PLY read back by the point
  * reader (cf_points: a separate parser) and byte by byte: every point's
  * coordinates bit for bit, the header's count patched, the colour and the

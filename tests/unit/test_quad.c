@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_quad.c: the quadrilateral decomposition and projection of nf_quad
  * (Piegl & Tiller 2001, Section 3) against independent results: feet by
  * brute force (400 x 400 samples, Newton from the nearest), chord error by

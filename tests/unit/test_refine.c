@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_refine.c: knot insertion (A5.3, A5.5, uniform refinement) leaves the
  * surface unchanged, builds the right knot vectors and nets, refuses what it
  * must before writing, and (independently of nf_surf_eval) a knot inserted p

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_resdb.c: cf_resdb against SQLite read directly (its own connection,
  * its own SQL): a version 1 database (the schema written here as the first
  * recorder wrote it) migrated on open with its rows kept; a newer schema

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_robust.c: robust reweighting that does no harm (issue 14), at the
  * nf_fit level against dense solves of Eq. 7 (ref_dense.c): on Gaussian
  * noise without outliers every weight stays 1 and the robust fit is the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_scan.c: the scan job: the raster plan (serpentine order, region,
  * counts) and the kinematic model against closed form, and the job's fault
  * handling. The rig here is a deterministic in-test implementation of

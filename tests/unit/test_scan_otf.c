@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_scan_otf.c: on-the-fly pairing (scan_otf.h) against the truth of a
  * generated stream: every trigger number has its own position and its own
  * distance, so a reading paired with any other position gives a point that

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_sha256.c: cf_sha256 against the FIPS 180-4 examples (NIST's CSRC
  * example values): "abc", the empty string, the 448-bit message, a million
  * 'a'; fed whole, byte by byte and in odd pieces; a file against its bytes. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_stats.c: the streaming deviation statistics against independent
  * results: moments by a two-pass computation in long double, percentiles by
  * sorting a copy (nearest rank), the tolerance count and histogram by direct

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_step.c: STEP AP242 surfaces (cf_step) and the extension dispatcher
  * (cf_surfio). Writing is checked by reading back bit-exactly (plain and
  * rational, several degrees, repeated interior knots, awkward numbers) and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_surfrow.c: cf_surfrow (rows of one v) against closed forms and
  * against nf_surf_eval (the plain per-point Eq. 1), in raster and random
  * order, on uniform and uneven knots, degrees 3 x 3 and 2 x 3, rational

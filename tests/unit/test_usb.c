@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_usb.c: the pure parts of the USB and serial backends: the trigger
  * box's CRC (against the published CRC-16/CCITT-FALSE check value), packet
  * layout (bytes built by hand from docs/rig-usb.md), decoding faults,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_uuid.c: cf_uuid: the RFC 9562 form (version 4, variant 10), and no
  * repeat among many. */
 #include "cf_err.h"
