@@ -141,6 +141,7 @@ typedef struct cellfit_journal cellfit_journal_t;
 typedef struct cellfit_point {
     double x, y, z; /* mm, the part's frame */
     double t;       /* seconds since the scan started */
+    double utc;     /* wall-clock UTC, seconds since 1970 (0: the board had no clock) */
     long index;     /* record number in the journal */
     int valid;      /* 0: the probe had no reading there (x y z meaningless) */
 } cellfit_point_t;

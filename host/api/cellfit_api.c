@@ -460,6 +460,7 @@ int cellfit_journal_next(cellfit_journal_t *j, cellfit_point_t *pt)
         pt->y = r.xyz[1];
         pt->z = r.xyz[2];
         pt->t = r.t - j->h.t_start;
+        pt->utc = j->h.utc_start > 0 ? j->h.utc_start + pt->t : 0.0;
         pt->index = idx;
         pt->valid = r.code == 0 && isfinite(r.xyz[0] + r.xyz[1] + r.xyz[2]);
         return 1;

@@ -125,6 +125,7 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     h.sync_every = JNL_SYNC_EVERY_DEFAULT;
     h.job_id = (uint64_t)o->job_id;
     h.t_start = cli_now();
+    h.utc_start = cli_utc_now(); /* the cell controller has a wall clock: records date */
     scan_header(&job, &h);
     if (o->method == CF_SCAN_OTF)
         cf_scanfast_header(&job.kin, scan_plan_count(&job.plan), &h);

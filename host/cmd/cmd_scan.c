@@ -583,6 +583,7 @@ int cmd_scan(int argc, char **argv)
     h.sync_every = (uint32_t)o.sync_every;
     h.job_id = (uint64_t)o.job_id;
     h.t_start = cli_now();
+    h.utc_start = cli_utc_now(); /* the cell controller has a wall clock: records date */
     scan_header(&job, &h);
     if (method != CF_SCAN_STOP)
         cf_scanfast_header(method == CF_SCAN_OTF ? &job.kin : &(scan_kin_t){geom.z0, {0, 0, 0}},

@@ -65,6 +65,16 @@ expect 0 "journal info" "$CF" journal info "$T/a.jnl" --json
 [ "$(json "$T/out" records)" = 67 ] && [ "$(json "$T/out" ended)" = 1 ] && [ "$(json "$T/out" end_code)" = 0 ] &&
     [ "$(json "$T/out" z0)" = 50 ] && [ "$(json "$T/out" cx)" = 1.5 ] && ok "journal: 66 points + end record, kinematics in the header" ||
     no "journal info: $(cat "$T/out")"
+# Wall-clock dates (issue 16): the start in UTC, every point's time.
+su=$(json "$T/out" started_utc)
+now=$(date -u +%s)
+st=$(date -u -d "$(echo "$su" | sed 's/T/ /; s/Z$//')" +%s 2>/dev/null || echo 0)
+[ $((now - st)) -ge 0 ] && [ $((now - st)) -le 600 ] && ok "journal: started $su, within minutes of the clock" ||
+    no "journal started_utc '$su' against now $now"
+"$CF" journal export "$T/a.jnl" --times >"$T/a.csv"
+head -1 "$T/a.csv" | grep -qx 'utc,x,y,z' && [ "$(($(wc -l <"$T/a.csv") - 1))" = 66 ] &&
+    awk -F, -v s="$st" 'NR > 1 { if ($1 < s - 1 || $1 > s + 600 || $1 < prev) bad = 1; prev = $1 } END { exit bad }' "$T/a.csv" &&
+    ok "journal export --times: 66 points with their UTC, in order" || no "export --times: $(head -3 "$T/a.csv")"
 "$CF" journal export "$T/a.jnl" >"$T/a.xyz"
 # Serpentine raster, offset by the beam: point k at x = 1.5 + 10 i, y = 2 + 10 j.
 awk '{ k = NR - 1; j = int(k / 11); c = k % 11; i = (j % 2) ? 10 - c : c;
