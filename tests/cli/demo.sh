@@ -200,7 +200,10 @@ rc=$?
 R=$D3/report.json
 grep '^scan: \|^losses: \|^time: ' "$T/d3.out" | sed 's/^/     /'
 n=$(json "$R" points)
-[ "$(json "$R" method)" = otf ] && le $((76 * 1401)) "${n:-0}" && le 100000 "${n:-0}" &&
+# On the fly a row yields what the triggers catch while the stage is in the
+# row (the trigger clock against the stage's ramp): within 1 % of the grid's
+# 76 x 1401 points, and at least the issue's 100,000.
+[ "$(json "$R" method)" = otf ] && le $((76 * 1401 * 99 / 100)) "${n:-0}" && le 100000 "${n:-0}" &&
     ok "default demo: on the fly, $n points (>= 100,000; $(json "$R" scan_points_per_s) points/s, scan + fit $(json "$R" seconds_scan_fit) s)" ||
     no "default demo: method $(json "$R" method), $n points"
 "$CF" journal info "$D3/scan.jnl" --json >"$T/ji3.json" 2>/dev/null
