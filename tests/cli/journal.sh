@@ -125,7 +125,7 @@ cp "$T/out" "$T/jt2.json"
 grep -q "tolerance 0.01 mm not met" "$T/err" && one_line && [ -s "$T/jt2.igs" ] &&
     ok "says the tolerance was not met in one line, the best fit written" || no "not met: $(cat "$T/err")"
 [ "$(json "$T/jt2.json" fit_status)" = not_met_no_progress ] && grep -q '"tol_met": false' "$T/jt2.json" &&
-    grep -q '"stopped": "after 2 rounds' "$T/jt2.json" && ok "tol 0.01: fit_status not_met_no_progress after 2 rounds" ||
+    grep -q '"stopped": "not_met_max_rounds: after 2 rounds' "$T/jt2.json" && ok "tol 0.01: fit_status not_met_no_progress after 2 rounds" ||
     no "tol 0.01: $(cat "$T/jt2.json")"
 grep -q '"round": 0, "nu": 40, "nv": 30, ' "$T/jt2.json" && grep -q '"round": 1, "nu": 77, "nv": 57, ' "$T/jt2.json" &&
     [ "$(grep -o '"round": ' "$T/jt2.json" | wc -l)" -eq 2 ] && ok "tol 0.01: rounds 40 x 30, then 77 x 57" ||
