@@ -81,11 +81,11 @@ a_port=$port; a_pid=$pid; a_simport=$simport; a_simpid=$simpid
 "$CF" gen --dir "$T/coarse" --nu 8 --nv 6 --count 1000 >/dev/null
 mkdir -p "$T/tres"
 start t --sim --sim-args="--speed 5000 --seed 3 --part $T/coarse/nominal.igs" \
-    --nominal "$T/coarse/nominal.igs" --results "$T/tres" --fit-to-tol --tol 0.01 --robust --within 99
+    --nominal "$T/coarse/nominal.igs" --results "$T/tres" --fit-to-tol --tol 0.01 --robust --within 99 --refine residual
 py tolfit "$port" "$simport" "$T/tres" 48 "$T/tol.out"
 d=$(sed -n 1p "$T/tol.out"); jnl=$(sed -n 2p "$T/tol.out")
 if [ -f "$jnl" ] && "$CF" journal export "$jnl" --out "$T/tol.xyz" &&
-    "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/tol.xyz" --tol 0.01 --within 99 --robust \
+    "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/tol.xyz" --tol 0.01 --within 99 --robust --refine residual \
         --out "$T/tol_shell.igs" >/dev/null; then
     "$CF" eval "$d/fitted.igs" "$T/coarse/check.uv" >"$T/e1"
     "$CF" eval "$T/tol_shell.igs" "$T/coarse/check.uv" >"$T/e2"
