@@ -66,7 +66,7 @@ done
 
 # One end-to-end fit: the part, 40 x 30 bicubic net, 60,000 noisy points.
 P=$T/part
-expect 0 "gen under $EMU" $EMU "$CF" gen --dir "$P" --nu 40 --nv 30 --points 60000 --noise 0.005
+expect 0 "gen under $EMU" $EMU "$CF" gen --dir "$P" --nu 40 --nv 30 --count 60000 --noise 0.005
 expect 0 "fit under $EMU" $EMU "$CF" fit --base "$P/nominal.igs" --points "$P/points.uvxyz" --uv \
     --out "$T/fit.igs" --json
 [ "$(json "$T/out" points)" = 60000 ] && ok "fit took 60000 points (solver $(json "$T/out" solver))" ||
