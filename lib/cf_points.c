@@ -530,7 +530,9 @@ static int cp_csv_header(cf_points_t *r)
         const char *p = s;
         while (cp_space(*p))
             p++;
-        if (*p == '\0' || *p == '#')
+        /* Blank or a comment; a NUL before the line's end is data (the
+         * reader names it), as on every later read. */
+        if ((*p == '\0' && p == e) || *p == '#')
             continue;
         int words = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || *p == '"';
         /* A header holds names only ("information 2 3" is a bad data line)
