@@ -1039,6 +1039,10 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     } else {
         r->fmt = CP_ASCII;
         rc = cp_csv_header(r);
+        /* No header: read from the start again, so the first pass is the
+         * very reading every rewind gives (standard input keeps its line). */
+        if (rc >= 0 && !r->hdr && !r->is_stdin)
+            rc = cf_points_rewind(r) ? CF_EIO : rc;
         if (rc > 0 && !r->hdr && !want_cols)
             rc = cp_first_cols(r); /* no header: the first data line decides */
         else if (rc > 0)
