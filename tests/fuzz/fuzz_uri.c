@@ -4,6 +4,7 @@
  * naming the URI. */
 #include "fuzz.h"
 #include "hal.h"
+#include <arpa/inet.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +28,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     case HAL_TTY: ok = u.baud > 0 && (u.data_bits == 7 || u.data_bits == 8); break;
     case HAL_TCP: ok = u.port >= 1 && u.port <= 65535 && u.unit >= 0 && u.unit <= 255; break;
     case HAL_USB: ok = 1; break;
+    case HAL_GEV: { /* a profiler: a dotted IPv4 address, never a name */
+        struct in_addr a;
+        ok = inet_pton(AF_INET, u.path, &a) == 1;
+        break;
+    }
     default: ok = 0;
     }
     if (!ok || !u.path[0] == (u.kind != HAL_USB) || strchr(u.path, ':'))
