@@ -184,24 +184,29 @@ fwcheck: $(FW_OBJ) $(BUILD)/cellsim
 	if [ -n "$$bad" ]; then echo "cellsim links host code:"; echo "$$bad"; exit 1; fi; \
 	echo "fwcheck: cellsim holds no cellfit command, job or PLC server"
 
+# Each stage prints its wall time, so a slow CI run says where it went.
+STAGE = sh scripts/stage.sh
 test: deps
-	$(MAKE) all
-	$(MAKE) fwcheck
-	$(MAKE) BOARD=sim BUILD=build/t-sim unit-run
-	$(MAKE) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
-	$(MAKE) BOARD=sim BUILD=build/t-clang CC=clang unit-run
-	$(MAKE) test-cli
-	$(MAKE) test-extra
-	$(MAKE) boards
-	$(MAKE) boards-test
-	$(MAKE) lint
+	@rm -f build/stages.txt
+	@$(STAGE) all $(MAKE) all
+	@$(STAGE) fwcheck $(MAKE) fwcheck
+	@$(STAGE) unit-sim $(MAKE) BOARD=sim BUILD=build/t-sim unit-run
+	@$(STAGE) unit-asan $(MAKE) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
+	@$(STAGE) unit-clang $(MAKE) BOARD=sim BUILD=build/t-clang CC=clang unit-run
+	@$(STAGE) test-cli $(MAKE) test-cli
+	@$(STAGE) test-extra $(MAKE) test-extra
+	@$(STAGE) boards $(MAKE) boards
+	@$(STAGE) boards-test $(MAKE) boards-test
+	@$(STAGE) lint $(MAKE) lint
+	@cat build/stages.txt
 	@echo "make test: all passed"
 
 # Every tests/cli/*.sh script, each given the cellfit binary (and cellsim
 # beside it); each prints "<name>: N passed, N failed" and fails on a failure.
 test-cli: all
 	@set -e; for s in $(filter-out tests/cli/lib.sh,$(sort $(wildcard tests/cli/*.sh))); do \
-	  echo "== $$s"; sh $$s $(BUILD)/cellfit; done
+	  echo "== $$s"; t0=$$(date +%s); sh $$s $(BUILD)/cellfit; \
+	  echo "== $$s: $$(( $$(date +%s) - t0 )) s"; done
 
 
 lint:
@@ -231,4 +236,5 @@ clean:
 include $(sort $(wildcard mk/*.mk))
 
 # After the fragments, which fill TEST_EXTRA.
-test-extra: $(TEST_EXTRA)
+test-extra:
+	@set -e; for t in $(TEST_EXTRA); do $(STAGE) $$t $(MAKE) $$t; done
