@@ -811,6 +811,11 @@ static int grid_local_min(const nf_seed_t *g, long k, double d, const double Q[3
              (j + 1 < g->nsv && sample_d2(g, k + g->nsu, Q) < d));
 }
 
+int nf_seed_local_min(const nf_seed_t *g, long k, const double Q[3])
+{
+    return grid_local_min(g, k, sample_d2(g, k, Q), Q);
+}
+
 /* The samples are searched tile by tile, SEED_TILE x SEED_TILE samples
  * around a centre sample c: every sample of the tile is within
  * SEED_TILE / 2 reach of c (at most SEED_TILE grid steps of at most
@@ -978,9 +983,17 @@ int nf_project_seeded(const nf_seed_t *g, const double Q[3], double tol, nf_proj
         return NF_EARG;
     if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
         return NF_ENONFINITE;
-    const nf_surf_t *s = g->s;
     double u0[NF_PROJ_STARTS], v0[NF_PROJ_STARTS];
     const int n = nf_seed_starts(g, Q, NF_PROJ_STARTS, u0, v0);
+    return nf_project_starts(g, Q, u0, v0, n, tol, out);
+}
+
+int nf_project_starts(const nf_seed_t *g, const double Q[3], const double *u0, const double *v0,
+                      int n, double tol, nf_proj_t *out)
+{
+    if (!g || !g->s || !Q || !u0 || !v0 || n < 1 || !out)
+        return NF_EARG;
+    const nf_surf_t *s = g->s;
     int rc = NF_ENOCONV;
     for (int t = 0; t < n; t++) {
         nf_proj_t p;

@@ -118,4 +118,15 @@ int nf_project_edge(const nf_surf_t *s, const double Q[3], double tol, nf_proj_t
 #define NF_PROJ_STARTS 3
 int nf_project_seeded(const nf_seed_t *g, const double Q[3], double tol, nf_proj_t *out);
 
+/* nf_project_seeded's second half, for callers that find the starts their
+ * own way (host/jobs/cf_seedgrid.c's cell grid): nf_project from each of
+ * the n >= 1 starts (u0[t], v0[t]), nearest first, and across a crease
+ * within a sample spacing of g's grid; the nearest converged foot kept. */
+int nf_project_starts(const nf_seed_t *g, const double Q[3], const double *u0, const double *v0,
+                      int n, double tol, nf_proj_t *out);
+
+/* Sample k of g is a local minimum of the distance to Q over the grid (no
+ * 4-neighbour strictly nearer): nf_seed_starts's rule for a valley's start. */
+int nf_seed_local_min(const nf_seed_t *g, long k, const double Q[3]);
+
 #endif

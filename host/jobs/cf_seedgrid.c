@@ -96,17 +96,12 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
     return CF_OK;
 }
 
-void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, double *v0)
+/* The sample nearest Q (exact), by cells in growing shells around Q's
+ * cell c0; its squared distance in *d2. */
+static long nearest(const cf_seedgrid_t *g, const double Q[3], const int c0[3], double *d2)
 {
-    if (g->use_quad) {
-        nf_quad_start(&g->quad, Q, u0, v0);
-        return;
-    }
-    const long ns = g->seed.ns, n2 = ns * ns;
+    const long n2 = (long)g->seed.ns * g->seed.ns;
     const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
-    int c0[3];
-    for (int c = 0; c < 3; c++)
-        c0[c] = clampi((long)floor((Q[c] - g->lo[c]) / g->cell), g->dim[c] - 1);
     const int rmax = g->dim[0] > g->dim[1] ? (g->dim[0] > g->dim[2] ? g->dim[0] : g->dim[2])
                                            : (g->dim[1] > g->dim[2] ? g->dim[1] : g->dim[2]);
     double best = INFINITY;
@@ -144,20 +139,91 @@ void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, do
         if (best < INFINITY && sqrt(best) <= r * g->cell)
             break;
     }
+    *d2 = best;
+    return bk;
+}
+
+/* Up to NF_PROJ_STARTS starts, nearest first: the nearest sample, then the
+ * other samples that are local minima of the distance over the sample grid
+ * within the band sqrt(nearest) + reach (nf_seed_starts's rule: a valley
+ * whose samples never come that near cannot hold the nearest foot). Over a
+ * fold the nearest sample can lie on the wrong layer; the other layer's
+ * valley is then among these. Returns how many (>= 1). */
+static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
+{
+    int c0[3];
+    for (int c = 0; c < 3; c++)
+        c0[c] = clampi((long)floor((Q[c] - g->lo[c]) / g->cell), g->dim[c] - 1);
+    double best;
+    ks[0] = nearest(g, Q, c0, &best);
+    if (!(best < INFINITY))
+        return 1;
+    const long n2 = (long)g->seed.ns * g->seed.ns;
+    const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
+    const double band = sqrt(best) + g->seed.reach, band2 = band * band;
+    /* A cell r cells from Q's cell is at least (r - 1) cells from Q. */
+    const double rr = floor(band / g->cell) + 1;
+    const int R = rr > SG_MAX_DIM ? SG_MAX_DIM : (int)rr;
+    double bd[NF_PROJ_STARTS];
+    int found = 1;
+    bd[0] = best;
+    for (int iz = c0[2] - R < 0 ? 0 : c0[2] - R; iz < g->dim[2] && iz <= c0[2] + R; iz++)
+        for (int iy = c0[1] - R < 0 ? 0 : c0[1] - R; iy < g->dim[1] && iy <= c0[1] + R; iy++)
+            for (int ix = c0[0] - R < 0 ? 0 : c0[0] - R; ix < g->dim[0] && ix <= c0[0] + R; ix++) {
+                long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+                for (int k = g->head[ci]; k >= 0; k = g->next[k]) {
+                    if (k == ks[0])
+                        continue;
+                    double dx3 = X[k] - Q[0], dy3 = Y[k] - Q[1], dz3 = Z[k] - Q[2];
+                    double d = dx3 * dx3 + dy3 * dy3 + dz3 * dz3;
+                    if (!(d < band2) || (found == NF_PROJ_STARTS && d >= bd[found - 1]) ||
+                        !nf_seed_local_min(&g->seed, k, Q))
+                        continue;
+                    int t = found < NF_PROJ_STARTS ? found++ : NF_PROJ_STARTS - 1;
+                    for (; t > 1 && bd[t - 1] > d; t--) {
+                        bd[t] = bd[t - 1];
+                        ks[t] = ks[t - 1];
+                    }
+                    bd[t] = d;
+                    ks[t] = k;
+                }
+            }
+    return found;
+}
+
+static void sample_uv(const cf_seedgrid_t *g, long k, double *u0, double *v0)
+{
     double ua, ub, va, vb;
     nf_surf_domain(g->seed.s, &ua, &ub, &va, &vb);
-    long i = bk % ns, j = bk / ns;
+    const long ns = g->seed.ns;
+    long i = k % ns, j = k / ns;
     *u0 = i == ns - 1 ? ub : ua + (ub - ua) * (double)i / (double)(ns - 1);
     *v0 = j == ns - 1 ? vb : va + (vb - va) * (double)j / (double)(ns - 1);
+}
+
+void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, double *v0)
+{
+    if (g->use_quad) {
+        nf_quad_start(&g->quad, Q, u0, v0);
+        return;
+    }
+    long ks[NF_PROJ_STARTS];
+    grid_starts(g, Q, ks);
+    sample_uv(g, ks[0], u0, v0);
 }
 
 int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj_t *out)
 {
     if (g->use_quad)
         return nf_quad_project(&g->quad, Q, tol, out);
-    double u0, v0;
-    cf_seedgrid_start(g, Q, &u0, &v0);
-    return nf_project(g->seed.s, Q, u0, v0, tol, out);
+    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
+        return NF_ENONFINITE;
+    long ks[NF_PROJ_STARTS];
+    double u0[NF_PROJ_STARTS], v0[NF_PROJ_STARTS];
+    const int n = grid_starts(g, Q, ks);
+    for (int t = 0; t < n; t++)
+        sample_uv(g, ks[t], &u0[t], &v0[t]);
+    return nf_project_starts(&g->seed, Q, u0, v0, n, tol, out);
 }
 
 void cf_seedgrid_free(cf_seedgrid_t *g)

@@ -6,7 +6,8 @@
  * folds over in that plane, or needs more than CF_SEEDGRID_MAXQ of them):
  * the seed samples of nf_seed (a grid of surface points at uniform
  * parameters) binned into a uniform 3-D cell grid, the nearest sample to Q
- * found by searching cells in growing shells around Q's cell. Host memory:
+ * found by searching cells in growing shells around Q's cell, and every
+ * valley's start within reach of it. Host memory:
  * fixed by the surface, never by the points. */
 #ifndef CF_SEEDGRID_H
 #define CF_SEEDGRID_H
@@ -34,8 +35,11 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span);
 /* Start parameters for Q: nf_quad_start, or the seed sample nearest Q
  * (exact nearest among the samples). */
 void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, double *v0);
-/* The whole projection to tol of the domain: nf_quad_project, or
- * nf_project from cf_seedgrid_start. nf_project's codes. */
+/* The whole projection to tol of the domain: nf_quad_project, or over a
+ * fold nf_project_starts from the nearest sample and the other valleys'
+ * starts within its band (the nearest sample alone put 16 in 10^4 feet of
+ * a hemmed plate on the wrong layer: tests/unit/test_foot.c). nf_project's
+ * codes. */
 int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj_t *out);
 void cf_seedgrid_free(cf_seedgrid_t *g);
 

@@ -7,6 +7,8 @@
  * brute-force minimum, and no point may get a boundary foot where an
  * interior foot is nearer. */
 
+#include "cf_err.h"
+#include "cf_seedgrid.h"
 #include "cf_test.h"
 #include "nf_err.h"
 #include "nf_project.h"
@@ -261,15 +263,15 @@ static void random_point(const nf_surf_t *s, double Q[3])
 }
 
 /* The projections cellfit uses: nf_project_seeded over the seed grid
- * nf_seed_size sizes (cellfit project); nf_quad_project (cellfit fit, where
- * the surface does not fold over in the maximum-area plane); and over a
- * fold, the square grid of host/cf_seedgrid.c (8 samples per span of the
- * longer direction, 16..1024), where the fit took the nearest sample and
- * nf_project from it (16 of the folded part's 10^4 feet in the wrong
- * valley, up to 5.8 % too far) and should take nf_project_seeded's starts. */
-enum { BY_SEEDED, BY_QUAD, BY_SQUARE, N_BY };
-static const char *by_name[N_BY] = {"nf_project_seeded", "nf_quad_project",
-                                    "nf_project_seeded, cf_seedgrid's square grid"};
+ * nf_seed_size sizes; nf_quad_project (where the surface does not fold over
+ * in the maximum-area plane); and cf_seedgrid_project itself, what the fit,
+ * report, project and the library call: the quadrilaterals, or over a fold
+ * its square grid's cells (8 samples per span of the longer direction,
+ * 16..1024). It used to take only the nearest sample and nf_project from
+ * it: 16 of the folded part's 10^4 feet in the wrong valley, up to 5.8 %
+ * too far; now it takes every valley's start within the band. */
+enum { BY_SEEDED, BY_QUAD, BY_GRID, N_BY };
+static const char *by_name[N_BY] = {"nf_project_seeded", "nf_quad_project", "cf_seedgrid_project"};
 
 typedef struct tally {
     long wrong;        /* distance not the brute-force minimum */
@@ -319,13 +321,10 @@ static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
     assert_non_null(spts);
     nf_seed_t g;
     nf_seed_init_uv(&g, s, nsu, nsv, spts);
-    const int spans = s->nu - s->p > s->nv - s->q ? s->nu - s->p : s->nv - s->q;
-    int ns = 8 * spans + 1;
-    ns = ns > 1024 ? 1024 : (ns < 16 ? 16 : ns);
-    double *sq = malloc(sizeof(double) * (size_t)NF_SEED_DOUBLES(ns, ns));
-    assert_non_null(sq);
-    nf_seed_t g2;
-    nf_seed_init(&g2, s, ns, sq);
+    cf_seedgrid_t sg;
+    assert_int_equal(cf_seedgrid_init(&sg, s, 8), CF_OK);
+    print_message("%s: cf_seedgrid by %s\n", part,
+                  sg.use_quad ? "quadrilaterals" : "its 3-D cell grid (the surface folds)");
     /* The quadrilaterals, as cellfit's fit uses them where the surface does
      * not fold over in the maximum-area plane. */
     const long maxq = 65536L;
@@ -351,8 +350,8 @@ static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
             assert_true(rc == NF_OK);
             check(part, BY_QUAD, &pr, Q, db, dint, &t[BY_QUAD]);
         }
-        assert_int_equal(nf_project_seeded(&g2, Q, TOL, &pr), NF_OK);
-        check(part, BY_SQUARE, &pr, Q, db, dint, &t[BY_SQUARE]);
+        assert_int_equal(cf_seedgrid_project(&sg, Q, TOL, &pr), NF_OK);
+        check(part, BY_GRID, &pr, Q, db, dint, &t[BY_GRID]);
     }
     long wrong = 0;
     for (int by = 0; by < N_BY; by++) {
@@ -366,7 +365,7 @@ static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
         wrong += t[by].wrong;
     }
     free(qmem);
-    free(sq);
+    cf_seedgrid_free(&sg);
     free(spts);
     free(b.bc);
     free(b.P);
