@@ -234,11 +234,13 @@ static int pg_insert(cf_forward_t *f, const cf_resdb_job_t *j, char *err, size_t
     v[k] = num[3], snprintf(num[3], 32, "%ld", j->error_code), k++;
     int h = j->has_fit;
     v[k++] = h ? (snprintf(num[4], 32, "%ld", j->fit_status), num[4]) : NULL;
+    /* A figure not known (NaN, verdict 0: cf_resdb.h) is NULL. */
     v[k++] = h ? (snprintf(num[5], 32, "%.17g", j->rms), num[5]) : NULL;
-    v[k++] = h ? (snprintf(num[6], 32, "%.17g", j->max_dev), num[6]) : NULL;
-    v[k++] = h ? (snprintf(num[7], 32, "%.17g", j->min_dev), num[7]) : NULL;
-    v[k++] = h ? (snprintf(num[8], 32, "%.17g", j->within_pct), num[8]) : NULL;
-    v[k++] = h ? (snprintf(num[9], 32, "%ld", j->verdict), num[9]) : NULL;
+    v[k++] = h && isfinite(j->max_dev) ? (snprintf(num[6], 32, "%.17g", j->max_dev), num[6]) : NULL;
+    v[k++] = h && isfinite(j->min_dev) ? (snprintf(num[7], 32, "%.17g", j->min_dev), num[7]) : NULL;
+    v[k++] = h && isfinite(j->within_pct) ? (snprintf(num[8], 32, "%.17g", j->within_pct), num[8])
+                                          : NULL;
+    v[k++] = h && j->verdict > 0 ? (snprintf(num[9], 32, "%ld", j->verdict), num[9]) : NULL;
     v[k++] = h ? (snprintf(num[10], 32, "%ld", j->points), num[10]) : NULL;
     v[k++] = h ? (snprintf(num[11], 32, "%ld", j->control_points), num[11]) : NULL;
     TXT(j->surface_path);
