@@ -50,6 +50,7 @@ struct cf_forward {
     int mq_port, mq_tls, mq_connected, mq_ever;
     double mq_next, mq_delay;
     int mq_down_logged;
+    char mq_err[256]; /* the library's last error line (OpenSSL's, for TLS) */
     char sent_state[32];
     inflight_t fl[FWD_INFLIGHT];
     int nfl;
@@ -335,6 +336,16 @@ static void on_publish(struct mosquitto *m, void *ctx, int mid)
         }
 }
 
+/* The library's error lines (OpenSSL's among them when a TLS handshake
+ * fails): the last kept for the reason mq_connect logs. */
+static void on_log(struct mosquitto *m, void *ctx, int level, const char *line)
+{
+    cf_forward_t *f = ctx;
+    (void)m;
+    if (level == MOSQ_LOG_ERR)
+        snprintf(f->mq_err, sizeof f->mq_err, "%s", line);
+}
+
 static void mq_down(cf_forward_t *f, const char *why, double now)
 {
     double d = backoff(&f->mq_delay, f->o.backoff_max);
@@ -350,12 +361,21 @@ static void mq_down(cf_forward_t *f, const char *why, double now)
 
 static int mq_connect(cf_forward_t *f, double now)
 {
+    f->mq_err[0] = 0;
     int rc = f->mq_ever ? mosquitto_reconnect(f->mq)
                         : mosquitto_connect(f->mq, f->mq_host, f->mq_port, 30);
     if (rc != MOSQ_ERR_SUCCESS) {
-        mq_down(f,
-                rc == MOSQ_ERR_ERRNO ? "connection refused or unreachable" : mosquitto_strerror(rc),
-                now);
+        char why[400];
+        if (rc == MOSQ_ERR_TLS) /* OpenSSL's own line says which check failed */
+            snprintf(why, sizeof why,
+                     "TLS handshake failed: %s (is the broker's certificate signed by "
+                     "mqtt_cafile, for this host name?)",
+                     *f->mq_err ? f->mq_err : mosquitto_strerror(rc));
+        else
+            snprintf(why, sizeof why, "%s",
+                     rc == MOSQ_ERR_ERRNO ? "connection refused or unreachable"
+                                          : mosquitto_strerror(rc));
+        mq_down(f, why, now);
         return -1;
     }
     f->mq_ever = 1;
@@ -497,6 +517,7 @@ static int mq_setup(cf_forward_t *f, char *msg, size_t ml)
     mosquitto_connect_callback_set(f->mq, on_connect);
     mosquitto_disconnect_callback_set(f->mq, on_disconnect);
     mosquitto_publish_callback_set(f->mq, on_publish);
+    mosquitto_log_callback_set(f->mq, on_log);
     char will[256];
     status_payload(f, "offline", will, sizeof will);
     mosquitto_will_set(f->mq, f->topic_st, (int)strlen(will), will, 1, true);
@@ -508,8 +529,15 @@ static int mq_setup(cf_forward_t *f, char *msg, size_t ml)
         int rc =
             mosquitto_tls_set(f->mq, f->o.mqtt_cafile, f->o.mqtt_cafile ? NULL : "/etc/ssl/certs",
                               f->o.mqtt_certfile, f->o.mqtt_keyfile, NULL);
-        if (rc != MOSQ_ERR_SUCCESS)
-            return snprintf(msg, ml, "mqtt TLS: %s", mosquitto_strerror(rc)), -1;
+        if (rc != MOSQ_ERR_SUCCESS) /* a file that cannot be read, or a key without its cert */
+            return snprintf(msg, ml,
+                            "mqtt TLS: mqtt_cafile %s, mqtt_certfile %s, mqtt_keyfile %s: %s "
+                            "(each must be readable; a certificate and its key go together)",
+                            f->o.mqtt_cafile ? f->o.mqtt_cafile : "(system: /etc/ssl/certs)",
+                            f->o.mqtt_certfile ? f->o.mqtt_certfile : "(none)",
+                            f->o.mqtt_keyfile ? f->o.mqtt_keyfile : "(none)",
+                            mosquitto_strerror(rc)),
+                   -1;
     }
     return 0;
 }
