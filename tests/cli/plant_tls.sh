@@ -191,6 +191,13 @@ drained 30 && ok "backlog and new job drained over TLS" || no "not drained: $(sq
 sleep 1
 stop_serve
 kill -0 "$SUBPID" 2>/dev/null && ok "TLS subscriber alive" || no "subscriber died: $(cat "$T/sub.err")"
+# A CA file that is not there: serve does not start, and names it.
+sed "s|^mqtt_cafile = .*|mqtt_cafile = $T/missing.pem|" "$T/good.conf" >"$T/missing.conf"
+timeout 60 "$CF" serve --plc tcp:127.0.0.1:0 --config "$T/missing.conf" --sim >/dev/null 2>"$T/missing.log"
+rc=$?
+[ $rc -ne 0 ] && [ $rc -ne 124 ] && grep -q "mqtt TLS: mqtt_cafile $T/missing.pem" "$T/missing.log" &&
+    ok "mqtt_cafile missing: serve refuses to start (exit $rc), naming the file" ||
+    no "missing CA file: exit $rc, $(tail -2 "$T/missing.log")"
 py verify "$J" "$DB" "runuser -u postgres -- psql -h $PGD -p $PGPORT -U postgres -d plant" "$T/mqtt.out"
 echo "plant_tls: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
