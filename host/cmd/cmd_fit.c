@@ -302,7 +302,8 @@ int cmd_fit(int argc, char **argv)
         print_text(&a, &r, t3 - t0, t3 - t2);
     /* The best surface is written either way; a tolerance not met is a
      * failure of the work (exit 1), said in one line. Recorded first. */
-    const cmd_record_job_t rj = {"fit", t0, 0, &r, &a.o, a.out, NULL, NULL};
+    const cmd_record_job_t rj = {
+        .command = "fit", .t0 = t0, .fit = &r, .fo = &a.o, .surface = a.out};
     if ((ec = cmd_record("fit", &a.rec, &rj)) == CLI_OK)
         ec = cmd_fitopts_verdict("fit", &a.o, &r, a.out);
 done:

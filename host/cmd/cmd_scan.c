@@ -719,9 +719,14 @@ int cmd_scan(int argc, char **argv)
                    fr.status == CF_FITJOB_MET ? "met" : "NOT met", fr.surf.nu, fr.surf.nv,
                    fr.nrounds);
     }
-    const cmd_record_job_t rj = {
-        o.fit ? "scan_fit" : "scan", t0,       rc,       fitted ? &fr : NULL, &o.fo,
-        fitted ? o.fit : NULL,       o.report, o.journal};
+    const cmd_record_job_t rj = {.command = o.fit ? "scan_fit" : "scan",
+                                 .t0 = t0,
+                                 .code = rc,
+                                 .fit = fitted ? &fr : NULL,
+                                 .fo = &o.fo,
+                                 .surface = fitted ? o.fit : NULL,
+                                 .report = o.report,
+                                 .journal = o.journal};
     if (cmd_record(CMD, &o.rec, &rj) && !ec)
         ec = CLI_FAIL;
     if (fitted && !ec) /* a tolerance not met fails the work, as `cellfit fit` */

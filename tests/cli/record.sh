@@ -124,6 +124,25 @@ if [ -x "$SIM" ]; then
     [ -z "$bad" ] && ok "scan row: surface, report and journal paths with sha256sum's checksums" ||
         no "scan row files:$bad"
     stop_all
+    # A drive fault at the 20th move: the scan fails (exit 1) and is
+    # recorded as an error with the rig's code, its journal kept.
+    "$SIM" --tcp 0 --homed --part "$T/part/nominal.igs" --fault stagefault:n20 >"$T/sim2.out" 2>"$T/sim2.err" &
+    PIDS="$PIDS $!"
+    i=0
+    while ! grep -q "cellsim: ready" "$T/sim2.out" 2>/dev/null && [ $i -lt 200 ]; do sleep 0.05; i=$((i + 1)); done
+    PORT=$(sed -n 's/^cellsim: tcp 127.0.0.1 \([0-9]*\)$/\1/p' "$T/sim2.out")
+    expect 1 "scan --fit --record with a drive fault: exit 1" timeout 120 "$CF" scan \
+        --stage "tcp:127.0.0.1:$PORT:1" --probe "tcp:127.0.0.1:$PORT:2" --nominal "$T/part/nominal.igs" \
+        --journal "$T/e.jnl" --region 0:100:0:50 --step 10 --fit "$T/e.igs" --report "$T/e.json" --record --db "$DB"
+    u4=$(uuid_of "$T/err")
+    "$CF" results show "$u4" --db "$DB" --json >"$T/r4.json"
+    code=$(field "$T/e.json" code)
+    [ "$(field "$T/r4.json" state)" = error ] && [ "$(field "$T/r4.json" error_code)" = "${code#-}" ] &&
+        [ "$code" -lt 0 ] && [ "$(field "$T/r4.json" rms)" = null ] && [ "$(field "$T/r4.json" surface_path)" = null ] &&
+        [ "$(field "$T/r4.json" journal_sha256)" = "$(sha256sum "$T/e.jnl" | cut -d' ' -f1)" ] &&
+        ok "failed scan's row: state error, error_code ${code#-} (the report's code $code), no fit, the journal's checksum" ||
+        no "failed scan row: $(cat "$T/r4.json")"
+    stop_all
 else
     echo "skip scan --record: no cellsim beside $CF"
 fi
