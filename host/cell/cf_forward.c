@@ -359,33 +359,41 @@ static void mq_down(cf_forward_t *f, const char *why, double now)
     f->nfl = 0;
 }
 
+/* Why a connection failed or went, for the log: a TLS handshake fails in
+ * mosquitto_connect or, the socket being non-blocking, in the loop after
+ * it; either way OpenSSL's own line (on_log) says which check failed. */
+static void mq_why(const cf_forward_t *f, int rc, const char *what, char *why, size_t n)
+{
+    if (rc == MOSQ_ERR_TLS || strstr(f->mq_err, "OpenSSL"))
+        snprintf(why, n,
+                 "TLS handshake failed: %s (is the broker's certificate signed by mqtt_cafile, "
+                 "for this host name?)",
+                 *f->mq_err ? f->mq_err : mosquitto_strerror(rc));
+    else if (rc == MOSQ_ERR_ERRNO)
+        snprintf(why, n, "connection refused or unreachable");
+    else
+        snprintf(why, n, "%s", rc ? mosquitto_strerror(rc) : what);
+}
+
 static int mq_connect(cf_forward_t *f, double now)
 {
+    char why[400];
     f->mq_err[0] = 0;
     int rc = f->mq_ever ? mosquitto_reconnect(f->mq)
                         : mosquitto_connect(f->mq, f->mq_host, f->mq_port, 30);
     if (rc != MOSQ_ERR_SUCCESS) {
-        char why[400];
-        if (rc == MOSQ_ERR_TLS) /* OpenSSL's own line says which check failed */
-            snprintf(why, sizeof why,
-                     "TLS handshake failed: %s (is the broker's certificate signed by "
-                     "mqtt_cafile, for this host name?)",
-                     *f->mq_err ? f->mq_err : mosquitto_strerror(rc));
-        else
-            snprintf(why, sizeof why, "%s",
-                     rc == MOSQ_ERR_ERRNO ? "connection refused or unreachable"
-                                          : mosquitto_strerror(rc));
+        mq_why(f, rc, "", why, sizeof why);
         mq_down(f, why, now);
         return -1;
     }
     f->mq_ever = 1;
     /* CONNACK arrives in the loop; until then publishing is queued by the
      * library, which is fine, but wait for it to know the broker is up. */
-    for (int i = 0; i < 40 && !f->mq_connected; i++)
-        if (mosquitto_loop(f->mq, FWD_POLL_MS, 1) != MOSQ_ERR_SUCCESS)
-            break;
+    for (int i = 0; i < 40 && !f->mq_connected && rc == MOSQ_ERR_SUCCESS; i++)
+        rc = mosquitto_loop(f->mq, FWD_POLL_MS, 1);
     if (!f->mq_connected) {
-        mq_down(f, "no CONNACK", now);
+        mq_why(f, rc, "no CONNACK", why, sizeof why);
+        mq_down(f, why, now);
         return -1;
     }
     cf_log(CF_LOG_INFO, "forward: broker %s:%d connected, topics %s/%s/...", f->mq_host, f->mq_port,
@@ -463,8 +471,11 @@ static void *fwd_main(void *arg)
             mq_step(f, now);
             if (f->mq_connected) {
                 int rc = mosquitto_loop(f->mq, FWD_POLL_MS, 1);
-                if (rc != MOSQ_ERR_SUCCESS || !f->mq_connected)
-                    mq_down(f, rc ? mosquitto_strerror(rc) : "disconnected", wall());
+                if (rc != MOSQ_ERR_SUCCESS || !f->mq_connected) {
+                    char why[400];
+                    mq_why(f, rc, "disconnected", why, sizeof why);
+                    mq_down(f, why, wall());
+                }
                 continue;
             }
         }
