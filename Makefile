@@ -201,10 +201,11 @@ test: deps
 	@cat build/stages.txt
 	@echo "make test: all passed"
 
-# Every tests/cli/*.sh script, each given the cellfit binary (and cellsim
-# beside it); each prints "<name>: N passed, N failed" and fails on a failure.
+# Every tests/cli/*.sh script (lib.sh and engines.sh aside: they are
+# sourced), each given the cellfit binary (and cellsim beside it); each
+# prints "<name>: N passed, N failed" and fails on a failure.
 test-cli: all
-	@set -e; for s in $(filter-out tests/cli/lib.sh,$(sort $(wildcard tests/cli/*.sh))); do \
+	@set -e; for s in $(filter-out tests/cli/lib.sh tests/cli/engines.sh,$(sort $(wildcard tests/cli/*.sh))); do \
 	  echo "== $$s"; t0=$$(date +%s); sh $$s $(BUILD)/cellfit; \
 	  echo "== $$s: $$(( $$(date +%s) - t0 )) s"; done
 

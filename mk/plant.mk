@@ -17,9 +17,12 @@ $(TEST_BIN): LIBS += $(PLANT_LIBS)
 $(FUZZ_BIN): LIBS += $(PLANT_LIBS)
 
 .PHONY: test-plant plant-demo
-# tests/cli/plant.sh also runs with test-cli (every tests/cli script).
+# tests/cli/plant.sh, plant_tls.sh (TLS to both engines) and record.sh
+# (fit/scan --record) also run with test-cli (every tests/cli script).
 test-plant: all
 	sh tests/cli/plant.sh $(BUILD)/cellfit
+	sh tests/cli/plant_tls.sh $(BUILD)/cellfit
+	sh tests/cli/record.sh $(BUILD)/cellfit
 
 # A plant on one machine: 4 cells, one broker, one database, an outage in
 # the middle (scripts/plant_demo.sh; PLANT_SECONDS, default 120).

@@ -12,8 +12,9 @@ build_pkgs="gcc make libc6-dev pkg-config zlib1g-dev libmodbus-dev libserialport
 build_pkgs="$build_pkgs libsqlite3-dev libpq-dev libmosquitto-dev"
 # The simulated rig's wiring and the third-party peers the tests use.
 rig_pkgs="socat mbpoll python3-pymodbus python3-serial python3-serial-asyncio umockdev libumockdev-dev"
-# The real engines tests/cli/plant.sh and make plant-demo start, and their clients.
-plant_pkgs="postgresql mosquitto mosquitto-clients sqlite3"
+# The real engines tests/cli/plant.sh and make plant-demo start, and their clients;
+# openssl makes tests/cli/plant_tls.sh's certificates.
+plant_pkgs="postgresql mosquitto mosquitto-clients sqlite3 openssl"
 test_pkgs="$rig_pkgs $plant_pkgs libcmocka-dev clang libclang-rt-14-dev cppcheck clang-format valgrind python3 libocct-data-exchange-dev libocct-foundation-dev libocct-modeling-data-dev g++ gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm"
 demo_pkgs="$rig_pkgs $plant_pkgs"
 # Other CPUs (mk/arch.mk): qemu-user runs the build on a CPU without AVX

@@ -8,33 +8,20 @@
 # broker likewise half way. Then the figures: per-cell jobs, latency from a
 # job's end to its PostgreSQL row and to its MQTT message (median, p99),
 # lost and duplicated counts. Everything started is stopped by PID (the
-# database by its data folder).
+# database by its data folder): the engines' helpers are tests/cli/engines.sh,
+# which tests/cli/plant.sh uses too.
 set -u
 CF=$(realpath "$1")
 SECS=${2:-120}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 PY=/usr/bin/python3
 NCELL=4
-PGBIN=$(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V | tail -1)
-[ -x "$PGBIN/pg_ctl" ] || { echo "plant-demo: no PostgreSQL server (scripts/deps.sh demo)"; exit 1; }
 T=$(mktemp -d /tmp/cellfit-plantdemo.XXXXXX)
 chmod 755 "$T"
-PGD="$T/pg"
+. "$ROOT/tests/cli/engines.sh" # pg_init, pg_start, pg_stop, mq_start, mq_stop, freeport
+[ -x "$PGBIN/pg_ctl" ] || { echo "plant-demo: no PostgreSQL server (scripts/deps.sh demo)"; rm -rf "$T"; exit 1; }
 pids=""
-MQPID=""
 SUBPID=""
-pg_stop() {
-    [ -f "$PGD/postmaster.pid" ] || return 0
-    pp=$(head -1 "$PGD/postmaster.pid")
-    runuser -u postgres -- "$PGBIN/pg_ctl" -D "$PGD" -m fast -w stop >/dev/null 2>&1 ||
-        kill -KILL "$pp" 2>/dev/null
-}
-mq_stop() {
-    [ -n "$MQPID" ] || return 0
-    kill -TERM "$MQPID" 2>/dev/null
-    wait "$MQPID" 2>/dev/null
-    MQPID=""
-}
 cleanup() {
     for p in $pids; do kill -TERM "$p" 2>/dev/null; done
     for p in $pids; do
@@ -49,34 +36,19 @@ cleanup() {
 }
 trap cleanup EXIT
 trap 'exit 1' INT TERM
-freeport() { "$PY" -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 now() { date +%s.%N; }
 PGPORT=$(freeport)
 MQPORT=$(freeport)
 
-mkdir -p "$PGD" "$T/pglog" "$T/mq" && chown postgres "$PGD" "$T/pglog"
+mkdir -p "$T/mq"
 id mosquitto >/dev/null 2>&1 && chown mosquitto "$T/mq"
-runuser -u postgres -- "$PGBIN/initdb" -D "$PGD" -U postgres --auth-local=trust \
-    --auth-host=trust >"$T/initdb.log" 2>&1 || { cat "$T/initdb.log"; exit 1; }
-pg_start() {
-    runuser -u postgres -- "$PGBIN/pg_ctl" -D "$PGD" -l "$T/pglog/pg.log" -w \
-        -o "-p $PGPORT -k $PGD -c listen_addresses=127.0.0.1" start >/dev/null 2>&1
-}
+pg_init trust || { cat "$T/initdb.log"; exit 1; }
 pg_start || { echo "plant-demo: PostgreSQL did not start"; exit 1; }
-runuser -u postgres -- psql -h "$PGD" -p "$PGPORT" -U postgres -qAt -c "CREATE DATABASE plant" ||
-    exit 1
+psql_admin -c "CREATE DATABASE plant" || exit 1
 PSQL="runuser -u postgres -- psql -h $PGD -p $PGPORT -U postgres -d plant"
 printf 'listener %s 127.0.0.1\nallow_anonymous true\npersistence true\npersistence_location %s/mq/\n' \
     "$MQPORT" "$T" >"$T/mosquitto.conf"
-mq_start() {
-    mosquitto -c "$T/mosquitto.conf" >>"$T/mq.log" 2>&1 &
-    MQPID=$!
-    i=0
-    while ! mosquitto_sub -p "$MQPORT" -h 127.0.0.1 -t x -E -i probe >/dev/null 2>&1 && [ $i -lt 50 ]; do
-        sleep 0.1; i=$((i + 1))
-    done
-}
-mq_start
+mq_start "$T/mosquitto.conf" "$MQPORT" || { echo "plant-demo: Mosquitto did not start"; exit 1; }
 SUB="mosquitto_sub -h 127.0.0.1 -p $MQPORT -q 1 -c -i plant-demo -t plant/#"
 $SUB -E
 $SUB -F '%U %t %p' >"$T/mqtt.out" 2>/dev/null &
@@ -120,7 +92,7 @@ c=$(now); mq_stop; echo "plant-demo: Mosquitto stopped at $(at "$c")"
 sleep $((P1 - M0))
 pg_start; b=$(now); echo "plant-demo: PostgreSQL back at $(at "$b")"
 sleep $((M1 - P1))
-mq_start; d2=$(now); echo "plant-demo: Mosquitto back at $(at "$d2")"
+mq_start "$T/mosquitto.conf" "$MQPORT"; d2=$(now); echo "plant-demo: Mosquitto back at $(at "$d2")"
 for p in $drivers; do wait "$p"; done
 # Drained: every cell's outbox empty (60 s at most).
 i=0

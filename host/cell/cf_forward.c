@@ -50,6 +50,7 @@ struct cf_forward {
     int mq_port, mq_tls, mq_connected, mq_ever;
     double mq_next, mq_delay;
     int mq_down_logged;
+    char mq_err[256]; /* the library's last error line (OpenSSL's, for TLS) */
     char sent_state[32];
     inflight_t fl[FWD_INFLIGHT];
     int nfl;
@@ -234,11 +235,13 @@ static int pg_insert(cf_forward_t *f, const cf_resdb_job_t *j, char *err, size_t
     v[k] = num[3], snprintf(num[3], 32, "%ld", j->error_code), k++;
     int h = j->has_fit;
     v[k++] = h ? (snprintf(num[4], 32, "%ld", j->fit_status), num[4]) : NULL;
+    /* A figure not known (NaN, verdict 0: cf_resdb.h) is NULL. */
     v[k++] = h ? (snprintf(num[5], 32, "%.17g", j->rms), num[5]) : NULL;
-    v[k++] = h ? (snprintf(num[6], 32, "%.17g", j->max_dev), num[6]) : NULL;
-    v[k++] = h ? (snprintf(num[7], 32, "%.17g", j->min_dev), num[7]) : NULL;
-    v[k++] = h ? (snprintf(num[8], 32, "%.17g", j->within_pct), num[8]) : NULL;
-    v[k++] = h ? (snprintf(num[9], 32, "%ld", j->verdict), num[9]) : NULL;
+    v[k++] = h && isfinite(j->max_dev) ? (snprintf(num[6], 32, "%.17g", j->max_dev), num[6]) : NULL;
+    v[k++] = h && isfinite(j->min_dev) ? (snprintf(num[7], 32, "%.17g", j->min_dev), num[7]) : NULL;
+    v[k++] = h && isfinite(j->within_pct) ? (snprintf(num[8], 32, "%.17g", j->within_pct), num[8])
+                                          : NULL;
+    v[k++] = h && j->verdict > 0 ? (snprintf(num[9], 32, "%ld", j->verdict), num[9]) : NULL;
     v[k++] = h ? (snprintf(num[10], 32, "%ld", j->points), num[10]) : NULL;
     v[k++] = h ? (snprintf(num[11], 32, "%ld", j->control_points), num[11]) : NULL;
     TXT(j->surface_path);
@@ -333,6 +336,16 @@ static void on_publish(struct mosquitto *m, void *ctx, int mid)
         }
 }
 
+/* The library's error lines (OpenSSL's among them when a TLS handshake
+ * fails): the last kept for the reason mq_connect logs. */
+static void on_log(struct mosquitto *m, void *ctx, int level, const char *line)
+{
+    cf_forward_t *f = ctx;
+    (void)m;
+    if (level == MOSQ_LOG_ERR)
+        snprintf(f->mq_err, sizeof f->mq_err, "%s", line);
+}
+
 static void mq_down(cf_forward_t *f, const char *why, double now)
 {
     double d = backoff(&f->mq_delay, f->o.backoff_max);
@@ -346,24 +359,41 @@ static void mq_down(cf_forward_t *f, const char *why, double now)
     f->nfl = 0;
 }
 
+/* Why a connection failed or went, for the log: a TLS handshake fails in
+ * mosquitto_connect or, the socket being non-blocking, in the loop after
+ * it; either way OpenSSL's own line (on_log) says which check failed. */
+static void mq_why(const cf_forward_t *f, int rc, const char *what, char *why, size_t n)
+{
+    if (rc == MOSQ_ERR_TLS || strstr(f->mq_err, "OpenSSL"))
+        snprintf(why, n,
+                 "TLS handshake failed: %s (is the broker's certificate signed by mqtt_cafile, "
+                 "for this host name?)",
+                 *f->mq_err ? f->mq_err : mosquitto_strerror(rc));
+    else if (rc == MOSQ_ERR_ERRNO)
+        snprintf(why, n, "connection refused or unreachable");
+    else
+        snprintf(why, n, "%s", rc ? mosquitto_strerror(rc) : what);
+}
+
 static int mq_connect(cf_forward_t *f, double now)
 {
+    char why[400];
+    f->mq_err[0] = 0;
     int rc = f->mq_ever ? mosquitto_reconnect(f->mq)
                         : mosquitto_connect(f->mq, f->mq_host, f->mq_port, 30);
     if (rc != MOSQ_ERR_SUCCESS) {
-        mq_down(f,
-                rc == MOSQ_ERR_ERRNO ? "connection refused or unreachable" : mosquitto_strerror(rc),
-                now);
+        mq_why(f, rc, "", why, sizeof why);
+        mq_down(f, why, now);
         return -1;
     }
     f->mq_ever = 1;
     /* CONNACK arrives in the loop; until then publishing is queued by the
      * library, which is fine, but wait for it to know the broker is up. */
-    for (int i = 0; i < 40 && !f->mq_connected; i++)
-        if (mosquitto_loop(f->mq, FWD_POLL_MS, 1) != MOSQ_ERR_SUCCESS)
-            break;
+    for (int i = 0; i < 40 && !f->mq_connected && rc == MOSQ_ERR_SUCCESS; i++)
+        rc = mosquitto_loop(f->mq, FWD_POLL_MS, 1);
     if (!f->mq_connected) {
-        mq_down(f, "no CONNACK", now);
+        mq_why(f, rc, "no CONNACK", why, sizeof why);
+        mq_down(f, why, now);
         return -1;
     }
     cf_log(CF_LOG_INFO, "forward: broker %s:%d connected, topics %s/%s/...", f->mq_host, f->mq_port,
@@ -441,8 +471,11 @@ static void *fwd_main(void *arg)
             mq_step(f, now);
             if (f->mq_connected) {
                 int rc = mosquitto_loop(f->mq, FWD_POLL_MS, 1);
-                if (rc != MOSQ_ERR_SUCCESS || !f->mq_connected)
-                    mq_down(f, rc ? mosquitto_strerror(rc) : "disconnected", wall());
+                if (rc != MOSQ_ERR_SUCCESS || !f->mq_connected) {
+                    char why[400];
+                    mq_why(f, rc, "disconnected", why, sizeof why);
+                    mq_down(f, why, wall());
+                }
                 continue;
             }
         }
@@ -495,6 +528,7 @@ static int mq_setup(cf_forward_t *f, char *msg, size_t ml)
     mosquitto_connect_callback_set(f->mq, on_connect);
     mosquitto_disconnect_callback_set(f->mq, on_disconnect);
     mosquitto_publish_callback_set(f->mq, on_publish);
+    mosquitto_log_callback_set(f->mq, on_log);
     char will[256];
     status_payload(f, "offline", will, sizeof will);
     mosquitto_will_set(f->mq, f->topic_st, (int)strlen(will), will, 1, true);
@@ -506,8 +540,15 @@ static int mq_setup(cf_forward_t *f, char *msg, size_t ml)
         int rc =
             mosquitto_tls_set(f->mq, f->o.mqtt_cafile, f->o.mqtt_cafile ? NULL : "/etc/ssl/certs",
                               f->o.mqtt_certfile, f->o.mqtt_keyfile, NULL);
-        if (rc != MOSQ_ERR_SUCCESS)
-            return snprintf(msg, ml, "mqtt TLS: %s", mosquitto_strerror(rc)), -1;
+        if (rc != MOSQ_ERR_SUCCESS) /* a file that cannot be read, or a key without its cert */
+            return snprintf(msg, ml,
+                            "mqtt TLS: mqtt_cafile %s, mqtt_certfile %s, mqtt_keyfile %s: %s "
+                            "(each must be readable; a certificate and its key go together)",
+                            f->o.mqtt_cafile ? f->o.mqtt_cafile : "(system: /etc/ssl/certs)",
+                            f->o.mqtt_certfile ? f->o.mqtt_certfile : "(none)",
+                            f->o.mqtt_keyfile ? f->o.mqtt_keyfile : "(none)",
+                            mosquitto_strerror(rc)),
+                   -1;
     }
     return 0;
 }

@@ -5,6 +5,7 @@
 #define _DEFAULT_SOURCE /* gmtime_r and clock_gettime beside C11 */
 #if !CF_NO_PLANT        /* built only with SQLite, libpq and libmosquitto (mk/plant.mk) */
 #include "cf_resdb.h"
+#include <math.h>
 #include <sqlite3.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -197,7 +198,8 @@ static void bind_job(sqlite3_stmt *st, const cf_resdb_job_t *j)
         sqlite3_bind_double(st, 14, j->max_dev);
         sqlite3_bind_double(st, 15, j->min_dev);
         sqlite3_bind_double(st, 16, j->within_pct);
-        sqlite3_bind_int64(st, 17, j->verdict);
+        if (j->verdict > 0) /* 0: no verdict (a shell fit without a tolerance) */
+            sqlite3_bind_int64(st, 17, j->verdict);
         sqlite3_bind_int64(st, 18, j->points);
         sqlite3_bind_int64(st, 19, j->control_points);
     }
@@ -213,6 +215,11 @@ static void col_text(sqlite3_stmt *st, int i, char *out, size_t n)
 {
     const unsigned char *s = sqlite3_column_text(st, i);
     snprintf(out, n, "%s", s ? (const char *)s : "");
+}
+
+static double col_num(sqlite3_stmt *st, int i)
+{
+    return sqlite3_column_type(st, i) == SQLITE_NULL ? NAN : sqlite3_column_double(st, i);
 }
 
 static void get_job(sqlite3_stmt *st, cf_resdb_job_t *j)
@@ -232,9 +239,11 @@ static void get_job(sqlite3_stmt *st, cf_resdb_job_t *j)
     j->has_fit = sqlite3_column_type(st, 12) != SQLITE_NULL;
     j->fit_status = (long)sqlite3_column_int64(st, 11);
     j->rms = sqlite3_column_double(st, 12);
-    j->max_dev = sqlite3_column_double(st, 13);
-    j->min_dev = sqlite3_column_double(st, 14);
-    j->within_pct = sqlite3_column_double(st, 15);
+    /* A figure not known (a shell fit's signed deviations, its share within
+     * without a tolerance) was bound as NaN, which SQLite stores as NULL. */
+    j->max_dev = col_num(st, 13);
+    j->min_dev = col_num(st, 14);
+    j->within_pct = col_num(st, 15);
     j->verdict = (long)sqlite3_column_int64(st, 16);
     j->points = (long)sqlite3_column_int64(st, 17);
     j->control_points = (long)sqlite3_column_int64(st, 18);

@@ -27,7 +27,9 @@ const char *cf_resdb_strerror(int err);
 /* Outbox targets (bits). */
 enum { CF_RESDB_PG = 1, CF_RESDB_MQTT = 2 };
 
-/* One job's row. Text fields "" and has_fit 0 are stored as NULL. */
+/* One job's row. Text fields "" and has_fit 0 are stored as NULL; with a
+ * fit, max_dev, min_dev, within_pct NaN and verdict 0 too (figures a shell
+ * fit does not know, cmd_record.h), read back as NaN and 0. */
 typedef struct cf_resdb_job {
     char job_uuid[37];
     char cell_id[64];
@@ -41,7 +43,7 @@ typedef struct cf_resdb_job {
     int has_fit;                       /* the figures below are set */
     long fit_status;                   /* 0: fitted */
     double rms, max_dev, min_dev, within_pct;
-    long verdict; /* 1 pass, 2 fail */
+    long verdict; /* 1 pass, 2 fail, 0 none */
     long points, control_points;
     char surface_path[CF_RESDB_PATH], surface_sha256[65];
     char report_path[CF_RESDB_PATH], report_sha256[65];

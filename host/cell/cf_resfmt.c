@@ -4,6 +4,7 @@
  * value the PLC read (a float widened to a double). */
 #include "cf_resfmt.h"
 #include "cf_json.h"
+#include <math.h>
 #include <string.h>
 
 static const char *nz(const char *s)
@@ -32,7 +33,10 @@ void cf_resfmt_json(FILE *f, const cf_resdb_job_t *j)
         cf_json_num(&w, "max_dev", j->max_dev);
         cf_json_num(&w, "min_dev", j->min_dev);
         cf_json_num(&w, "within_pct", j->within_pct);
-        cf_json_int(&w, "verdict", j->verdict);
+        if (j->verdict > 0)
+            cf_json_int(&w, "verdict", j->verdict);
+        else
+            cf_json_null(&w, "verdict");
         cf_json_int(&w, "points", j->points);
         cf_json_int(&w, "control_points", j->control_points);
     } else {
@@ -104,10 +108,18 @@ void cf_resfmt_csv(FILE *f, const cf_resdb_job_t *j)
     csv_str(f, j->ended_at, 0);
     csv_str(f, j->state, 0);
     fprintf(f, "%ld,", j->error_code);
-    if (j->has_fit)
-        fprintf(f, "%ld,%.17g,%.17g,%.17g,%.17g,%ld,%ld,%ld,", j->fit_status, j->rms, j->max_dev,
-                j->min_dev, j->within_pct, j->verdict, j->points, j->control_points);
-    else
+    if (j->has_fit) {
+        fprintf(f, "%ld,", j->fit_status);
+        const double x[4] = {j->rms, j->max_dev, j->min_dev, j->within_pct};
+        for (int i = 0; i < 4; i++) /* a figure not known (NaN): an empty field */
+            if (isfinite(x[i]))
+                fprintf(f, "%.17g,", x[i]);
+            else
+                fputc(',', f);
+        if (j->verdict > 0)
+            fprintf(f, "%ld", j->verdict);
+        fprintf(f, ",%ld,%ld,", j->points, j->control_points);
+    } else
         fputs(",,,,,,,,", f);
     csv_str(f, j->surface_path, 0);
     csv_str(f, j->surface_sha256, 0);

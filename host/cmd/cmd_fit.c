@@ -15,6 +15,7 @@
 #include "cf_version.h"
 #include "cmd.h"
 #include "cmd_fitopts.h"
+#include "cmd_record.h"
 #include "nf_err.h"
 #include <string.h>
 #include <sys/resource.h>
@@ -39,6 +40,7 @@ typedef struct fit_args {
     long entity;
     cf_fitjob_opts_t o;
     cmd_fitopts_t fo;
+    cmd_record_t rec;
 } fit_args_t;
 
 static int parse(int argc, char **argv, fit_args_t *a)
@@ -136,12 +138,13 @@ static int parse(int argc, char **argv, fit_args_t *a)
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &a->json, .help = "print the summary as JSON"},
         {0}};
     /* The job's shared options after own's first ten rows (--base to
-     * --max-iter), then --far, --drop-far, --json. */
+     * --max-iter), --record and --db, then --far, --drop-far, --json. */
     cf_opt_t opts[CF_OPT_MAX];
     int n = 10, m = (int)(sizeof own / sizeof own[0]);
     memcpy(opts, own, sizeof(cf_opt_t) * (size_t)n);
     n += cmd_fitopts_table(opts + n, o, &a->fo,
                            "reprojection passes onto the fit, each refitted (x y z points)");
+    n += cmd_record_table(opts + n, &a->rec);
     memcpy(opts + n, own + 10, sizeof(cf_opt_t) * (size_t)(m - 10));
     const cf_cmd_t cmd = {.prog = "cellfit",
                           .name = "fit",
@@ -298,8 +301,11 @@ int cmd_fit(int argc, char **argv)
     else
         print_text(&a, &r, t3 - t0, t3 - t2);
     /* The best surface is written either way; a tolerance not met is a
-     * failure of the work (exit 1), said in one line. */
-    ec = cmd_fitopts_verdict("fit", &a.o, &r, a.out);
+     * failure of the work (exit 1), said in one line. Recorded first. */
+    const cmd_record_job_t rj = {
+        .command = "fit", .t0 = t0, .fit = &r, .fo = &a.o, .surface = a.out};
+    if ((ec = cmd_record("fit", &a.rec, &rj)) == CLI_OK)
+        ec = cmd_fitopts_verdict("fit", &a.o, &r, a.out);
 done:
     cf_fitjob_result_free(&r);
     return ec;

@@ -9,6 +9,7 @@
 #include "cf_resdb.h"
 #include "cf_resfmt.h"
 #include "cmd.h"
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -38,11 +39,18 @@ static int print_row(void *ctx, const cf_resdb_job_t *j)
         cf_resfmt_json(stdout, j);
     else if (o->csv)
         cf_resfmt_csv(stdout, j);
-    else if (j->has_fit)
-        printf("%s  %s  part %ld  seq %ld  %-8s %-7s rms %.6g max %.6g min %.6g %s\n", j->ended_at,
-               j->job_uuid, j->part_number, j->result_seq, j->command, j->state, j->rms, j->max_dev,
-               j->min_dev, j->verdict == 1 ? "pass" : "fail");
-    else
+    else if (j->has_fit) {
+        char mx[32] = "-", mn[32] = "-"; /* NaN: not known (a shell fit's, cf_resdb.h) */
+        if (isfinite(j->max_dev))
+            snprintf(mx, sizeof mx, "%.6g", j->max_dev);
+        if (isfinite(j->min_dev))
+            snprintf(mn, sizeof mn, "%.6g", j->min_dev);
+        printf("%s  %s  part %ld  seq %ld  %-8s %-7s rms %.6g max %s min %s %s\n", j->ended_at,
+               j->job_uuid, j->part_number, j->result_seq, j->command, j->state, j->rms, mx, mn,
+               j->verdict == 1   ? "pass"
+               : j->verdict == 2 ? "fail"
+                                 : "-");
+    } else
         printf("%s  %s  part %ld  seq %ld  %-8s %-7s error %ld\n", j->ended_at, j->job_uuid,
                j->part_number, j->result_seq, j->command, j->state, j->error_code);
     return 0;

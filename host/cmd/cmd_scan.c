@@ -20,6 +20,7 @@
 #include "cf_version.h"
 #include "cmd.h"
 #include "cmd_fitopts.h"
+#include "cmd_record.h"
 #include "hal_rig.h"
 #include "nf_err.h"
 #include "rig_err.h"
@@ -73,6 +74,7 @@ typedef struct scan_opts {
     long entity, sync_every, job_id;
     cf_fitjob_opts_t fo; /* --fit: the job's loop, robust passes, reprojection */
     cmd_fitopts_t fa;
+    cmd_record_t rec; /* --record, --db */
     /* issue 19: the method and its settings (cf_scanfast.h) */
     const char *method, *geometry;
     double period_us, frame_rate, pitch;
@@ -274,6 +276,7 @@ static int parse(int argc, char **argv, scan_opts_t *o)
     memcpy(opts, own, sizeof(cf_opt_t) * (size_t)m);
     m += cmd_fitopts_table(opts + m, &o->fo, &o->fa,
                            "--fit: reprojection passes onto the fit, each refitted");
+    m += cmd_record_table(opts + m, &o->rec);
     opts[m] = (cf_opt_t){0};
     const cf_cmd_t cmd = {.prog = "cellfit",
                           .name = "scan",
@@ -716,6 +719,16 @@ int cmd_scan(int argc, char **argv)
                    fr.status == CF_FITJOB_MET ? "met" : "NOT met", fr.surf.nu, fr.surf.nv,
                    fr.nrounds);
     }
+    const cmd_record_job_t rj = {.command = o.fit ? "scan_fit" : "scan",
+                                 .t0 = t0,
+                                 .code = rc,
+                                 .fit = fitted ? &fr : NULL,
+                                 .fo = &o.fo,
+                                 .surface = fitted ? o.fit : NULL,
+                                 .report = o.report,
+                                 .journal = o.journal};
+    if (cmd_record(CMD, &o.rec, &rj) && !ec)
+        ec = CLI_FAIL;
     if (fitted && !ec) /* a tolerance not met fails the work, as `cellfit fit` */
         ec = cmd_fitopts_verdict(CMD, &o.fo, &fr, o.fit);
 out_dev:

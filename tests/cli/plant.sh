@@ -19,26 +19,12 @@ PY=/usr/bin/python3
 for tool in mosquitto mosquitto_sub psql sqlite3 runuser; do
     command -v $tool >/dev/null || { echo "plant: $tool missing (scripts/deps.sh test)"; exit 1; }
 done
-PGBIN=$(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V | tail -1)
-[ -x "$PGBIN/pg_ctl" ] || { echo "plant: no PostgreSQL server (scripts/deps.sh test)"; exit 1; }
 # A folder the postgres user can reach (its parents included): /tmp, 755.
 T=$(mktemp -d /tmp/cellfit-plant.XXXXXX)
 chmod 755 "$T"
+. "$HERE/engines.sh" # pg_init, pg_start, pg_stop, psql_admin, mq_start, mq_stop, freeport
+[ -x "$PGBIN/pg_ctl" ] || { echo "plant: no PostgreSQL server (scripts/deps.sh test)"; rm -rf "$T"; exit 1; }
 pids=""
-MQPID=""
-PGD="$T/pg"
-pg_stop() { # by its data folder; the postmaster's PID as the last resort
-    [ -f "$PGD/postmaster.pid" ] || return 0
-    pp=$(head -1 "$PGD/postmaster.pid")
-    runuser -u postgres -- "$PGBIN/pg_ctl" -D "$PGD" -m fast -w stop >/dev/null 2>&1 ||
-        kill -KILL "$pp" 2>/dev/null
-}
-mq_stop() {
-    [ -n "$MQPID" ] || return 0
-    kill -TERM "$MQPID" 2>/dev/null
-    wait "$MQPID" 2>/dev/null
-    MQPID=""
-}
 stop_serve() {
     for p in $pids; do kill -TERM "$p" 2>/dev/null; done
     for p in $pids; do
@@ -57,24 +43,15 @@ cleanup() {
 }
 trap cleanup EXIT
 trap 'exit 1' INT TERM
-freeport() { "$PY" -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 py() { py_step plant.py 180 "$@"; }
 
 PGPORT=$(freeport)
 MQPORT=$(freeport)
 # PostgreSQL: a cluster of the test's own, TCP on 127.0.0.1 with passwords
 # (scram), the socket in its folder for the set-up.
-mkdir -p "$PGD" "$T/pglog" && chown postgres "$PGD" "$T/pglog"
 echo "cellpw-$$-secret" >"$T/pw"
-runuser -u postgres -- "$PGBIN/initdb" -D "$PGD" -U postgres --auth-local=trust \
-    --auth-host=scram-sha-256 >"$T/initdb.log" 2>&1 && ok "initdb: a cluster in $PGD" ||
-    { no "initdb"; tail -5 "$T/initdb.log"; exit 1; }
-pg_start() {
-    runuser -u postgres -- "$PGBIN/pg_ctl" -D "$PGD" -l "$T/pglog/pg.log" -w \
-        -o "-p $PGPORT -k $PGD -c listen_addresses=127.0.0.1" start >/dev/null 2>&1
-}
+pg_init scram-sha-256 && ok "initdb: a cluster in $PGD" || { no "initdb"; tail -5 "$T/initdb.log"; exit 1; }
 pg_start && ok "PostgreSQL on 127.0.0.1:$PGPORT" || { no "PostgreSQL start"; tail -5 "$T/pglog/pg.log"; exit 1; }
-psql_admin() { runuser -u postgres -- psql -h "$PGD" -p "$PGPORT" -U postgres -v ON_ERROR_STOP=1 -qAt "$@"; }
 psql_admin -c "CREATE ROLE cell LOGIN PASSWORD '$(cat "$T/pw")'" -c "CREATE DATABASE plant OWNER cell" &&
     ok "role cell with a password, database plant" || no "create role and database"
 PSQL="runuser -u postgres -- psql -h $PGD -p $PGPORT -U postgres -d plant"
@@ -90,16 +67,7 @@ CONF
 mkdir -p "$T/mq"
 # Started as root, mosquitto drops to its own user: the folder is its.
 id mosquitto >/dev/null 2>&1 && chown mosquitto "$T/mq"
-mq_start() {
-    mosquitto -c "$T/mosquitto.conf" >>"$T/mq.log" 2>&1 &
-    MQPID=$!
-    i=0
-    while ! mosquitto_sub -p "$MQPORT" -h 127.0.0.1 -t x -E -i probe$i >/dev/null 2>&1 && [ $i -lt 50 ]; do
-        sleep 0.1; i=$((i + 1))
-    done
-    [ $i -lt 50 ]
-}
-mq_start && ok "Mosquitto pid $MQPID on 127.0.0.1:$MQPORT" || { no "Mosquitto start"; exit 1; }
+mq_start "$T/mosquitto.conf" "$MQPORT" && ok "Mosquitto pid $MQPID on 127.0.0.1:$MQPORT" || { no "Mosquitto start"; exit 1; }
 # The subscriber's persistent session first (-E: subscribe and leave), so
 # that nothing published before it listens is lost to it.
 SUB="mosquitto_sub -h 127.0.0.1 -p $MQPORT -q 1 -c -i plant-check -v -t plant/#"
@@ -143,7 +111,7 @@ py job "$port" 1005 "$J"
 n=$(sqlite3 "$T/results/results.db" "SELECT count(*) FROM outbox WHERE target = 'mqtt'")
 [ "$n" -ge 4 ] && ok "outbox holds $n MQTT entries while the broker is down" || no "mqtt outbox $n"
 wait "$MQPID" 2>/dev/null
-mq_start && ok "Mosquitto restarted (pid $MQPID)" || no "Mosquitto restart"
+mq_start "$T/mosquitto.conf" "$MQPORT" && ok "Mosquitto restarted (pid $MQPID)" || no "Mosquitto restart"
 py job "$port" 1006 "$J"
 # Both down, a job, serve stopped and started again: the outbox is durable.
 pg_stop
@@ -152,7 +120,7 @@ py job "$port" 1007 "$J"
 stop_serve
 ok "serve stopped with both engines down"
 start b
-pg_start && mq_start && ok "PostgreSQL and Mosquitto back" || no "engines back"
+pg_start && mq_start "$T/mosquitto.conf" "$MQPORT" && ok "PostgreSQL and Mosquitto back" || no "engines back"
 py job "$port" 1008 "$J"
 i=0
 while [ "$(sqlite3 "$T/results/results.db" 'SELECT count(*) FROM outbox')" != 0 ] && [ $i -lt 300 ]; do

@@ -4,9 +4,11 @@
  * recorder wrote it) migrated on open with its rows kept; a newer schema
  * refused; a record and its outbox entries in one transaction; the outbox's
  * bound (oldest dropped and counted); due, retry and delivery; the queries'
- * filters; WAL on the file. */
+ * filters; WAL on the file; figures a shell fit does not know (NaN,
+ * verdict 0) stored as NULL and read back as NaN and 0. */
 #include "cf_resdb.h"
 #include "cf_test.h"
+#include <math.h>
 #include <sqlite3.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -254,6 +256,31 @@ static void test_query(void **state)
     cf_resdb_close(db);
 }
 
+/* A shell fit's row (cmd_record.h): no signed deviations, no share
+ * within, no verdict. SQLite's own count of NULLs says what was stored. */
+static void test_unknown_null(void **state)
+{
+    (void)state;
+    cf_resdb_t *db;
+    char msg[256];
+    assert_int_equal(cf_resdb_open(path, &db, msg, sizeof msg), CF_RESDB_OK);
+    cf_resdb_job_t j, g;
+    job(&j, 5, 0, "2026-03-01T00:00:00.000Z");
+    j.max_dev = j.min_dev = j.within_pct = NAN;
+    j.verdict = 0;
+    assert_int_equal(cf_resdb_record(db, &j, 0, 0), CF_RESDB_OK);
+    assert_int_equal(cf_resdb_get(db, j.job_uuid, &g), CF_RESDB_OK);
+    cf_resdb_close(db);
+    assert_true(g.has_fit);
+    assert_true(g.rms == j.rms && g.points == j.points);
+    assert_true(isnan(g.max_dev) && isnan(g.min_dev) && isnan(g.within_pct));
+    assert_int_equal(g.verdict, 0);
+    assert_int_equal(q1("SELECT count(*) FROM jobs WHERE max_dev IS NULL AND min_dev IS NULL AND "
+                        "within_pct IS NULL AND verdict IS NULL AND rms IS NOT NULL"),
+                     1);
+    assert_int_equal(q1("SELECT count(*) FROM outbox"), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -263,6 +290,7 @@ int main(void)
         cmocka_unit_test_setup(test_outbox_bound, setup),
         cmocka_unit_test_setup(test_due_retry_delivered, setup),
         cmocka_unit_test_setup(test_query, setup),
+        cmocka_unit_test_setup(test_unknown_null, setup),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     setup(NULL);
