@@ -187,6 +187,7 @@ int cf_plcrun_rig_code(int rc, int where)
     switch (rc) {
     case RIG_OK: return 0;
     case RIG_EABORTED: return CF_PLC_ABORTED;
+    case RIG_ELOST: return PLC_E_RIG_GONE;
     case RIG_ETIMEOUT:
     case RIG_EDISCONNECT:
     case RIG_ECRC:
@@ -202,11 +203,15 @@ int cf_plcrun_rig_code(int rc, int where)
     }
 }
 
-/* The stage driver's stop check while it waits for a move or homing. */
+/* The stop check of the stage driver (while it waits for a move or
+ * homing) and of the transports (hal_set_stop: retries, late replies and
+ * reconnects give up at once): the running phase's stop, or an ABORT's STOP
+ * sent with no job running (one attempt, not the retries). */
 static int rig_should_stop(void *ctx)
 {
-    const cf_job_ctl_t *c = ((cf_plcrun_t *)ctx)->ctl;
-    return c && c->should_stop && c->should_stop(c->ctx);
+    const cf_plcrun_t *rr = ctx;
+    const cf_job_ctl_t *c = rr->ctl;
+    return rr->idle_stop || (c && c->should_stop && c->should_stop(c->ctx) != 0);
 }
 
 static void rig_take(cf_plcrun_t *rr, const cf_job_ctl_t *ctl)
@@ -300,9 +305,9 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
         cf_log(CF_LOG_ERROR, "scan: %s", msg);
         return PLC_E_RIG;
     }
-    if (rc == RIG_EABORTED) {
-        cf_log(CF_LOG_WARN, "scan: stopped at grid point %ld; journal %s consistent",
-               res.fail_index, rr->journal);
+    if (rc == RIG_EABORTED || rc == RIG_ELOST) {
+        cf_log(CF_LOG_WARN, "scan: stopped at grid point %ld%s; journal %s consistent",
+               res.fail_index, rc == RIG_ELOST ? " (the rig was lost)" : "", rr->journal);
         return CF_PLC_ABORTED;
     }
     if (rc) {
@@ -432,7 +437,9 @@ static void run_abort(void *ctx)
         return;
     if (pthread_mutex_trylock(&rr->rig_mu) == 0) {
         const rig_stage_t *s = &rr->rig->stage;
+        rr->idle_stop = 1; /* a hung stage holds the server thread one timeout, not the retries */
         int rc = s->ops->stop(s->ctx);
+        rr->idle_stop = 0;
         pthread_mutex_unlock(&rr->rig_mu);
         if (rc)
             cf_log(CF_LOG_WARN, "abort: stage stop: %s", hal_stage_error(s->ctx));
@@ -461,6 +468,8 @@ void cf_plcrun_init(cf_plcrun_t *rr, cf_runner_t *out)
     if (rr->rig) {
         rr->rig->st.should_stop = rig_should_stop;
         rr->rig->st.stop_ctx = rr;
+        hal_set_stop(rr->rig->st.h, rig_should_stop, rr);
+        hal_set_stop(rr->rig->pr.h, rig_should_stop, rr);
     }
     out->check = run_check;
     out->home = run_home;

@@ -59,6 +59,7 @@ typedef struct cf_plcrun {
      * and trigger period (config scan_method, scan_period_us) */
     int scan_method;
     double scan_period_us;
+    int idle_stop; /* 1 while an ABORT with no job running sends STOP (under rig_mu) */
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

@@ -9,6 +9,7 @@
 #include "cf_plcsrv.h"
 #include "cf_log.h"
 #include "plc_mbap.h"
+#include "rig_err.h"
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -135,7 +136,8 @@ static void join_worker(srv_t *s)
 static void act(srv_t *s, plc_action_t a)
 {
     if (a == PLC_ACT_ABORT) {
-        atomic_store(&s->stop_job, 1);
+        int none = 0; /* a reason already given (RIG_ELOST) stays */
+        atomic_compare_exchange_strong(&s->stop_job, &none, 1);
         s->run->abort(s->run->ctx);
         cf_log(CF_LOG_WARN, "abort: job asked to stop, motion stopped");
     } else if (a == PLC_ACT_START) {
@@ -575,6 +577,10 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
             cf_log(CF_LOG_ERROR, "watchdog: PLC heartbeat unchanged for %u ms: error %d",
                    plc_map_u16(&s.map, PLC_R_WATCHDOG_MS), PLC_E_WATCHDOG);
         pthread_mutex_unlock(&s.mu);
+        /* The rig gone for good: the job stops for that reason, which its
+         * journal's end record keeps (RIG_ELOST), not as a PLC's abort. */
+        if (code == PLC_E_RIG_GONE)
+            atomic_store(&s.stop_job, RIG_ELOST);
         act(&s, a != PLC_ACT_NONE ? a : w);
         if (atomic_load(&s.job_ended))
             join_worker(&s);

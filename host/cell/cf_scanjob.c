@@ -20,9 +20,10 @@ static void progress(const cf_job_ctl_t *c, int pct)
         c->progress(c->ctx, pct);
 }
 
+/* The stop request as it came (scan.h: a negative value is its reason). */
 static int stop(const cf_job_ctl_t *c)
 {
-    return c && c->should_stop && c->should_stop(c->ctx);
+    return c && c->should_stop ? c->should_stop(c->ctx) : 0;
 }
 
 int cf_scanjob_plan(const cf_scanjob_opts_t *o, scan_plan_t *pl)

