@@ -42,3 +42,28 @@ serve_start h --sim --nominal "$T/part/nominal.igs" --results "$T/res" \
     --sim-args="--speed 5000 --seed 1 --part $T/part/nominal.igs --control $T/h.ctl"
 py hung "$port" "$T/h.ctl" "$BOUND"
 stop_one "$pid"
+
+# 2. cellsim killed mid-scan: the journal's end record says the rig was lost.
+serve_start g --sim --nominal "$T/part/nominal.igs" --results "$T/resg"
+simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/g.log")
+if [ -n "$simpid" ]; then
+    py lost "$port" "$simpid"
+    jnl=$(ls "$T"/resg/*.jnl 2>/dev/null | head -1)
+    if [ -n "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
+        code=$(json "$T/info.json" end_code)
+        why=$(json "$T/info.json" end_error)
+        echo "     journal info: end_code $code ($why)"
+        [ "$(json "$T/info.json" ended)" = 1 ] && [ "$code" = -219 ] &&
+            [ "$why" = "rig lost (its process ended)" ] &&
+            ok "lost: journal ended with -219, rig lost (not a PLC's abort)" ||
+            no "lost: journal end: $(cat "$T/info.json")"
+        "$CF" journal info "$jnl" >"$T/info.txt" 2>&1
+        grep -q "ended: rig lost (its process ended) (-219)" "$T/info.txt" &&
+            ok "lost: journal info says 'ended: rig lost'" || no "lost: $(grep ended "$T/info.txt")"
+    else
+        no "lost: no journal in $T/resg ($(ls "$T/resg"))"
+    fi
+else
+    no "lost: no cellsim pid in g.log"
+fi
+stop_one "$pid"
