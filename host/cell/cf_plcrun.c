@@ -5,6 +5,7 @@
 #include "cf_cli.h"
 #include "cf_err.h"
 #include "cf_log.h"
+#include "cf_scanfast.h"
 #include "cf_scanjob.h"
 #include "jnl.h"
 #include "nf_err.h"
@@ -46,8 +47,9 @@ static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_op
         o->fit.stats_tol = p->tol;
         o->fit.within = p->fit_within;
         o->fit.max_cp = p->fit_max_cp ? (long)p->fit_max_cp : NF_MAX_CP;
-        o->fit.refine =
-            p->fit_refine == PLC_REFINE_UNIFORM ? CF_REFINE_UNIFORM : CF_REFINE_RESIDUAL;
+        o->fit.refine = p->fit_refine == PLC_REFINE_UNIFORM    ? CF_REFINE_UNIFORM
+                        : p->fit_refine == PLC_REFINE_RESIDUAL ? CF_REFINE_RESIDUAL
+                                                               : CF_REFINE_AUTO;
     }
     o->fit.robust = p->fit_robust != 0;
     o->fit.reparam = p->fit_reparam;
@@ -294,9 +296,18 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
     cf_scanjob_opts_t o;
     scan_opts(rr, p, &o);
     o.journal = rr->journal;
+    cf_scanfast_res_t fr;
+    memset(&fr, 0, sizeof fr);
+    o.fast_out = &fr;
     scan_result_t res;
     rig_take(rr, ctl);
     int rc = cf_scanjob_run(&o, ctl, &res, msg, sizeof msg);
+    /* SCAN_TRIGGERS .. SCAN_OVERRUNS: this scan's (0 when stop-and-go). */
+    const long counts[CF_PLC_SCAN_COUNTS] = {
+        fr.triggers, fr.dropped_by_probe, fr.lost_readings, fr.lost_triggers, fr.both_lost,
+        fr.dup,      fr.overrun};
+    for (int i = 0; i < CF_PLC_SCAN_COUNTS; i++)
+        atomic_store(&rr->scan_counts[i], counts[i] > 0 ? (unsigned)counts[i] : 0u);
     const char *det = res.where == SCAN_AT_STAGE   ? hal_stage_error(o.stage.ctx)
                       : res.where == SCAN_AT_PROBE ? hal_probe_error(o.probe.ctx)
                                                    : "";

@@ -30,6 +30,7 @@
 #include "cf_simchild.h"
 #include "hal_rig.h"
 #include <pthread.h>
+#include <stdatomic.h>
 
 #define CF_PLCRUN_RECIPES 16 /* RECIPE 0 (`nominal`) .. 15 (`nominal.15`) */
 
@@ -60,6 +61,9 @@ typedef struct cf_plcrun {
     int scan_method;
     double scan_period_us;
     int idle_stop; /* 1 while an ABORT with no job running sends STOP (under rig_mu) */
+    /* The last scan's on-the-fly counts (SCAN_TRIGGERS .. SCAN_OVERRUNS;
+     * 0 after a stop-and-go scan), written by the job, read by the server. */
+    atomic_uint scan_counts[CF_PLC_SCAN_COUNTS];
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

@@ -67,3 +67,39 @@ else
     no "lost: no cellsim pid in g.log"
 fi
 stop_one "$pid"
+
+# 3. The port file after SIGKILL: PORT and PID in it; replaced at the next
+# start (logged); a live serve's is never taken over.
+pf="$T/cell.port"
+wait_pf() { # wait_pf PID: until the port file names PID on line 2
+    i=0
+    while [ "$(sed -n 2p "$pf" 2>/dev/null)" != "$1" ] && kill -0 "$1" 2>/dev/null && [ $i -lt 100 ]; do
+        sleep 0.1; i=$((i + 1))
+    done
+}
+"$CF" serve --plc tcp:127.0.0.1:0 --port-file "$pf" --nominal "$T/part/nominal.igs" 2>"$T/k1.log" &
+k1=$!; pids="$k1 $pids"
+wait_pf "$k1"
+p1=$(sed -n 1p "$pf")
+[ -n "$p1" ] && [ "$(sed -n 2p "$pf")" = "$k1" ] && ok "port file: port $p1 and serve's pid $k1" ||
+    no "port file: $(cat "$pf")"
+kill -KILL "$k1"; wait "$k1" 2>/dev/null
+[ "$(sed -n 2p "$pf")" = "$k1" ] && ok "after SIGKILL the port file is left (pid $k1, no longer running)" ||
+    no "port file after SIGKILL: $(cat "$pf" 2>&1)"
+"$CF" serve --plc tcp:127.0.0.1:0 --port-file "$pf" --nominal "$T/part/nominal.igs" 2>"$T/k2.log" &
+k2=$!; pids="$k2 $pids"
+wait_pf "$k2"
+p2=$(sed -n 1p "$pf")
+[ "$(sed -n 2p "$pf")" = "$k2" ] && [ -n "$p2" ] &&
+    grep -q "port file $pf: stale (port $p1, serve pid $k1 no longer holds it): replaced" "$T/k2.log" &&
+    ok "restart: the stale port file replaced (port $p2, pid $k2), logged" ||
+    { no "restart: port file $(cat "$pf" 2>&1)"; sed 's/^/     /' "$T/k2.log" | head -5; }
+timeout 5 /usr/bin/python3 -c "import socket; socket.create_connection(('127.0.0.1', $p2), 2)" &&
+    ok "restart: serve answers on the port the file names" || no "restart: port $p2 not served"
+expect 1 "a second serve on a live serve's port file: exit 1" \
+    "$CF" serve --plc tcp:127.0.0.1:0 --port-file "$pf" --nominal "$T/part/nominal.igs"
+grep -q "port file $pf is held by a running serve (pid $k2, port $p2): not started" "$T/err" &&
+    [ "$(sed -n 1p "$pf")" = "$p2" ] && [ "$(sed -n 2p "$pf")" = "$k2" ] &&
+    ok "refused, naming pid $k2 and port $p2; the file unchanged" || no "second serve: $(cat "$T/err")"
+stop_one "$k2"
+[ ! -e "$pf" ] && ok "SIGTERM: the port file removed" || no "port file left after SIGTERM"
