@@ -28,8 +28,6 @@ static const char *job_nominal(const cf_plcrun_t *rr, const plc_params_t *p)
 /* The PLC's fit settings (map version 2) over the configured rest (solver,
  * rounds, robust passes): FIT_TOL > 0 runs the loop to it, while the
  * statistics and the verdict stay at TOLERANCE. */
-#define CF_PLCRUN_MIN_FREE (1024.0 * 1024.0) /* bytes free a job's folder needs beyond its own */
-
 static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_opts_t *o)
 {
     o->nominal = job_nominal(rr, p);
@@ -53,6 +51,11 @@ static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_op
     }
     o->fit.robust = p->fit_robust != 0;
     o->fit.reparam = p->fit_reparam;
+}
+
+static double min_free(const cf_plcrun_t *rr)
+{
+    return rr->min_free > 0 ? rr->min_free : CF_PLCRUN_MIN_FREE;
 }
 
 static const char *journal_dir(const cf_plcrun_t *rr, const plc_params_t *p)
@@ -128,8 +131,7 @@ static int check_scan(const cf_plcrun_t *rr, const plc_params_t *p)
         return PLC_E_BAD_PARAM;
     }
     /* One record a grid point, the header, and a margin for the rest. */
-    double need =
-        (double)JNL_HDR_BYTES + (double)pl.nx * pl.ny * JNL_REC_BYTES + CF_PLCRUN_MIN_FREE;
+    double need = (double)JNL_HDR_BYTES + (double)pl.nx * pl.ny * JNL_REC_BYTES + min_free(rr);
     return check_folder("scan", journal_dir(rr, p), need);
 }
 
@@ -179,7 +181,7 @@ static int run_check(void *ctx, int cmd, const plc_params_t *p)
             cf_log(CF_LOG_WARN, "export refused: results folder %u not configured", p->folder);
             return PLC_E_BAD_PARAM;
         }
-        return check_folder("export", rr->results_dir[p->folder], CF_PLCRUN_MIN_FREE);
+        return check_folder("export", rr->results_dir[p->folder], min_free(rr));
     default: return 0;
     }
 }

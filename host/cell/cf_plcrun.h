@@ -32,7 +32,8 @@
 #include <pthread.h>
 #include <stdatomic.h>
 
-#define CF_PLCRUN_RECIPES 16 /* RECIPE 0 (`nominal`) .. 15 (`nominal.15`) */
+#define CF_PLCRUN_RECIPES 16                 /* RECIPE 0 (`nominal`) .. 15 (`nominal.15`) */
+#define CF_PLCRUN_MIN_FREE (1024.0 * 1024.0) /* bytes free a job's folder keeps by default */
 
 typedef struct cf_plcrun {
     const char *nominal, *points;             /* fit inputs (config) */
@@ -64,6 +65,9 @@ typedef struct cf_plcrun {
     /* The last scan's on-the-fly counts (SCAN_TRIGGERS .. SCAN_OVERRUNS;
      * 0 after a stop-and-go scan), written by the job, read by the server. */
     atomic_uint scan_counts[CF_PLC_SCAN_COUNTS];
+    /* Bytes a job's folder must keep free beyond what the job writes
+     * (config min_free_mb; 0: CF_PLCRUN_MIN_FREE, 1 MiB). */
+    double min_free;
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

@@ -234,6 +234,11 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         if (cli_double(v, &r->scan_period_us) || !(r->scan_period_us >= 20) ||
             r->scan_period_us > 1e6)
             return cf_fail(msg, ml, CF_EARG, "scan_period_us '%s': need 20 .. 1000000", v);
+    } else if (!strcmp(k, "min_free_mb")) {
+        double mb;
+        if (cli_double(v, &mb) || !(mb >= 0) || mb > 1e9)
+            return cf_fail(msg, ml, CF_EARG, "min_free_mb '%s': need 0 .. 1e9 (MiB)", v);
+        r->min_free = mb > 0 ? mb * 1024.0 * 1024.0 : 1.0; /* 0: only the job's own bytes */
     } else if (!strcmp(k, "journal_dir"))
         r->journal_dir = keep(c, v);
     else if (!strcmp(k, "board"))
@@ -336,6 +341,10 @@ static const serve_key_t keys[] = {
     {"scan_period_us", "US",
      "scan_method otf: the trigger period; the stage runs at SCAN_STEP / it", "50"},
     {"journal_dir", "DIR", "folder of the scans' journals", "the results folder"},
+    {"min_free_mb", "MB",
+     "MiB a scan's journal folder and an export's results folder keep free beyond the job's own "
+     "bytes (checked when the job is accepted: 108)",
+     "1"},
     {"z0", "MM", "the probe's beam height", "50"},
     {"cal", "CX,CY,CZ", "the probe's calibration offset, mm", "0,0,0"},
     {"allow", "ADDR[/BITS],...", "client addresses allowed (IPv4, up to 16)", "any"},
