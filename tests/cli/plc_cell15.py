@@ -6,9 +6,12 @@
 # refused before any motion for want of free space, the outbox and
 # on-the-fly loss registers, FIT_REFINE 2 (auto). Prints "ok ..." / "FAIL
 # ..." lines; tests/cli/plc_cell15.sh counts them. Steps: hung PORT CONTROL
-# BOUND_S; lost PORT SIMPID; nospace PORT; regs PORT ...
+# BOUND_S; lost PORT SIMPID; nospace PORT CODE; outbox PORT CELLFIT DB
+# MQPORT; otfregs PORT OUT; refine PORT OUT.
+import json
 import os
 import signal
+import subprocess
 import sys
 import time
 
@@ -97,6 +100,120 @@ def nospace(port, code):
           % (s["state"], s["progress"]))
 
 
+OUTBOX_PG, SCAN_TRIGGERS, FIT_TOL, FIT_REFINE = 160, 168, 82, 88
+SCAN_NAMES = ("triggers", "dropped", "no_reading", "no_trigger", "both_lost", "duplicates",
+              "overruns")
+
+
+def outbox_regs(c):
+    r = c.read(OUTBOX_PG, 8)
+    return {"pg": c.u32(r[0:2]), "mqtt": c.u32(r[2:4]), "age": c.u32(r[4:6]),
+            "dropped": c.u32(r[6:8])}
+
+
+def outbox_cli(cf, db):
+    out = subprocess.run([cf, "results", "outbox", "--json", "--db", db], capture_output=True,
+                         text=True, timeout=20).stdout
+    return json.loads(out)
+
+
+def same_outbox(c, cf, db, what):
+    """The registers against `cellfit results outbox` (read around them)."""
+    a = outbox_cli(cf, db)
+    r = outbox_regs(c)
+    b = outbox_cli(cf, db)
+    ok = (r["pg"] in (a["pg"], b["pg"]) and r["mqtt"] in (a["mqtt"], b["mqtt"])
+          and r["dropped"] in (a["dropped"], b["dropped"])
+          and a["oldest_age_s"] - 2 <= r["age"] <= b["oldest_age_s"] + 2)
+    check(ok, "outbox: %s: registers %s = cellfit results outbox %s" % (what, r, b))
+    return r
+
+
+def wait_outbox(c, cond, limit):
+    t = time.time()
+    r = outbox_regs(c)
+    while time.time() - t < limit and not cond(r):
+        time.sleep(0.2)
+        r = outbox_regs(c)
+    return r
+
+
+def outbox(port, cf, db, mqport):
+    """OUTBOX_* while the broker is down (a job waits, its age grows), then
+    drained once a broker (mosquitto) listens."""
+    c = Cell(port)
+    r = outbox_regs(c)
+    check(r == {"pg": 0, "mqtt": 0, "age": 0, "dropped": 0}, "outbox: empty at start (%s)" % r)
+    c.write(pc.PART, c.words(4801) + [1, 0] + c.fwords(0.05))
+    s = c.command(3)  # FIT
+    check(s.get("result") == 0, "outbox: FIT accepted")
+    c.wait_done(c.seq)
+    c.command(8)  # ACK_RESULTS
+    r = wait_outbox(c, lambda r: r["mqtt"] >= 1 and r["age"] >= 2, 10)
+    check(r["mqtt"] == 1 and r["pg"] == 0 and r["age"] >= 2,
+          "outbox: broker down: OUTBOX_MQTT 1, OUTBOX_PG 0, OUTBOX_AGE %d s growing (%s)"
+          % (r["age"], r))
+    same_outbox(c, cf, db, "broker down")
+    broker = subprocess.Popen(["mosquitto", "-p", str(mqport)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+    try:
+        t0 = time.time()
+        r = wait_outbox(c, lambda r: r["mqtt"] == 0 and r["age"] == 0, 30)
+        check(r["mqtt"] == 0 and r["age"] == 0,
+              "outbox: broker up: drained to 0 within %.1f s (%s)" % (time.time() - t0, r))
+        same_outbox(c, cf, db, "drained")
+    finally:
+        broker.terminate()
+        broker.wait(5)
+
+
+def scan_regs(c):
+    r = c.read(SCAN_TRIGGERS, 14)
+    return dict(zip(SCAN_NAMES, (c.u32(r[i:i + 2]) for i in range(0, 14, 2))))
+
+
+def otfregs(port, out):
+    """SCAN on the fly with the probe's FIFO overflowing: the SCAN_*
+    registers; the script checks them against the journal and the log."""
+    c = Cell(port)
+    home_and_region(c, "otfregs", (60, 30, 140, 31, 0.1))
+    s = c.command(SCAN)
+    check(s.get("result") == 0, "otfregs: SCAN on the fly accepted")
+    s = c.wait_done(c.seq, 120)
+    check(not s["status"] & pc.ERROR, "otfregs: SCAN done (error %d)" % s["error"])
+    time.sleep(1.5)  # the registers follow within a second
+    r = scan_regs(c)
+    with open(out, "w") as f:
+        f.write(" ".join(str(r[n]) for n in SCAN_NAMES) + "\n")
+    check(r["triggers"] > 0, "otfregs: SCAN_* %s" % r)
+
+
+def refine(port, out):
+    """FIT_REFINE 2 (auto) is the default and is accepted, 3 is not; the
+    loop's control points with FIT_REFINE 2 and 1 (the script compares them
+    with `cellfit fit --refine auto` and `--refine residual`)."""
+    c = Cell(port)
+    check(c.read(FIT_REFINE, 1)[0] == 2, "refine: FIT_REFINE 2 (auto) at start")
+    check(c.write(FIT_REFINE, [0]) == 0 and c.write(FIT_REFINE, [2]) == 0,
+          "refine: FIT_REFINE 0 and 2 accepted")
+    check(c.write(FIT_REFINE, [3]) == 3, "refine: FIT_REFINE 3: exception 03")
+    c.write(pc.PART, c.words(4802) + [1, 0] + c.fwords(0.05))
+    c.write(FIT_TOL, c.fwords(0.01) + c.fwords(99.0))
+    cps = {}
+    for rf in (2, 1):
+        c.write(FIT_REFINE, [rf])
+        s = c.command(3)
+        check(s.get("result") == 0, "refine: FIT with the loop, FIT_REFINE %d, accepted" % rf)
+        s = c.wait_done(c.seq)
+        cps[rf] = pc.results(c)["cps"]
+        check(s["status"] & pc.RESULTS, "refine: FIT_REFINE %d: %d control points" % (rf, cps[rf]))
+        c.command(8)
+    with open(out, "w") as f:
+        f.write("%d %d\n" % (cps[2], cps[1]))
+    c.write(FIT_TOL, c.fwords(0.0) + c.fwords(100.0))
+    c.write(FIT_REFINE, [2])
+
+
 if __name__ == "__main__":
     step, port = sys.argv[1], int(sys.argv[2])
     a = sys.argv[3:]
@@ -107,6 +224,12 @@ if __name__ == "__main__":
             lost(port, a[0])
         elif step == "nospace":
             nospace(port, a[0])
+        elif step == "outbox":
+            outbox(port, a[0], a[1], int(a[2]))
+        elif step == "otfregs":
+            otfregs(port, a[0])
+        elif step == "refine":
+            refine(port, a[0])
         else:
             raise SystemExit("unknown step " + step)
     except Exception as e:  # a dead server or a protocol error is a failure, not a crash

@@ -103,3 +103,97 @@ grep -q "port file $pf is held by a running serve (pid $k2, port $p2): not start
     ok "refused, naming pid $k2 and port $p2; the file unchanged" || no "second serve: $(cat "$T/err")"
 stop_one "$k2"
 [ ! -e "$pf" ] && ok "SIGTERM: the port file removed" || no "port file left after SIGTERM"
+
+# 4. No room for the scan's journal: refused at acceptance (108), before
+# any motion. min_free_mb beyond any filesystem; then, where this user may
+# mount one, a 64 KiB tmpfs as the journal folder with the default 1 MiB.
+serve_start s --sim --nominal "$T/part/nominal.igs" --results "$T/ress" --min-free-mb 1000000000
+py nospace "$port" 108
+grep -q "scan refused: folder $T/ress: [0-9]* bytes free, the job needs [0-9]*" "$T/s.log" &&
+    ok "log: the folder, the bytes free and the bytes needed" || no "log: no free-space refusal"
+! grep -q "job SCAN" "$T/s.log" && ok "no scan job started" || no "a scan job started"
+stop_one "$pid"
+mkdir -p "$T/small"
+if mount -t tmpfs -o size=64k tmpfs "$T/small" 2>/dev/null; then
+    serve_start m --sim --nominal "$T/part/nominal.igs" --results "$T/resm" --journal-dir "$T/small"
+    py nospace "$port" 108
+    grep -q "scan refused: folder $T/small: [0-9]* bytes free" "$T/m.log" &&
+        ok "64 KiB tmpfs: refused for want of 1 MiB free" || no "tmpfs: no refusal logged"
+    stop_one "$pid"
+    umount "$T/small"
+else
+    echo "skip: cannot mount a tmpfs here (the min_free_mb case above covers the check)"
+fi
+expect 2 "serve --min-free-mb -1: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --min-free-mb -1
+
+# 5a. The outbox registers = `cellfit results outbox`, the broker down,
+# then up (mosquitto on a free port of 127.0.0.1).
+"$CF" gen --dir "$T/fp" --nu 16 --nv 12 --count 20000 --noise 0.002 >/dev/null
+grep -v '^#' "$T/fp/points.uvxyz" | cut -d' ' -f3- >"$T/fp/points.xyz"
+if command -v mosquitto >/dev/null; then
+    mq=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+    serve_start o --nominal "$T/fp/nominal.igs" --points "$T/fp/points.xyz" --results "$T/reso" \
+        --mqtt "mqtt://127.0.0.1:$mq/c15" --cell-id c15 --forward-backoff-max 1
+    py outbox "$port" "$CF" "$T/reso/results.db" "$mq"
+    stop_one "$pid"
+else
+    no "mosquitto not installed (scripts/deps.sh installs it)"
+fi
+
+# 5b. The last scan's on-the-fly losses: cellsim's FIFO of 64 overflowing
+# under slow replies (as tests/cli/scan_fast.sh's overrun case); the
+# registers against the journal (cellfit journal info) and serve's log.
+serve_start f --sim --nominal "$T/part/nominal.igs" --results "$T/resf" --scan-method otf \
+    --scan-period-us 20 --sim-args="--speed 5000 --seed 1 --part $T/part/nominal.igs --fifo 64 --fault slow@tcp:e30:10"
+py otfregs "$port" "$T/scan.regs"
+read -r trig dropped noread notrig both dup ovr <"$T/scan.regs" 2>/dev/null
+jnl=$(ls "$T"/resf/*.jnl 2>/dev/null | head -1)
+if [ -n "$jnl" ] && [ -n "${trig:-}" ] && "$CF" journal info "$jnl" --json >"$T/finfo.json"; then
+    pts=$(json "$T/finfo.json" points)
+    echo "     SCAN_*: triggers $trig dropped $dropped no_reading $noread no_trigger $notrig both_lost $both dup $dup overruns $ovr; journal points $pts"
+    [ "$trig" = "$pts" ] && ok "SCAN_TRIGGERS $trig = the journal's points" || no "SCAN_TRIGGERS $trig, journal $pts"
+    le 1 "$dropped" && le 1 "$ovr" && le 1 "$both" && le "$both" "$dropped" && [ "$noread" = 0 ] &&
+        [ "$notrig" = 0 ] && ok "losses counted: $dropped dropped by the probe, $ovr overruns, $both lost on both sides" ||
+        no "losses: $(cat "$T/scan.regs")"
+    grep -q "lost: $noread readings, $notrig triggers, $both on both sides ($dropped dropped by the probe), $ovr overrun" "$T/f.log" &&
+        ok "the registers = serve's log line of the scan" || no "log: $(grep 'scan on the fly' "$T/f.log")"
+else
+    no "otfregs: no journal or registers ($(ls "$T/resf" 2>&1))"
+fi
+stop_one "$pid"
+
+# 5c. FIT_REFINE 2 (auto): the default, and the cell's loop = the shell's
+# `cellfit fit --refine auto` (1: --refine residual): a coarse 8 x 6
+# nominal under the 40 x 30 part's points, fitted to 0.01 mm for 99 %.
+"$CF" gen --dir "$T/coarse" --nu 8 --nv 6 --count 1000 >/dev/null
+"$CF" gen --dir "$T/fine" --nu 40 --nv 30 --count 20000 --noise 0.002 >/dev/null
+grep -v '^#' "$T/fine/points.uvxyz" | cut -d' ' -f3- >"$T/fine/points.xyz"
+serve_start r --nominal "$T/coarse/nominal.igs" --points "$T/fine/points.xyz" --results "$T/resr"
+grep -q "fit defaults (FIT_TOL .. FIT_REPARAM): plain" "$T/r.log" && ok "serve starts with FIT_TOL 0" || no "fit defaults: $(grep 'fit defaults' "$T/r.log")"
+py refine "$port" "$T/refine.cps"
+read -r c_auto c_res <"$T/refine.cps" 2>/dev/null
+for how in auto residual; do
+    "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/fine/points.xyz" --tol 0.01 --within 99 \
+        --refine $how --json --out "$T/shell_$how.igs" >"$T/shell_$how.json" 2>"$T/err"
+done
+s_auto=$(json "$T/shell_auto.json" control_points)
+s_res=$(json "$T/shell_residual.json" control_points)
+echo "     control points: cell auto ${c_auto:-?} / shell auto ${s_auto:-?}; cell residual ${c_res:-?} / shell residual ${s_res:-?}"
+[ -n "${c_auto:-}" ] && [ "$c_auto" = "$s_auto" ] && [ "$c_res" = "$s_res" ] &&
+    ok "FIT_REFINE 2 = --refine auto ($c_auto), 1 = --refine residual ($c_res)" ||
+    no "refine: cell $c_auto/$c_res, shell $s_auto/$s_res"
+stop_one "$pid"
+serve_start u --nominal "$T/coarse/nominal.igs" --refine uniform --fit-to-tol
+grep -q "fit defaults (FIT_TOL .. FIT_REPARAM): loop to 0.05 mm (uniform)" "$T/u.log" &&
+    ok "--refine uniform still taken (FIT_REFINE 0)" || no "refine uniform: $(grep 'fit defaults' "$T/u.log")"
+stop_one "$pid"
+expect 2 "serve --refine sideways: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --refine sideways
+
+if grep -E "Sanitizer|runtime error" "$T"/*.log >/dev/null; then
+    no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/*.log | head -5
+else
+    ok "no sanitizer report in the server logs"
+fi
+stop_all
+echo "plc_cell15: $pass passed, $fail failed"
+[ $fail -eq 0 ]
