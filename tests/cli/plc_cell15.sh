@@ -26,7 +26,7 @@ stop_all() { # TERM, wait, then KILL
     done
     pids=""
 }
-trap 'stop_all; rm -rf "$T"' EXIT
+trap 'stop_all; umount "$T/small" 2>/dev/null; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
 py() { py_step plc_cell15.py 120 "$@"; } # py STEP PORT ARGS...
 stop_one() { kill -TERM "$1"; wait "$1"; pids=$(echo "$pids" | sed "s/\\b$1\\b//"); }
@@ -134,8 +134,12 @@ if command -v mosquitto >/dev/null; then
     mq=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
     serve_start o --nominal "$T/fp/nominal.igs" --points "$T/fp/points.xyz" --results "$T/reso" \
         --mqtt "mqtt://127.0.0.1:$mq/c15" --cell-id c15 --forward-backoff-max 1
-    py outbox "$port" "$CF" "$T/reso/results.db" "$mq"
+    py outbox "$port" "$CF" "$T/reso/results.db" down
+    mosquitto -p "$mq" >"$T/mq.log" 2>&1 &
+    mqpid=$!; pids="$mqpid $pids"
+    py outbox "$port" "$CF" "$T/reso/results.db" up
     stop_one "$pid"
+    stop_one "$mqpid"
 else
     no "mosquitto not installed (scripts/deps.sh installs it)"
 fi
