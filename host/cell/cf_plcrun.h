@@ -22,7 +22,12 @@
  * an abort sets the server's stop flag, which the stage driver polls while
  * it waits for a move or homing (hal_stage_t.should_stop) and the scan
  * between points: the stage is stopped from the job's own line within one
- * poll. With no job running, an abort stops the stage at once. */
+ * poll. The stage's and the probe's transports see the same flag
+ * (hal_set_stop): retries, late-reply waits and reconnects give up at once,
+ * so an abort lands within one request timeout even on a hung device. With
+ * no job running, an abort stops the stage at once (one attempt). A rig
+ * lost for good (the simulator ended) stops the job with RIG_ELOST, which
+ * the scan's journal ends with. */
 #ifndef CF_PLCRUN_H
 #define CF_PLCRUN_H
 
