@@ -191,7 +191,7 @@ void plc_fsm_init(plc_fsm_t *f, plc_map_t *m, int rig, uint16_t watchdog_ms, plc
     plc_map_put_f32(m, PLC_R_SCAN_STEP, 1.0f);
     /* The fit loop as `cellfit fit --tol` runs it, off until FIT_TOL > 0. */
     plc_map_put_f32(m, PLC_R_FIT_WITHIN, 100.0f);
-    plc_map_put_u16(m, PLC_R_FIT_REFINE, PLC_REFINE_RESIDUAL);
+    plc_map_put_u16(m, PLC_R_FIT_REFINE, PLC_REFINE_AUTO);
     publish(f);
 }
 

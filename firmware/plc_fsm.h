@@ -74,7 +74,7 @@ typedef struct plc_params {
 } plc_params_t;
 
 /* FIT_REFINE values (cf_refine_t's numbering). */
-enum { PLC_REFINE_UNIFORM = 0, PLC_REFINE_RESIDUAL = 1 };
+enum { PLC_REFINE_UNIFORM = 0, PLC_REFINE_RESIDUAL = 1, PLC_REFINE_AUTO = 2 };
 
 /* FIT_STATUS values: how the fit loop ended. */
 enum {

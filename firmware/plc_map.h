@@ -12,10 +12,12 @@
 
 #include <stdint.h>
 
-#define PLC_MAGIC 17222u   /* 0x4346, "CF" */
-#define PLC_MAP_VERSION 2u /* 2: fit settings, recipe, part ID, job time, fit status, counters */
-#define PLC_FW_VERSION 0x0100u   /* major in the high byte, minor in the low */
-#define PLC_TEST_F32 123.456f    /* 0x42F6E979: words 0x42F6, 0xE979 */
+#define PLC_MAGIC 17222u /* 0x4346, "CF" */
+#define PLC_MAP_VERSION                                                                            \
+    3u                         /* 2: fit settings, recipe, part ID, job time, fit status, counters;
+                           * 3: outbox and on-the-fly loss registers, FIT_REFINE 2 (auto) */
+#define PLC_FW_VERSION 0x0100u /* major in the high byte, minor in the low */
+#define PLC_TEST_F32 123.456f  /* 0x42F6E979: words 0x42F6, 0xE979 */
 #define PLC_TEST_U32 0x12345678u /* 305419896: words 0x1234, 0x5678 */
 #define PLC_MAX_FOLDERS 8        /* results folder choices */
 #define PLC_MAX_READ 125         /* registers per read (Modbus limit) */
@@ -52,10 +54,12 @@ enum {
  * Ranges apply to writable registers; a float range is inclusive; a
  * string's range is that of each character (0 pads the end). Version 2
  * added FIT_TOL .. RECIPE, JOB_TIME, FIT_STATUS, PART_ID and the counters
- * (JOBS_OK .. LAST_ERROR); every version 1 address is unchanged. */
+ * (JOBS_OK .. LAST_ERROR); version 3 the plant outbox (OUTBOX_*, issue
+ * 18) and the last scan's on-the-fly losses (SCAN_*, issue 19), and
+ * FIT_REFINE 2; every earlier address is unchanged. */
 #define PLC_REGS(X)                                                                                \
     X(MAGIC, 0, U16, RO, 0, 0, "", "17222 (0x4346, \"CF\"): this is a cellfit cell")               \
-    X(MAP_VERSION, 1, U16, RO, 0, 0, "", "register map version (2)")                               \
+    X(MAP_VERSION, 1, U16, RO, 0, 0, "", "register map version (3)")                               \
     X(TEST_F32, 2, F32, RO, 0, 0, "", "123.456 in the selected word order")                        \
     X(TEST_U32, 4, U32, RO, 0, 0, "", "305419896 (0x12345678) in the selected word order")         \
     X(FW_VERSION, 6, U16, RO, 0, 0, "", "firmware version, major in the high byte")                \
@@ -94,8 +98,9 @@ enum {
     X(FIT_WITHIN, 84, F32, RW, 0.01, 100, "%",                                                     \
       "fit loop: share of the points wanted within FIT_TOL")                                       \
     X(FIT_MAX_CP, 86, U32, RW, 0, 4000000, "", "fit loop: control points at most, 0 the board's")  \
-    X(FIT_REFINE, 88, U16, RW, 0, 1, "",                                                           \
-      "fit loop refinement: 0 uniform (every span halved), 1 residual (worst spans split)")        \
+    X(FIT_REFINE, 88, U16, RW, 0, 2, "",                                                           \
+      "fit loop refinement: 0 uniform (every span halved), 1 residual (worst spans split), 2 "     \
+      "auto (knot lines scored per control point added)")                                          \
     X(FIT_ROBUST, 89, U16, RW, 0, 1, "",                                                           \
       "fit: 1 robust (reweighted passes against outliers), 0 off")                                 \
     X(FIT_REPARAM, 90, U16, RW, 0, 100, "",                                                        \
@@ -128,7 +133,23 @@ enum {
       "connections closed idle or with a frame incomplete for 1 s")                                \
     X(REQ_REFUSED, 152, U32, RO, 0, 0, "", "requests answered with a Modbus exception")            \
     X(CMD_REFUSED, 154, U32, RO, 0, 0, "", "commands refused (CMD_RESULT not 0)")                  \
-    X(LAST_ERROR, 156, U16, RO, 0, 0, "", "the last ERROR_CODE shown (kept after RESET), 0 none")
+    X(LAST_ERROR, 156, U16, RO, 0, 0, "", "the last ERROR_CODE shown (kept after RESET), 0 none")  \
+    X(OUTBOX_PG, 160, U32, RO, 0, 0, "", "plant outbox: jobs waiting for the PostgreSQL database") \
+    X(OUTBOX_MQTT, 162, U32, RO, 0, 0, "", "plant outbox: jobs waiting for the MQTT broker")       \
+    X(OUTBOX_AGE, 164, U32, RO, 0, 0, "s",                                                         \
+      "plant outbox: age of the oldest waiting entry, 0 none")                                     \
+    X(OUTBOX_DROPPED, 166, U32, RO, 0, 0, "",                                                      \
+      "plant outbox: entries dropped because it was full (outbox_max)")                            \
+    X(SCAN_TRIGGERS, 168, U32, RO, 0, 0, "", "last scan on the fly: triggers fired")               \
+    X(SCAN_DROPPED, 170, U32, RO, 0, 0, "",                                                        \
+      "last scan on the fly: readings the probe dropped (its buffer full)")                        \
+    X(SCAN_NO_READING, 172, U32, RO, 0, 0, "", "last scan on the fly: triggers without a reading") \
+    X(SCAN_NO_TRIGGER, 174, U32, RO, 0, 0, "", "last scan on the fly: readings without a trigger") \
+    X(SCAN_BOTH_LOST, 176, U32, RO, 0, 0, "",                                                      \
+      "last scan on the fly: trigger numbers with neither a position nor a reading")               \
+    X(SCAN_DUPLICATES, 178, U32, RO, 0, 0, "",                                                     \
+      "last scan on the fly: triggers or readings seen twice (dropped)")                           \
+    X(SCAN_OVERRUNS, 180, U32, RO, 0, 0, "", "last scan on the fly: the probe's overrun events")
 
 /* Addresses: PLC_R_MAGIC == 0 ... */
 enum {
@@ -143,7 +164,7 @@ enum {
 #undef PLC_X_IDX
 };
 
-#define PLC_NREGS 157      /* registers 0 .. PLC_NREGS - 1 may be read */
+#define PLC_NREGS 182      /* registers 0 .. PLC_NREGS - 1 may be read */
 #define PLC_PART_ID_LEN 32 /* characters of PART_ID */
 /* The results block, cleared by ACK_RESULTS: RMS .. FIT_STATUS. */
 #define PLC_R_RESULTS_END (PLC_R_FIT_STATUS + 1)

@@ -24,6 +24,7 @@ const char *rig_strerror(int err)
     case RIG_ECORRUPT: return "journal record damaged";
     case RIG_EABORTED: return "job stopped on request";
     case RIG_ESTATE: return "call out of order";
+    case RIG_ELOST: return "rig lost (its process ended)";
     default: return "unknown error";
     }
 }

@@ -25,7 +25,8 @@ typedef enum rig_err {
     RIG_EFULL = -215,        /* storage full */
     RIG_ECORRUPT = -216,     /* journal record damaged before its tail */
     RIG_EABORTED = -217,     /* job stopped on request (abort, watchdog) */
-    RIG_ESTATE = -218        /* call out of order */
+    RIG_ESTATE = -218,       /* call out of order */
+    RIG_ELOST = -219 /* the rig is gone for good (its process ended): a job stopped for it */
 } rig_err_t;
 
 /* A static string for every value above; "unknown error" otherwise. */

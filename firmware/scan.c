@@ -70,6 +70,14 @@ static double now(const scan_job_t *job)
  * be), the end record written and synced. Returns code. */
 static int finish(const scan_job_t *job, jnl_t *j, scan_result_t *res, long k, int code, int where)
 {
+    if (code && job->clock.ops && job->clock.ops->should_stop) {
+        /* A job stopped for a reason of its own (should_stop gave a
+         * rig_err_t, e.g. RIG_ELOST: the rig's process ended) ends with that
+         * reason, whatever the device call it interrupted returned. */
+        int why = job->clock.ops->should_stop(job->clock.ctx);
+        if (why < 0)
+            code = why;
+    }
     res->where = code ? where : SCAN_AT_NONE;
     if (code && job->stage.ops->stop)
         job->stage.ops->stop(job->stage.ctx);

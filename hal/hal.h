@@ -95,6 +95,16 @@ struct hal {
     char err[256];         /* detail of the last failure */
     unsigned long retries; /* retries made since open (statistics) */
     unsigned long reconnects;
+    /* Appended (issue 15, ABORT bounded): asked between attempts and in
+     * every wait of a retry, late-reply or reconnect loop (hal_set_stop);
+     * non-zero makes the call give up with RIG_EABORTED instead of waiting
+     * out the retries. While it is set a request is tried once, so a STOP
+     * still reaches a live device; once a request failed with it set, the
+     * device is taken as hung and later requests fail at once (stop_dead)
+     * until the stop is withdrawn. NULL: never. */
+    int (*should_stop)(void *ctx);
+    void *stop_ctx;
+    int stop_dead;
 };
 
 /* Open the device a URI names (opts NULL: defaults). RIG_EOPEN,
@@ -115,6 +125,11 @@ int hal_bulk(hal_t *h, uint8_t ep, void *data, size_t len, size_t *got);
  * request finds the line gone); RIG_EDISCONNECT if it stays away for
  * reconnect_ms. */
 int hal_reconnect(hal_t *h);
+
+/* The stop check above (fn NULL: none). hal_stopped: 1 while it asks to
+ * stop (and clears stop_dead when it no longer does). */
+void hal_set_stop(hal_t *h, int (*fn)(void *ctx), void *ctx);
+int hal_stopped(hal_t *h);
 
 /* Backend constructors (one file each). hal_open dispatches on the URI. */
 int hal_modbus_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **h, char *msg, size_t len);

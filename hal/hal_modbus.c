@@ -81,12 +81,17 @@ static int mb_reconnect(hal_t *h)
         if (mb_connect(m) == 0)
             return RIG_OK;
         int e = errno;
+        if (hal_stopped(h)) /* an abort does not wait for the line to come back */
+            return hal_fail(h, RIG_EABORTED, "%s: line lost, reopening given up: stop asked",
+                            mb_where(m, where, sizeof where));
         double left = t_end - hal_now_ms();
         if (left <= 0)
             return hal_fail(h, RIG_EDISCONNECT, "%s: line lost, reopening failed for %d ms: %s",
                             mb_where(m, where, sizeof where), h->opts.reconnect_ms,
                             modbus_strerror(e));
-        hal_sleep_ms(wait < left ? wait : left);
+        if (hal_wait_ms(h, wait < left ? wait : left))
+            return hal_fail(h, RIG_EABORTED, "%s: line lost, reopening given up: stop asked",
+                            mb_where(m, where, sizeof where));
         wait = wait * 2 > 200 ? 200 : wait * 2;
     }
 }
@@ -116,6 +121,9 @@ static int mb_request(hal_mb_t *m, int op, int addr, int n, uint16_t *regs)
                                        : "writing";
     char where[300];
     int backoff = h->opts.backoff_ms, relinks = 0;
+    int rc0 = hal_stop_before(h); /* a device already found hung under this stop */
+    if (rc0)
+        return rc0;
     for (int attempt = 0;; attempt++) {
         if (!m->up) {
             int rc = mb_reconnect(h);
@@ -133,10 +141,18 @@ static int mb_request(hal_mb_t *m, int op, int addr, int n, uint16_t *regs)
                  modbus_strerror(e), attempt + 1, h->opts.retries + 1);
         if (code == RIG_EARG || (code == RIG_EEXCEPTION && e != EMBXSBUSY))
             return code;
+        int stopped = hal_stop_after(h, code); /* an abort waits for no retry */
+        if (stopped) {
+            modbus_flush(m->ctx);
+            return stopped;
+        }
         if (code == RIG_ETIMEOUT) {
             /* The reply may still be on its way: let it arrive and drop it,
              * or it would answer the next request (off by one ever after). */
-            hal_sleep_ms(h->opts.late_ms);
+            if (hal_wait_ms(h, h->opts.late_ms)) {
+                modbus_flush(m->ctx);
+                return hal_stop_after(h, code);
+            }
             modbus_flush(m->ctx);
         } else if (code == RIG_ECRC || code == RIG_EPROTO) {
             hal_sleep_ms(h->opts.byte_timeout_ms); /* the rest of a broken frame */
@@ -158,7 +174,8 @@ static int mb_request(hal_mb_t *m, int op, int addr, int n, uint16_t *regs)
         if (getenv("HAL_DEBUG"))
             fprintf(stderr, "hal: %s\n", h->err);
         h->retries++;
-        hal_sleep_ms(backoff);
+        if (hal_wait_ms(h, backoff))
+            return hal_stop_after(h, code);
         backoff = backoff * 2 > 2000 ? 2000 : backoff * 2;
     }
 }

@@ -12,6 +12,16 @@ int hal_fail(hal_t *h, int code, const char *fmt, ...) __attribute__((format(pri
 
 double hal_now_ms(void); /* monotonic milliseconds */
 void hal_sleep_ms(double ms);
+/* Sleep ms in slices of at most HAL_STOP_SLICE_MS that see h's stop check:
+ * RIG_OK after the whole wait, RIG_EABORTED as soon as a stop is asked. */
+#define HAL_STOP_SLICE_MS 10.0
+int hal_wait_ms(hal_t *h, double ms);
+/* A request's stop rules (hal.h): RIG_EABORTED (detail in h->err) when a
+ * stop is asked and the device already failed a request under it, else
+ * RIG_OK. hal_stop_after: after a failed attempt, RIG_EABORTED (the device
+ * now taken as hung) when a stop is asked, else RIG_OK. */
+int hal_stop_before(hal_t *h);
+int hal_stop_after(hal_t *h, int code);
 
 /* Fill o from in (NULL: defaults), a field left 0 taking its default. */
 void hal_opts_fill(hal_opts_t *o, const hal_opts_t *in);

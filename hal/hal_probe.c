@@ -106,6 +106,8 @@ static int transact(hal_probe_t *p, const char *req, char *line, size_t cap,
 {
     hal_t *h = p->h;
     int backoff = h->opts.backoff_ms;
+    if (hal_stop_before(h)) /* the probe already found hung under this stop */
+        return hal_probe_pfail(p, RIG_EABORTED, "probe: %s", hal_last_error(h));
     for (int attempt = 0;; attempt++) {
         int rc = hal_write(h, req, strlen(req));
         if (rc == RIG_OK)
@@ -122,10 +124,14 @@ static int transact(hal_probe_t *p, const char *req, char *line, size_t cap,
                 return hal_probe_pfail(p, rc, "probe %s: error reply '%s'", h->uri.path, line);
             hal_probe_pfail(p, rc, "probe %s: malformed reply '%.40s'", h->uri.path, line);
         }
-        if (rc == RIG_EDISCONNECT || rc == RIG_EARG || rc == RIG_EUNSUPPORTED)
+        if (rc == RIG_EDISCONNECT || rc == RIG_EARG || rc == RIG_EUNSUPPORTED || rc == RIG_EABORTED)
             return rc;
+        int stopped = hal_stop_after(h, rc); /* an abort waits for no retry (hal.h) */
+        if (stopped)
+            return hal_probe_pfail(p, stopped, "probe: %s", hal_last_error(h));
         /* Let a late or broken reply finish arriving, then drop it. */
-        hal_sleep_ms(rc == RIG_ETIMEOUT ? h->opts.late_ms : h->opts.byte_timeout_ms);
+        if (hal_wait_ms(h, rc == RIG_ETIMEOUT ? h->opts.late_ms : h->opts.byte_timeout_ms))
+            return hal_probe_pfail(p, hal_stop_after(h, rc), "probe: %s", hal_last_error(h));
         hal_flush(h);
         if (attempt >= h->opts.retries) {
             char d[320];
@@ -133,7 +139,8 @@ static int transact(hal_probe_t *p, const char *req, char *line, size_t cap,
             return hal_probe_pfail(p, rc, "%.280s (after %d attempts)", d, attempt + 1);
         }
         h->retries++;
-        hal_sleep_ms(backoff);
+        if (hal_wait_ms(h, backoff))
+            return hal_probe_pfail(p, hal_stop_after(h, rc), "probe: %s", hal_last_error(h));
         backoff = backoff * 2 > 2000 ? 2000 : backoff * 2;
     }
 }

@@ -135,6 +135,11 @@ static int serial_reconnect(hal_t *h)
         double left = end - now_ms();
         if (left <= 0)
             break;
+        if (hal_stopped(h)) { /* an abort does not wait for it to come back (hal.h) */
+            snprintf(h->err, sizeof h->err, "line lost (%.100s); reopening given up: stop asked",
+                     why);
+            return RIG_EDISCONNECT;
+        }
         sleep_ms(wait < left ? wait : (int)left + 1);
         wait = wait * 2 > 500 ? 500 : wait * 2;
     }

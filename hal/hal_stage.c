@@ -26,9 +26,18 @@ static int sfail(hal_stage_t *s, int code, const char *fmt, ...)
     return code;
 }
 
-/* A transport failure: its detail becomes ours. */
+/* A transport failure: its detail becomes ours. One that gave up on a stop
+ * request (hal.h: the device did not answer while a stop was asked) sends
+ * STOP (tried once, or not at all when the device is hung) and aborts. */
 static int tfail(hal_stage_t *s, int code, const char *what)
 {
+    if (code == RIG_EABORTED) {
+        char why[256];
+        snprintf(why, sizeof why, "%s", hal_last_error(s->h));
+        uint16_t stop = STG_CMD_STOP;
+        hal_write_regs(s->h, STG_COMMAND, 1, &stop);
+        return sfail(s, RIG_EABORTED, "stage %s: stopped on request (%s)", what, why);
+    }
     return sfail(s, code, "stage %s: %s", what, hal_last_error(s->h));
 }
 

@@ -94,7 +94,9 @@ static int tty_reconnect(hal_t *h)
         if (left <= 0)
             return hal_fail(h, RIG_EDISCONNECT, "tty:%s: line lost, reopening failed for %d ms: %s",
                             h->uri.path, h->opts.reconnect_ms, strerror(e));
-        hal_sleep_ms(wait < left ? wait : left);
+        if (hal_wait_ms(h, wait < left ? wait : left)) /* an abort does not wait for the line */
+            return hal_fail(h, RIG_EABORTED, "tty:%s: line lost, reopening given up: stop asked",
+                            h->uri.path);
         wait = wait * 2 > 200 ? 200 : wait * 2;
     }
 }

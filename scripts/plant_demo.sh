@@ -76,7 +76,7 @@ CONF
     pids="$! $pids"
     i=0
     while [ ! -s "$d/port" ] && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
-    timeout $((SECS + 120)) "$PY" "$ROOT/scripts/plant_demo.py" drive "$(cat "$d/port")" "$SECS" \
+    timeout $((SECS + 120)) "$PY" "$ROOT/scripts/plant_demo.py" drive "$(sed -n 1p "$d/port")" "$SECS" \
         $((k * 100000)) >"$d/drive.log" 2>&1 &
     drivers="$drivers $!"
 done

@@ -5,6 +5,7 @@
 #include "cf_cli.h"
 #include "cf_err.h"
 #include "cf_log.h"
+#include "cf_scanfast.h"
 #include "cf_scanjob.h"
 #include "jnl.h"
 #include "nf_err.h"
@@ -27,8 +28,6 @@ static const char *job_nominal(const cf_plcrun_t *rr, const plc_params_t *p)
 /* The PLC's fit settings (map version 2) over the configured rest (solver,
  * rounds, robust passes): FIT_TOL > 0 runs the loop to it, while the
  * statistics and the verdict stay at TOLERANCE. */
-#define CF_PLCRUN_MIN_FREE (1024.0 * 1024.0) /* bytes free a job's folder needs beyond its own */
-
 static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_opts_t *o)
 {
     o->nominal = job_nominal(rr, p);
@@ -46,11 +45,17 @@ static void fit_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_job_fit_op
         o->fit.stats_tol = p->tol;
         o->fit.within = p->fit_within;
         o->fit.max_cp = p->fit_max_cp ? (long)p->fit_max_cp : NF_MAX_CP;
-        o->fit.refine =
-            p->fit_refine == PLC_REFINE_UNIFORM ? CF_REFINE_UNIFORM : CF_REFINE_RESIDUAL;
+        o->fit.refine = p->fit_refine == PLC_REFINE_UNIFORM    ? CF_REFINE_UNIFORM
+                        : p->fit_refine == PLC_REFINE_RESIDUAL ? CF_REFINE_RESIDUAL
+                                                               : CF_REFINE_AUTO;
     }
     o->fit.robust = p->fit_robust != 0;
     o->fit.reparam = p->fit_reparam;
+}
+
+static double min_free(const cf_plcrun_t *rr)
+{
+    return rr->min_free > 0 ? rr->min_free : CF_PLCRUN_MIN_FREE;
 }
 
 static const char *journal_dir(const cf_plcrun_t *rr, const plc_params_t *p)
@@ -126,8 +131,7 @@ static int check_scan(const cf_plcrun_t *rr, const plc_params_t *p)
         return PLC_E_BAD_PARAM;
     }
     /* One record a grid point, the header, and a margin for the rest. */
-    double need =
-        (double)JNL_HDR_BYTES + (double)pl.nx * pl.ny * JNL_REC_BYTES + CF_PLCRUN_MIN_FREE;
+    double need = (double)JNL_HDR_BYTES + (double)pl.nx * pl.ny * JNL_REC_BYTES + min_free(rr);
     return check_folder("scan", journal_dir(rr, p), need);
 }
 
@@ -177,7 +181,7 @@ static int run_check(void *ctx, int cmd, const plc_params_t *p)
             cf_log(CF_LOG_WARN, "export refused: results folder %u not configured", p->folder);
             return PLC_E_BAD_PARAM;
         }
-        return check_folder("export", rr->results_dir[p->folder], CF_PLCRUN_MIN_FREE);
+        return check_folder("export", rr->results_dir[p->folder], min_free(rr));
     default: return 0;
     }
 }
@@ -187,6 +191,7 @@ int cf_plcrun_rig_code(int rc, int where)
     switch (rc) {
     case RIG_OK: return 0;
     case RIG_EABORTED: return CF_PLC_ABORTED;
+    case RIG_ELOST: return PLC_E_RIG_GONE;
     case RIG_ETIMEOUT:
     case RIG_EDISCONNECT:
     case RIG_ECRC:
@@ -202,11 +207,15 @@ int cf_plcrun_rig_code(int rc, int where)
     }
 }
 
-/* The stage driver's stop check while it waits for a move or homing. */
+/* The stop check of the stage driver (while it waits for a move or
+ * homing) and of the transports (hal_set_stop: retries, late replies and
+ * reconnects give up at once): the running phase's stop, or an ABORT's STOP
+ * sent with no job running (one attempt, not the retries). */
 static int rig_should_stop(void *ctx)
 {
-    const cf_job_ctl_t *c = ((cf_plcrun_t *)ctx)->ctl;
-    return c && c->should_stop && c->should_stop(c->ctx);
+    const cf_plcrun_t *rr = ctx;
+    const cf_job_ctl_t *c = rr->ctl;
+    return rr->idle_stop || (c && c->should_stop && c->should_stop(c->ctx) != 0);
 }
 
 static void rig_take(cf_plcrun_t *rr, const cf_job_ctl_t *ctl)
@@ -289,9 +298,18 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
     cf_scanjob_opts_t o;
     scan_opts(rr, p, &o);
     o.journal = rr->journal;
+    cf_scanfast_res_t fr;
+    memset(&fr, 0, sizeof fr);
+    o.fast_out = &fr;
     scan_result_t res;
     rig_take(rr, ctl);
     int rc = cf_scanjob_run(&o, ctl, &res, msg, sizeof msg);
+    /* SCAN_TRIGGERS .. SCAN_OVERRUNS: this scan's (0 when stop-and-go). */
+    const long counts[CF_PLC_SCAN_COUNTS] = {
+        fr.triggers, fr.dropped_by_probe, fr.lost_readings, fr.lost_triggers, fr.both_lost,
+        fr.dup,      fr.overrun};
+    for (int i = 0; i < CF_PLC_SCAN_COUNTS; i++)
+        atomic_store(&rr->scan_counts[i], counts[i] > 0 ? (unsigned)counts[i] : 0u);
     const char *det = res.where == SCAN_AT_STAGE   ? hal_stage_error(o.stage.ctx)
                       : res.where == SCAN_AT_PROBE ? hal_probe_error(o.probe.ctx)
                                                    : "";
@@ -300,9 +318,9 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
         cf_log(CF_LOG_ERROR, "scan: %s", msg);
         return PLC_E_RIG;
     }
-    if (rc == RIG_EABORTED) {
-        cf_log(CF_LOG_WARN, "scan: stopped at grid point %ld; journal %s consistent",
-               res.fail_index, rr->journal);
+    if (rc == RIG_EABORTED || rc == RIG_ELOST) {
+        cf_log(CF_LOG_WARN, "scan: stopped at grid point %ld%s; journal %s consistent",
+               res.fail_index, rc == RIG_ELOST ? " (the rig was lost)" : "", rr->journal);
         return CF_PLC_ABORTED;
     }
     if (rc) {
@@ -432,7 +450,9 @@ static void run_abort(void *ctx)
         return;
     if (pthread_mutex_trylock(&rr->rig_mu) == 0) {
         const rig_stage_t *s = &rr->rig->stage;
+        rr->idle_stop = 1; /* a hung stage holds the server thread one timeout, not the retries */
         int rc = s->ops->stop(s->ctx);
+        rr->idle_stop = 0;
         pthread_mutex_unlock(&rr->rig_mu);
         if (rc)
             cf_log(CF_LOG_WARN, "abort: stage stop: %s", hal_stage_error(s->ctx));
@@ -461,6 +481,8 @@ void cf_plcrun_init(cf_plcrun_t *rr, cf_runner_t *out)
     if (rr->rig) {
         rr->rig->st.should_stop = rig_should_stop;
         rr->rig->st.stop_ctx = rr;
+        hal_set_stop(rr->rig->st.h, rig_should_stop, rr);
+        hal_set_stop(rr->rig->pr.h, rig_should_stop, rr);
     }
     out->check = run_check;
     out->home = run_home;

@@ -22,7 +22,12 @@
  * an abort sets the server's stop flag, which the stage driver polls while
  * it waits for a move or homing (hal_stage_t.should_stop) and the scan
  * between points: the stage is stopped from the job's own line within one
- * poll. With no job running, an abort stops the stage at once. */
+ * poll. The stage's and the probe's transports see the same flag
+ * (hal_set_stop): retries, late-reply waits and reconnects give up at once,
+ * so an abort lands within one request timeout even on a hung device. With
+ * no job running, an abort stops the stage at once (one attempt). A rig
+ * lost for good (the simulator ended) stops the job with RIG_ELOST, which
+ * the scan's journal ends with. */
 #ifndef CF_PLCRUN_H
 #define CF_PLCRUN_H
 
@@ -30,8 +35,10 @@
 #include "cf_simchild.h"
 #include "hal_rig.h"
 #include <pthread.h>
+#include <stdatomic.h>
 
-#define CF_PLCRUN_RECIPES 16 /* RECIPE 0 (`nominal`) .. 15 (`nominal.15`) */
+#define CF_PLCRUN_RECIPES 16                 /* RECIPE 0 (`nominal`) .. 15 (`nominal.15`) */
+#define CF_PLCRUN_MIN_FREE (1024.0 * 1024.0) /* bytes free a job's folder keeps by default */
 
 typedef struct cf_plcrun {
     const char *nominal, *points;             /* fit inputs (config) */
@@ -59,6 +66,13 @@ typedef struct cf_plcrun {
      * and trigger period (config scan_method, scan_period_us) */
     int scan_method;
     double scan_period_us;
+    int idle_stop; /* 1 while an ABORT with no job running sends STOP (under rig_mu) */
+    /* The last scan's on-the-fly counts (SCAN_TRIGGERS .. SCAN_OVERRUNS;
+     * 0 after a stop-and-go scan), written by the job, read by the server. */
+    atomic_uint scan_counts[CF_PLC_SCAN_COUNTS];
+    /* Bytes a job's folder must keep free beyond what the job writes
+     * (config min_free_mb; 0: CF_PLCRUN_MIN_FREE, 1 MiB). */
+    double min_free;
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

@@ -8,7 +8,9 @@
  * worker touches the register table only under the mutex. */
 #include "cf_plcsrv.h"
 #include "cf_log.h"
+#include "cf_portfile.h"
 #include "plc_mbap.h"
+#include "rig_err.h"
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -135,7 +137,8 @@ static void join_worker(srv_t *s)
 static void act(srv_t *s, plc_action_t a)
 {
     if (a == PLC_ACT_ABORT) {
-        atomic_store(&s->stop_job, 1);
+        int none = 0; /* a reason already given (RIG_ELOST) stays */
+        atomic_compare_exchange_strong(&s->stop_job, &none, 1);
         s->run->abort(s->run->ctx);
         cf_log(CF_LOG_WARN, "abort: job asked to stop, motion stopped");
     } else if (a == PLC_ACT_START) {
@@ -385,6 +388,28 @@ static int write_port_file(const char *path, int port)
     return 0;
 }
 
+/* The scan counts fill SCAN_TRIGGERS .. SCAN_OVERRUNS, two registers each. */
+_Static_assert(PLC_R_SCAN_OVERRUNS == PLC_R_SCAN_TRIGGERS + 2 * (CF_PLC_SCAN_COUNTS - 1),
+               "cf_plc_stats_t.scan and the SCAN_* registers");
+
+/* Map version 3's outbox and scan registers from the cell (o->stats). */
+static void put_stats(srv_t *s, const cf_plcsrv_opts_t *o)
+{
+    cf_plc_stats_t v;
+    memset(&v, 0, sizeof v);
+    o->stats(o->stats_ctx, &v);
+    pthread_mutex_lock(&s->mu);
+    if (v.have_outbox) {
+        plc_map_put_u32(&s->map, PLC_R_OUTBOX_PG, v.outbox_pg);
+        plc_map_put_u32(&s->map, PLC_R_OUTBOX_MQTT, v.outbox_mqtt);
+        plc_map_put_u32(&s->map, PLC_R_OUTBOX_AGE, v.outbox_age_s);
+        plc_map_put_u32(&s->map, PLC_R_OUTBOX_DROPPED, v.outbox_dropped);
+    }
+    for (unsigned i = 0; i < CF_PLC_SCAN_COUNTS; i++)
+        plc_map_put_u32(&s->map, PLC_R_SCAN_TRIGGERS + 2 * i, v.scan[i]);
+    pthread_mutex_unlock(&s->mu);
+}
+
 /* CLIENTS, and one of the connection counters (0: none). */
 static void set_clients(srv_t *s, int n, unsigned counter)
 {
@@ -529,7 +554,7 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
     plc_map_put_u16(&s.map, PLC_R_FIT_REPARAM, o->fit_reparam);
 
     int ret = -1, lfd = -1, nc = 0;
-    uint32_t t_refused = now_ms() - 1000;
+    uint32_t t_refused = now_ms() - 1000, t_stats = now_ms() - CF_PLCSRV_STATS_MS;
     client_t *cl = calloc((size_t)o->max_clients, sizeof *cl);
     if (!cl) {
         cf_log(CF_LOG_ERROR, "cannot set up the Modbus server: out of memory");
@@ -541,7 +566,8 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
         goto out;
     }
     int port = listen_port(lfd);
-    if (o->port_file && write_port_file(o->port_file, port)) {
+    if (o->portfile ? cf_portfile_write(o->portfile, port) != 0
+                    : o->port_file && write_port_file(o->port_file, port)) {
         cf_log(CF_LOG_ERROR, "cannot write the port file %s: %s", o->port_file, strerror(errno));
         goto out;
     }
@@ -575,10 +601,18 @@ int cf_plcsrv_run(const cf_plcsrv_opts_t *o, const cf_runner_t *r, volatile sig_
             cf_log(CF_LOG_ERROR, "watchdog: PLC heartbeat unchanged for %u ms: error %d",
                    plc_map_u16(&s.map, PLC_R_WATCHDOG_MS), PLC_E_WATCHDOG);
         pthread_mutex_unlock(&s.mu);
+        /* The rig gone for good: the job stops for that reason, which its
+         * journal's end record keeps (RIG_ELOST), not as a PLC's abort. */
+        if (code == PLC_E_RIG_GONE)
+            atomic_store(&s.stop_job, RIG_ELOST);
         act(&s, a != PLC_ACT_NONE ? a : w);
         if (atomic_load(&s.job_ended))
             join_worker(&s);
         uint32_t t = now_ms();
+        if (o->stats && (uint32_t)(t - t_stats) >= CF_PLCSRV_STATS_MS) {
+            put_stats(&s, o);
+            t_stats = t;
+        }
         for (int i = 0; i < nc; i++) {
             client_t *c = &cl[i];
             int gone = 0;
@@ -618,7 +652,7 @@ out:
         close(cl[i].fd);
     if (lfd >= 0)
         close(lfd);
-    if (o->port_file && ret == 0)
+    if (o->port_file && !o->portfile && ret == 0)
         remove(o->port_file);
     free(cl);
     pthread_mutex_destroy(&s.mu);

@@ -54,6 +54,17 @@ typedef struct cf_runner {
     int rig; /* 1: a stage and probe are configured (home and scan possible) */
 } cf_runner_t;
 
+/* Map version 3's figures from the rest of the cell (cf_plcstats.h): the
+ * plant outbox (OUTBOX_PG .. OUTBOX_DROPPED) and the last scan's
+ * on-the-fly counts (SCAN_TRIGGERS .. SCAN_OVERRUNS, in address order). */
+#define CF_PLC_SCAN_COUNTS 7
+typedef struct cf_plc_stats {
+    int have_outbox; /* 0: the OUTBOX_* registers are left as they are */
+    uint32_t outbox_pg, outbox_mqtt, outbox_age_s, outbox_dropped;
+    uint32_t scan[CF_PLC_SCAN_COUNTS];
+} cf_plc_stats_t;
+#define CF_PLCSRV_STATS_MS 1000u /* how often the server asks for them */
+
 typedef struct cf_plcsrv_opts {
     const char *addr; /* IPv4 address to listen on */
     int port;         /* 0: the kernel picks one */
@@ -75,6 +86,15 @@ typedef struct cf_plcsrv_opts {
     /* A connection without a complete request for this long is closed (a
      * PLC's heartbeat writes keep its own open); 0: CF_PLCSRV_IDLE_MS. */
     unsigned idle_ms;
+    /* Appended: port_file claimed by the caller (cf_portfile.h: locked,
+     * "PORT\nPID\n"), written through it and released by the caller; NULL:
+     * port_file written plainly and removed at a clean exit. */
+    struct cf_portfile *portfile;
+    /* Appended (map version 3): asked from the server thread every
+     * CF_PLCSRV_STATS_MS, without the register lock; quick (no device
+     * I/O, one local database read). NULL: those registers stay 0. */
+    void (*stats)(void *ctx, cf_plc_stats_t *out);
+    void *stats_ctx;
 } cf_plcsrv_opts_t;
 
 /* Serve until *stop becomes non-zero (SIGTERM). Returns 0 after a clean

@@ -57,9 +57,18 @@ void cf_scanfast_header(const scan_kin_t *kin, long planned, jnl_header_t *h)
     h->sync_every = 0x7FFFFFFFu;
 }
 
+/* The stop request as it came: a negative value is its reason (RIG_ELOST). */
 static int stop_asked(const cf_scanfast_cb_t *cb)
 {
-    return cb && cb->should_stop && cb->should_stop(cb->ctx);
+    return cb && cb->should_stop ? cb->should_stop(cb->ctx) : 0;
+}
+
+/* The code a scan that failed or stopped ends with: a stop's own reason
+ * (RIG_ELOST: the rig's process ended) over what the interrupted call said. */
+static int end_code(const cf_scanfast_cb_t *cb, int rc)
+{
+    int why = rc ? stop_asked(cb) : 0;
+    return why < 0 ? why : rc;
 }
 
 /* One point: journalled, then to the caller. */
@@ -310,6 +319,7 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
         (void)hal_stage_set_speed(&rig->st, old_speed); /* best effort: the scan itself stands */
     if (rc == RIG_EABORTED || res->where == SCAN_AT_STAGE)
         rig->stage.ops->stop(rig->stage.ctx);
+    rc = end_code(cb, rc);
     jnl_end(j, rc, cli_now());
     res->seconds = cli_now() - t0;
     res->code = rc;
@@ -428,6 +438,7 @@ int cf_scanfast_profiler(const char *uri, const cf_scanfast_geom_t *g, long prof
         snprintf(msg, ml, "%s: %s", uri, hal_gev_error(gv));
     hal_gev_stop(gv);
     hal_gev_close(gv);
+    rc = end_code(cb, rc);
     jnl_end(j, rc, cli_now());
     res->seconds = cli_now() - t0;
     return res->code = rc;

@@ -20,9 +20,10 @@ static void progress(const cf_job_ctl_t *c, int pct)
         c->progress(c->ctx, pct);
 }
 
+/* The stop request as it came (scan.h: a negative value is its reason). */
 static int stop(const cf_job_ctl_t *c)
 {
-    return c && c->should_stop && c->should_stop(c->ctx);
+    return c && c->should_stop ? c->should_stop(c->ctx) : 0;
 }
 
 int cf_scanjob_plan(const cf_scanjob_opts_t *o, scan_plan_t *pl)
@@ -84,6 +85,8 @@ static int run_otf(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, 
     cf_scanfast_res_t fr;
     int rc = cf_scanfast_otf(o->rig, &job->plan, &job->kin, o->period_us > 0 ? o->period_us : 50, j,
                              &cb, &fr, msg, ml);
+    if (o->fast_out)
+        *o->fast_out = fr;
     res->points = fr.points;
     res->flagged = fr.flagged;
     res->done = fr.points + fr.flagged;

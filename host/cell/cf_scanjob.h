@@ -30,6 +30,9 @@ typedef struct cf_scanjob_opts {
     int method;
     hal_rig_t *rig;
     double period_us;
+    /* Appended (map version 3): on the fly, the scan's counts (triggers,
+     * losses) copied here when not NULL (struct cf_scanfast_res, cf_scanfast.h). */
+    struct cf_scanfast_res *fast_out;
 } cf_scanjob_opts_t;
 
 /* The plan of the region (RIG_EARG when it has no point or too many). */

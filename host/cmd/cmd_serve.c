@@ -16,6 +16,8 @@
 #include "cf_plcdoc.h"
 #include "cf_plcrun.h"
 #include "cf_plcsrv.h"
+#include "cf_plcstats.h"
+#include "cf_portfile.h"
 #include "cf_scanfast.h"
 #include "cf_simchild.h"
 #include "cmd.h"
@@ -192,10 +194,12 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         if (cli_int(v, 0, 100, &r->fit.reparam))
             return cf_fail(msg, ml, CF_EARG, "reparam '%s': need 0 .. 100", v);
     } else if (!strcmp(k, "refine")) {
-        if (!strcmp(v, "uniform") || !strcmp(v, "residual"))
-            r->fit.refine = v[0] == 'u' ? CF_REFINE_UNIFORM : CF_REFINE_RESIDUAL;
+        if (!strcmp(v, "uniform") || !strcmp(v, "residual") || !strcmp(v, "auto"))
+            r->fit.refine = v[0] == 'u'   ? CF_REFINE_UNIFORM
+                            : v[0] == 'r' ? CF_REFINE_RESIDUAL
+                                          : CF_REFINE_AUTO;
         else
-            return cf_fail(msg, ml, CF_EARG, "refine '%s': uniform or residual", v);
+            return cf_fail(msg, ml, CF_EARG, "refine '%s': auto, uniform or residual", v);
     } else if (!strncmp(k, "results_dir", 11)) {
         idx = 0;
         if (k[11] && (k[11] != '.' || cli_int(k + 12, 0, PLC_MAX_FOLDERS - 1, &idx)))
@@ -230,6 +234,11 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         if (cli_double(v, &r->scan_period_us) || !(r->scan_period_us >= 20) ||
             r->scan_period_us > 1e6)
             return cf_fail(msg, ml, CF_EARG, "scan_period_us '%s': need 20 .. 1000000", v);
+    } else if (!strcmp(k, "min_free_mb")) {
+        double mb;
+        if (cli_double(v, &mb) || !(mb >= 0) || mb > 1e9)
+            return cf_fail(msg, ml, CF_EARG, "min_free_mb '%s': need 0 .. 1e9 (MiB)", v);
+        r->min_free = mb > 0 ? mb * 1024.0 * 1024.0 : 1.0; /* 0: only the job's own bytes */
     } else if (!strcmp(k, "journal_dir"))
         r->journal_dir = keep(c, v);
     else if (!strcmp(k, "board"))
@@ -316,7 +325,10 @@ static const serve_key_t keys[] = {
     {"within", "PCT", "with fit_to_tol: the share of points within tol (FIT_WITHIN)", "100"},
     {"max_cp", "N", "with fit_to_tol: control points the loop may reach at most", "the board's"},
     {"max_rounds", "N", "with fit_to_tol: rounds of the loop at most", "12"},
-    {"refine", "HOW", "with fit_to_tol: uniform or residual knot insertion", "residual"},
+    {"refine", "HOW",
+     "with fit_to_tol: auto (knot lines scored per control point added), uniform or residual "
+     "knot insertion (FIT_REFINE 2, 0, 1)",
+     "auto"},
     {"robust_iters", "N", "with robust: Tukey passes", "3"},
     {"reparam", "K", "reprojection passes onto the fit, each refitted", "0"},
     {"log_level", "LEVEL", "error, warn, info or debug", "info"},
@@ -329,6 +341,10 @@ static const serve_key_t keys[] = {
     {"scan_period_us", "US",
      "scan_method otf: the trigger period; the stage runs at SCAN_STEP / it", "50"},
     {"journal_dir", "DIR", "folder of the scans' journals", "the results folder"},
+    {"min_free_mb", "MB",
+     "MiB a scan's journal folder and an export's results folder keep free beyond the job's own "
+     "bytes (checked when the job is accepted: 108)",
+     "1"},
     {"z0", "MM", "the probe's beam height", "50"},
     {"cal", "CX,CY,CZ", "the probe's calibration offset, mm", "0,0,0"},
     {"allow", "ADDR[/BITS],...", "client addresses allowed (IPv4, up to 16)", "any"},
@@ -459,6 +475,14 @@ int cmd_serve(int argc, char **argv)
         goto done;
     }
     cf_log_open(c.level, c.use_syslog);
+    /* The port file first: a live serve's is never taken over (nothing
+     * started), a stale one (its serve killed) is replaced (cf_portfile.h). */
+    cf_portfile_t pf = {-1, ""};
+    char msg[512];
+    if (c.port_file && cf_portfile_claim(&pf, c.port_file, msg, sizeof msg)) {
+        ec = cli_error("serve", CLI_FAIL, "%s", msg);
+        goto done_log;
+    }
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal; /* no SA_RESTART: select returns EINTR */
@@ -469,7 +493,6 @@ int cmd_serve(int argc, char **argv)
     /* The simulator first (fork before any thread), then the rig on it. */
     cf_simchild_t sim;
     memset(&sim, 0, sizeof sim);
-    char msg[512];
     if (c.sim) {
         /* Without sim_args the simulator runs at the doc's speed with the
          * nominal as its part (cellsim's own default stage is a slow
@@ -516,6 +539,7 @@ int cmd_serve(int argc, char **argv)
     so.word_order = c.order;
     so.watchdog_ms = (unsigned)c.watchdog_ms;
     so.port_file = c.port_file;
+    so.portfile = c.port_file ? &pf : NULL;
     so.tol = (float)c.tol;
     so.alpha = (float)c.alpha;
     so.beta = (float)c.beta;
@@ -526,8 +550,14 @@ int cmd_serve(int argc, char **argv)
     so.fit_tol = c.run.fit.loop ? (float)c.tol : 0.0f;
     so.fit_within = (float)c.run.fit.within;
     so.fit_max_cp = c.run.fit.max_cp >= NF_MAX_CP ? 0u : (uint32_t)c.run.fit.max_cp;
-    so.fit_refine =
-        c.run.fit.refine == CF_REFINE_UNIFORM ? PLC_REFINE_UNIFORM : PLC_REFINE_RESIDUAL;
+    so.fit_refine = c.run.fit.refine == CF_REFINE_UNIFORM    ? PLC_REFINE_UNIFORM
+                    : c.run.fit.refine == CF_REFINE_RESIDUAL ? PLC_REFINE_RESIDUAL
+                                                             : PLC_REFINE_AUTO;
+    /* Map version 3: the outbox (results.db, when jobs are recorded) and
+     * the last scan's counts as registers. */
+    cf_plcstats_t stats = {&c.run, c.plant.started ? c.plant.db_path : NULL, NULL, 0};
+    so.stats = cf_plcstats_read;
+    so.stats_ctx = &stats;
     so.fit_robust = (uint16_t)(c.run.fit.robust != 0);
     so.fit_reparam = (uint16_t)c.run.fit.reparam;
     cf_log(CF_LOG_INFO, "cellfit serve: board %s, nominal %s, points %s, results %s", BOARD_NAME,
@@ -537,9 +567,13 @@ int cmd_serve(int argc, char **argv)
     cf_log(CF_LOG_INFO,
            "fit defaults (FIT_TOL .. FIT_REPARAM): %s%g mm%s, within %g %%, robust %s, reparam %ld",
            fo->loop ? "loop to " : "plain (FIT_TOL 0; tol ", c.tol,
-           fo->loop ? (fo->refine == CF_REFINE_UNIFORM ? " (uniform)" : " (residual)") : ")",
+           fo->loop ? (fo->refine == CF_REFINE_UNIFORM    ? " (uniform)"
+                       : fo->refine == CF_REFINE_RESIDUAL ? " (residual)"
+                                                          : " (auto)")
+                    : ")",
            fo->within, fo->robust ? "yes" : "no", fo->reparam);
     ec = cf_plcsrv_run(&so, &runner, &stop_flag) ? CLI_FAIL : CLI_OK;
+    cf_plcstats_close(&stats);
     cf_plant_stop(&c.plant);
     cf_plcrun_free(&c.run);
 done_rig:
@@ -553,6 +587,7 @@ done_sim:
             cf_log(CF_LOG_INFO, "rig: cellsim pid %ld stopped", (long)sim.pid);
     }
 done_log:
+    cf_portfile_release(&pf, 1); /* ours (fd -1 when not claimed) */
     cf_log_close();
 done:
     cf_plant_stop(&c.plant);

@@ -47,7 +47,7 @@ serve_start() {
     while [ ! -s "$T/$name.port" ] && kill -0 "$pid" 2>/dev/null && [ $i -lt 100 ]; do
         sleep 0.1; i=$((i + 1))
     done
-    port=$(cat "$T/$name.port" 2>/dev/null)
+    port=$(sed -n 1p "$T/$name.port" 2>/dev/null) # line 2: serve's PID
     [ -n "$port" ] && ok "serve $name listening on 127.0.0.1:$port" ||
         { no "serve $name did not start"; sed 's/^/     /' "$T/$name.log" | head -5; }
 }

@@ -53,7 +53,7 @@ grep -q -- "--fit-to-tol" "$T/out" && grep -q -- "--tol MM" "$T/out" && ok "  ..
     no "serve --help: $(head -3 "$T/out")"
 expect 2 "serve --tolerance (now --tol): exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --tolerance 0.05
 expect 2 "serve --refine bogus: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --refine bogus
-grep -q "refine 'bogus': uniform or residual" "$T/err" && ok "  ... says what refine takes" || no "refine: $(cat "$T/err")"
+grep -q "refine 'bogus': auto, uniform or residual" "$T/err" && ok "  ... says what refine takes" || no "refine: $(cat "$T/err")"
 expect 2 "serve --board other: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --board nosuch
 printf 'plc = tcp:127.0.0.1:0\n# comment\nnominal = %s\nwatchdog = 5\n' "$T/nominal.igs" >"$T/bad.conf"
 expect 2 "config with an unknown key: exit 2" "$CF" serve --config "$T/bad.conf"

@@ -123,7 +123,7 @@ def identity(port):
     c = Cell(port)
     r = c.read(0, 16)
     check(r[MAGIC] == 17222, "identity: magic 17222 (%d)" % r[MAGIC])
-    check(r[VERSION] == 2, "identity: map version 2")
+    check(r[VERSION] == 3, "identity: map version 3")
     name = b"".join(struct.pack(">H", w) for w in r[8:16]).rstrip(b"\0").decode()
     check(len(name) > 0, "identity: board name '%s'" % name)
     for order in (1 - c.order, c.order):
@@ -235,7 +235,7 @@ def invalid(port):
     # A request with one bad value changes none of the others.
     check(c.write(TOL, c.fwords(0.5) + [0, 0, 0, 0, 0xFFFF]) == 3 and c.read(TOL, 2) == tol,
           "invalid: a request with one bad value stores nothing")
-    check(c.exc_read(156, 2) == 2, "invalid: read past the map (157 registers): exception 02")
+    check(c.exc_read(181, 2) == 2, "invalid: read past the map (182 registers): exception 02")
     r = c.c.read_input_registers(0, 16, slave=1)
     check(not r.isError() and r.registers == c.read(0, 16),
           "invalid: input registers (function 04) read as the holding registers")

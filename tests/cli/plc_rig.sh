@@ -75,17 +75,17 @@ fi
 # SCAN_FIT to a tolerance, robustly, on a cell configured so (fit_to_tol,
 # with tol 0.01: FIT_TOL's default; within, robust): a coarse nominal (8 x 6) under cellsim's dented part, so
 # the loop must insert knots. The cell's fit = the shell's `cellfit fit
-# --tol --within --robust` on the journal's points (float32 registers:
-# equal to 1e-6 mm).
+# --tol --within --robust` on the journal's points, both with the shell's
+# default refinement, auto, named (float32 registers: equal to 1e-6 mm).
 a_port=$port; a_pid=$pid; a_simport=$simport; a_simpid=$simpid
 "$CF" gen --dir "$T/coarse" --nu 8 --nv 6 --count 1000 >/dev/null
 mkdir -p "$T/tres"
 start t --sim --sim-args="--speed 5000 --seed 3 --part $T/coarse/nominal.igs" \
-    --nominal "$T/coarse/nominal.igs" --results "$T/tres" --fit-to-tol --tol 0.01 --robust --within 99 --refine residual
+    --nominal "$T/coarse/nominal.igs" --results "$T/tres" --fit-to-tol --tol 0.01 --robust --within 99 --refine auto
 py tolfit "$port" "$simport" "$T/tres" 48 "$T/tol.out"
 d=$(sed -n 1p "$T/tol.out"); jnl=$(sed -n 2p "$T/tol.out")
 if [ -f "$jnl" ] && "$CF" journal export "$jnl" --out "$T/tol.xyz" &&
-    "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/tol.xyz" --tol 0.01 --within 99 --robust --refine residual \
+    "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/tol.xyz" --tol 0.01 --within 99 --robust --refine auto \
         --out "$T/tol_shell.igs" >/dev/null; then
     "$CF" eval "$d/fitted.igs" "$T/coarse/check.uv" >"$T/e1"
     "$CF" eval "$T/tol_shell.igs" "$T/coarse/check.uv" >"$T/e2"

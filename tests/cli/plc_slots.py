@@ -229,7 +229,7 @@ def spam(port, n):
 
 def v2(port):
     c = client(port)
-    check(rd(c, VERSION, 1)[0] == 2, "v2: MAP_VERSION 2")
+    check(rd(c, VERSION, 1)[0] == 3, "v2: MAP_VERSION 3 (2 and its outbox and scan registers)")
     pid = b"SN-0042/A7 lot 2026-12-02"
     words = [struct.unpack(">H", (pid + b"\0" * 32)[i:i + 2])[0] for i in range(0, 32, 2)]
     check(wr(c, PART_ID, words) == 0 and rd(c, PART_ID, 16) == words,
@@ -241,10 +241,11 @@ def v2(port):
     check(wr(c, PART_ID, words[:8]) == 2, "v2: half of PART_ID: exception 02")
     w = rd(c, FIT_TOL, 10)
     fw = struct.unpack("<f", struct.pack("<I", u32(w[2:4])))[0]
-    check(u32(w[0:2]) == 0 and fw == 100.0 and w[6] == 1 and w[9] == 0,
-          "v2: fit defaults: FIT_TOL 0, FIT_WITHIN 100, FIT_REFINE 1 (residual), RECIPE 0")
-    check(wr(c, FIT_REFINE, [2]) == 3 and wr(c, RECIPE, [16]) == 3,
-          "v2: FIT_REFINE 2, RECIPE 16: exception 03")
+    check(u32(w[0:2]) == 0 and fw == 100.0 and w[6] == 2 and w[9] == 0,
+          "v2: fit defaults: FIT_TOL 0, FIT_WITHIN 100, FIT_REFINE 2 (auto, map version 3), "
+          "RECIPE 0")
+    check(wr(c, FIT_REFINE, [3]) == 3 and wr(c, RECIPE, [16]) == 3,
+          "v2: FIT_REFINE 3, RECIPE 16: exception 03")
     r3, r4 = rd(c, 140, 17), c.read_input_registers(140, 17, slave=1)
     check(not r4.isError() and r4.registers[:12] == r3[:12],
           "v2: the counters read as input registers (function 04) too")

@@ -163,7 +163,7 @@ def fitset(port, ncp):
           "= 609 control points (%d)" % (st, r["cps"]))
     ack(c)
     c.write(FIT_MAX_CP, c.words(0))
-    c.write(FIT_REFINE, [1])
+    c.write(FIT_REFINE, [2])  # the default again (auto)
     c.write(FIT_TOL, c.fwords(0.0))
 
 

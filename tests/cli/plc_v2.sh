@@ -49,7 +49,7 @@ serve_start a --config "$T/cell.conf"
     ok "a missing results folder is made at start" || no "results folder not made: $(ls "$T")"
 grep -q "warn cannot create the folder $T/points.xyz/results" "$T/a.log" &&
     ok "a folder that cannot be made: a warning at start" || no "no warning for results_dir.1"
-py defaults "$port" 0 100 0 1 0 0
+py defaults "$port" 0 100 0 2 0 0
 py export2 "$port" "$T/new/results"
 py recipe "$port" "$T/new/results" "$T/n2/nominal.igs"
 py fitset "$port" 192

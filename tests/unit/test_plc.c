@@ -37,9 +37,10 @@ static void test_table_layout(void **state)
         for (int j = 0; j < i; j++)
             assert_string_not_equal(plc_regs[j].name, r->name);
     }
-    assert_int_equal(end, PLC_NREGS); /* the counters end the map */
-    /* Map version 2 kept every version 1 address and added these. */
-    assert_int_equal(PLC_MAP_VERSION, 2);
+    assert_int_equal(end, PLC_NREGS); /* the scan's losses end the map */
+    /* Map version 2 kept every version 1 address and added these; version 3
+     * kept every version 2 address and added the outbox and scan blocks. */
+    assert_int_equal(PLC_MAP_VERSION, 3);
     assert_int_equal(PLC_R_RESULT_PART, 116);
     assert_int_equal(PLC_R_FIT_TOL, 82);
     assert_int_equal(PLC_R_RECIPE, 91);
@@ -49,6 +50,11 @@ static void test_table_layout(void **state)
     assert_int_equal(plc_type_words(PLC_T_STR32), PLC_PART_ID_LEN / 2);
     assert_int_equal(PLC_R_JOBS_OK, 140);
     assert_int_equal(PLC_R_LAST_ERROR, 156);
+    assert_int_equal(PLC_R_OUTBOX_PG, 160);
+    assert_int_equal(PLC_R_OUTBOX_DROPPED, 166);
+    assert_int_equal(PLC_R_SCAN_TRIGGERS, 168);
+    assert_int_equal(PLC_R_SCAN_OVERRUNS, 180);
+    assert_null(plc_map_entry(157)); /* reserved: reads 0 */
     /* The numbers the docs and PLC programs use. */
     assert_int_equal(PLC_R_MAGIC, 0);
     assert_int_equal(PLC_R_COMMAND, 20);
@@ -616,10 +622,10 @@ static void test_map_v2(void **state)
     (void)state;
     fresh(1);
     plc_action_t act;
-    /* Defaults: no loop, 100 %, residual refinement. */
+    /* Defaults: no loop, 100 %, auto refinement (the shell's, map version 3). */
     assert_true(plc_map_f32(&M, PLC_R_FIT_TOL) == 0.0f);
     assert_true(plc_map_f32(&M, PLC_R_FIT_WITHIN) == 100.0f);
-    assert_int_equal(M.reg[PLC_R_FIT_REFINE], PLC_REFINE_RESIDUAL);
+    assert_int_equal(M.reg[PLC_R_FIT_REFINE], PLC_REFINE_AUTO);
     /* The block 82-91 and PART_ID in two requests; a FIT copies them. */
     uint16_t blk[10];
     plc_pack_u32(plc_f32_bits(0.01f), M.order, blk);

@@ -59,10 +59,10 @@ static void test_mbap_pdu(void **state)
     uint8_t r[256];
     plc_action_t act;
     plc_req_t rq;
-    /* 03 and 04 at 0 x 2: 17222 (0x4346) and map version 2. */
+    /* 03 and 04 at 0 x 2: 17222 (0x4346) and map version 3. */
     for (uint8_t fc = 3; fc <= 4; fc++) {
         const uint8_t q[] = {fc, 0x00, 0x00, 0x00, 0x02};
-        const uint8_t want[] = {fc, 4, 0x43, 0x46, 0x00, 0x02};
+        const uint8_t want[] = {fc, 4, 0x43, 0x46, 0x00, 0x03};
         assert_int_equal(plc_mbap_pdu(&f, q, sizeof q, r, 0, &act, &rq), sizeof want);
         assert_memory_equal(r, want, sizeof want);
         assert_int_equal(rq.ex, 0);
@@ -87,7 +87,7 @@ static void test_mbap_pdu(void **state)
         uint8_t ex;
     } bad[] = {
         {{0x05, 0, 0, 0xFF, 0}, 5, 1},        {{0x10, 0, 22, 0, 1, 4, 0, 1}, 8, 3},
-        {{0x03, 0, 0, 0, 126}, 5, 3},         {{0x03, 0, 156, 0, 2}, 5, 2},
+        {{0x03, 0, 0, 0, 126}, 5, 3},         {{0x03, 0, 181, 0, 2}, 5, 2},
         {{0x06, 0, 0, 0, 1}, 5, 2},           {{0x03, 0, 0, 0}, 4, 3},
         {{0x10, 0, 22, 0, 1, 2, 0, 1}, 7, 3},
     };

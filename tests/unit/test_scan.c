@@ -29,6 +29,7 @@ typedef struct trig {
     long fail_read_at; /* read number that fails with read_err */
     int read_err;
     long stop_at;              /* should_stop answers 1 from this check on */
+    int stop_why;              /* ... or this reason (a rig_err_t) when not 0 */
     long checks;               /* should_stop calls */
     double hole[3];            /* no surface within radius hole[2] of (hole[0], hole[1]) */
     double lo[2], hi[2];       /* soft limits */
@@ -114,7 +115,9 @@ static double t_now(void *ctx)
 static int t_should_stop(void *ctx)
 {
     trig_t *t = ctx;
-    return t->checks++ >= t->stop_at;
+    if (t->checks++ < t->stop_at)
+        return 0;
+    return t->stop_why ? t->stop_why : 1;
 }
 
 static const rig_stage_ops_t stage_ops = {RIG_OPS_VERSION, t_home, t_move, t_pos,
@@ -388,6 +391,26 @@ static void test_faults(void **state)
     assert_int_equal(res.where, SCAN_AT_STOP);
     assert_int_equal(rig.moves, 9);
     assert_int_equal(rig.stops, 1);
+    /* A stop with a reason (the rig lost for good): the job and its
+     * journal end with the reason, not RIG_EABORTED. */
+    rig_reset();
+    rig.stop_at = 9;
+    rig.stop_why = RIG_ELOST;
+    assert_int_equal(run_mem(&job, &res, &in), RIG_ELOST);
+    assert_int_equal(in.end_code, RIG_ELOST);
+    assert_int_equal(res.done, 9);
+    assert_int_equal(res.where, SCAN_AT_STOP);
+    /* ... also when the reason comes while a move is in progress: the move
+     * gave up (RIG_EABORTED from the transport), the reason wins. */
+    rig_reset();
+    rig.fail_move_at = 12;
+    rig.move_err = RIG_EABORTED;
+    rig.stop_at = 13; /* the check before move 12 passes, the one after it stops */
+    rig.stop_why = RIG_ELOST;
+    assert_int_equal(run_mem(&job, &res, &in), RIG_ELOST);
+    assert_int_equal(in.end_code, RIG_ELOST);
+    assert_int_equal(res.done, 12);
+    assert_int_equal(res.where, SCAN_AT_STAGE);
     /* E-stop or a latched fault before the start: no move at all. */
     rig_reset();
     rig.status |= RIG_ST_ESTOP;
