@@ -35,6 +35,17 @@
 
 #define CMD "scan"
 
+static volatile sig_atomic_t stop_flag;
+
+/* The lines' stop check (hal_set_stop): after Ctrl-C a request is tried
+ * once, without the retries, late-reply waits and reconnect loops that
+ * would hold a dead line for seconds (serve's ABORT has the same bound). */
+static int stop_asked(void *ctx)
+{
+    (void)ctx;
+    return stop_flag != 0;
+}
+
 /* The device drivers of hal/: hal_rig_open opens the stage and the probe
  * from their URIs into rig.h tables. */
 static int rig_open(const char *stage, const char *probe, rig_stage_t *st, rig_probe_t *pr,
@@ -45,6 +56,8 @@ static int rig_open(const char *stage, const char *probe, rig_stage_t *st, rig_p
     int rc = hal_rig_open(stage, probe, &o, &r, msg, len);
     if (rc)
         return rc;
+    hal_set_stop(r->st.h, stop_asked, NULL);
+    hal_set_stop(r->pr.h, stop_asked, NULL);
     *st = r->stage;
     *pr = r->probe;
     *handle = r;
@@ -323,8 +336,6 @@ static int dir_writable(const char *path)
         snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
     return access(dir, W_OK | X_OK) == 0;
 }
-
-static volatile sig_atomic_t stop_flag;
 
 static void on_signal(int sig)
 {

@@ -178,6 +178,28 @@ rc=$?
     ok "journal ended RIG_EABORTED after $(json "$T/d.info" points) of $(json "$T/d.info" planned) points" ||
     no "abort journal: $(cat "$T/d.info")"
 
+# Ctrl-C while the rig has stopped answering (cellsim's 'silent' fault):
+# the lines' stop check (hal_set_stop) ends the retries, late-reply waits
+# and reconnects at once, so the scan exits within 2 s (serve's ABORT
+# bound), not after the transports' timeouts (before: about 8 s).
+start_sim s --control "$T/s.ctl"
+timeout 120 "$CF" scan --stage "tcp:127.0.0.1:$PORT:1" --probe "tcp:127.0.0.1:$PORT:2" --nominal "$T/part/nominal.igs" \
+    --journal "$T/s.jnl" --step 5 >"$T/s.out" 2>"$T/s.err" &
+spid=$!
+wait_for "$T/s.err" "scan: [0-9]*/[0-9]* points (10%)" || no "scan made no progress"
+echo "fault silent:e1" >"$T/s.ctl"
+i=0
+while [ -e "$T/s.ctl" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+sleep 0.3 # a request or two meets the silence
+t0=$(date +%s.%N)
+kill -INT "$spid"
+wait "$spid"
+rc=$?
+dt=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.2f", b - a }')
+echo "     $(tail -1 "$T/s.err")"
+[ $rc -eq 1 ] && le "$dt" 2 && grep -q "job stopped on request" "$T/s.err" && ok "Ctrl-C against a silent rig: exit 1 after $dt s (bound 2 s)" ||
+    no "Ctrl-C against a silent rig: exit $rc after $dt s; $(tail -1 "$T/s.err")"
+
 stop_all
 echo "scan: $pass passed, $fail failed"
 [ $fail -eq 0 ]
