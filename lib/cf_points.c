@@ -2,10 +2,12 @@
 /* cf_points.c: streaming point-file reader (ASCII lines; PLY ascii and
  * binary_little_endian). One fixed buffer refilled with fread; a line is
  * parsed in place, after moving its start to the front of the buffer when it
- * straddles a refill. Numbers take Clinger's fast path when that is exact and
- * strtod otherwise, so every value equals strtod's. */
+ * straddles a refill. Numbers take Clinger's fast path when that is exact,
+ * then Eisel-Lemire's (cf_points_el.c) when it decides, and strtod
+ * otherwise, so every value equals strtod's. */
 #include "cf_points.h"
 #include "cf_err.h"
+#include "cf_points_el.h"
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -355,6 +357,16 @@ static int cp_num(const char *p, const char **end, double *out)
         d = e10 < 0 ? d / cp_p10[-e10] : d * cp_p10[e10];
         *out = neg ? -d : d;
         return CP_NUM_OK;
+    }
+    /* Eisel-Lemire (cf_points_el.c): decides nearly every other normal
+     * value, including 19-digit and longer mantissas (both ends of the
+     * dropped digits' interval rounding alike). */
+    {
+        double d;
+        if (drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d)) {
+            *out = neg ? -d : d;
+            return CP_NUM_OK;
+        }
     }
 #if CP_EXT
     /* m < 2^64 and 10^|e10| <= 10^27 are exact in the 64-bit significand, so x
