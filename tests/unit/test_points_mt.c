@@ -62,7 +62,7 @@ static void compare(cf_points_t *a, cf_points_t *b, int cols, long n_calls, long
             *total += ka;
         }
         if (ka < 0 || (ka == 0 && max > 0)) { /* the end, or an error: the next calls repeat it */
-            for (int i = 0; i < 3; i++) { /* 0 rows too: an error still comes back */
+            for (int i = 0; i < 3; i++) {     /* 0 rows too: an error still comes back */
                 long ra = cf_points_read(a, va, i, ma, sizeof ma);
                 long rb = cf_points_read(b, vb, i, mb, sizeof mb);
                 assert_int_equal(ra, ka);
