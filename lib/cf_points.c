@@ -366,16 +366,6 @@ static int cp_num(const char *p, const char **end, double *out)
         *out = neg ? -d : d;
         return CP_NUM_OK;
     }
-    /* Eisel-Lemire (cf_points_el.c): decides nearly every other normal
-     * value, including 19-digit and longer mantissas (both ends of the
-     * dropped digits' interval rounding alike). */
-    {
-        double d;
-        if (drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d)) {
-            *out = neg ? -d : d;
-            return CP_NUM_OK;
-        }
-    }
 #if CP_EXT
     /* m < 2^64 and 10^|e10| <= 10^27 are exact in the 64-bit significand, so x
      * is m*10^e10 correctly rounded to 64 bits. Rounding x again to 53 bits is
@@ -394,6 +384,19 @@ static int cp_num(const char *p, const char **end, double *out)
         }
     }
 #endif
+    /* Eisel-Lemire (cf_points_el.c): nearly every other normal value,
+     * mantissas longer than 19 digits too (both ends of the dropped digits'
+     * interval rounding alike). After the x87 check, which is cheaper where
+     * it applies (4 against 7 ns a value measured on 17-digit mantissas).
+     * It declines m * 10^-n exactly on a rounding boundary (m divisible by
+     * 5^n, n <= 27): strtod then, where the x87 check has not decided. */
+    {
+        double d;
+        if (drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d)) {
+            *out = neg ? -d : d;
+            return CP_NUM_OK;
+        }
+    }
     *out = cp_strtod(s, (size_t)(p - s));
     return isinf(*out) ? CP_NUM_RANGE : CP_NUM_OK;
 }
