@@ -387,9 +387,7 @@ static int cp_num(const char *p, const char **end, double *out)
     /* Eisel-Lemire (cf_points_el.c): nearly every other normal value,
      * mantissas longer than 19 digits too (both ends of the dropped digits'
      * interval rounding alike). After the x87 check, which is cheaper where
-     * it applies (4 against 7 ns a value measured on 17-digit mantissas).
-     * It declines m * 10^-n exactly on a rounding boundary (m divisible by
-     * 5^n, n <= 27): strtod then, where the x87 check has not decided. */
+     * it applies (4 against 7 ns a value measured on 17-digit mantissas). */
     {
         double d;
         if (drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d)) {

@@ -8,7 +8,9 @@
  * X >= 2^190. Rounding X to 53 bits keeps the bits above L - 1 (L = 139 when
  * P >= 2^191, else 138), so it is decided when no multiple of 2^(L-1) falls
  * in (P, P + 2^64): then X's half bit and all bits above are P's, and X is
- * not a tie. */
+ * not a tie. When one does (for -27 <= q < 0 whenever 5^-q divides m: X is
+ * then exactly that multiple), exact integer arithmetic says on which side
+ * of it X lies, or that X is on it. */
 #include "cf_points_el.h"
 #include <pthread.h>
 #include <string.h>
@@ -94,6 +96,30 @@ void cf_pel_pow5(long q, uint64_t *hi, uint64_t *lo, int *s)
     *s = t->s;
 }
 
+/* m against K 5^n 2^E, exactly: -1, 0, 1 (n <= 27, K < 2^55: K 5^n <
+ * 2^118). */
+static int pel_side(uint64_t m, uint64_t K, int n, int E)
+{
+    pel_u128 a = K, b = m;
+    for (int i = 0; i < n; i++)
+        a *= 5;
+    if (E >= 0) {
+        if (a > b || E >= 64)
+            return -1; /* a <= m < 2^64 below: a << E fits */
+        a <<= E;
+    } else if (-E <= 64) {
+        b <<= -E;
+    } else if (-E >= 118) {
+        return 1;
+    } else { /* m 2^64 against a / 2^(-E-64), the remainder breaking a tie */
+        int sh = -E - 64;
+        pel_u128 hi = a >> sh, lo = a & (((pel_u128)1 << sh) - 1);
+        b <<= 64;
+        return b > hi ? 1 : b < hi || lo ? -1 : 0;
+    }
+    return b > a ? 1 : b < a ? -1 : 0;
+}
+
 /* The bits of the double m * 10^q, or 0 when undecided (never a valid
  * answer here: results are normal, so nonzero). */
 static uint64_t pel_one(uint64_t m, long q)
@@ -116,8 +142,23 @@ static uint64_t pel_one(uint64_t m, long q)
     } else {
         /* X in (P, P + w), w < 2^64: a multiple of 2^(L-1) can lie there
          * only when P mod 2^(L-1) > 2^(L-1) - 2^64. */
-        if (rh == mask && p1 == UINT64_MAX && p0)
-            return 0;
+        if (rh == mask && p1 == UINT64_MAX && p0) {
+            /* M0 = (k + 1) 2^(L-1) lies in (P, P + 2^64). For q < -27 or q
+             * > 55, X is never a multiple of 2^(L-1) and this is rare
+             * (about 2^-73): decline. For -27 <= q < 0 it is X exactly when
+             * 5^-q divides m (X then just above P): compare m 10^q with M0
+             * as integers, m against (k + 1) 5^-q 2^(L-1+s-lz). */
+            if (q > 0 || q < -27)
+                return 0;
+            int c = pel_side(m, k + 1, (int)-q, 128 + sh + t->s - lz);
+            if (c >= 0) { /* X in [M0, M0 + 2^64): k + 1's bits */
+                k++;
+                mant = k >> 1;
+                half = (int)(k & 1);
+                if (c == 0) /* X = M0: exact, or a tie (to even) */
+                    half = half && (mant & 1);
+            }
+        }
         mant += (uint64_t)half; /* X strictly above or below the half way */
     }
     long e = 138 + top + 52 + t->s + q - lz; /* unbiased exponent of mant's bit 52 */

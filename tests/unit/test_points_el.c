@@ -164,6 +164,39 @@ static void test_ties(void **state)
     assert_true(dec > n * 9 / 10);
 }
 
+/* On a rounding boundary with q < 0: m = r 5^n, q = -n, so that m 10^q =
+ * r 2^-n exactly (the product P falls just below it): r of 53 bits (an
+ * exact double), of 54 bits and odd (a tie, to even), or anything; and one
+ * unit either side. All decided (exact integer comparison), all right. */
+static void test_boundaries(void **state)
+{
+    (void)state;
+    long n = 0, dec = 0;
+    for (int i = 0; i < 200000; i++) {
+        int e = 1 + (int)(next_u64() % 27);
+        uint64_t p5 = 1;
+        for (int k = 0; k < e; k++)
+            p5 *= 5;
+        uint64_t lim = UINT64_MAX / p5, r;
+        int kind = (int)(next_u64() % 3);
+        if (kind == 0)
+            r = (UINT64_C(1) << 52) | (next_u64() >> 12);
+        else if (kind == 1)
+            r = (UINT64_C(1) << 53) | (next_u64() >> 11) | 1;
+        else
+            r = 1 + next_u64() % lim;
+        if (r > lim) {
+            r = 1 + next_u64() % lim;
+            kind = 2;
+        }
+        uint64_t m = r * p5;
+        for (int d = -1; d <= 1; d++, n++)
+            dec += check(m + (uint64_t)(int64_t)d, -e);
+    }
+    printf("boundaries: %ld of %ld decided\n", dec, n);
+    assert_true(dec > n * 999 / 1000);
+}
+
 /* Near halfway: the 19-digit truncation of the exact midpoint of two
  * doubles (and its neighbours): the product's error can matter here, so
  * these are where the fast path must decline or be right. */
@@ -363,6 +396,7 @@ int main(void)
         cmocka_unit_test(test_ties),
         cmocka_unit_test(test_near_halfway),
         cmocka_unit_test(test_many_digits),
+        cmocka_unit_test(test_boundaries),
 #endif
         cmocka_unit_test(test_reader_classes),
     };
