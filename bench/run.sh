@@ -11,7 +11,9 @@
 # BENCH_REPS (3) runs per cell,
 # the fastest kept, while one run takes less than BENCH_REPEAT_S (5) seconds
 # of wall time; BENCH_CHOL_MAX_S (20): banded Cholesky is skipped ("-") where
-# its estimate from N = 10^4 exceeds this; CC (gcc) builds the C helpers.
+# its estimate from N = 10^4 exceeds this; CC (gcc) builds the C helpers;
+# BENCH_SECTIONS (all): some of stream accumulate solve cholmod fitpack e2e
+# project loop.
 set -eu
 
 if [ $# -ne 1 ] || [ ! -x "$1" ]; then
@@ -85,6 +87,10 @@ cell_n() {
     return 0
 }
 cell() { cell_n "$REPS" "$@"; }
+# want SECTION: BENCH_SECTIONS (all) names it; BENCH_SECTIONS=e2e refreshes
+# the end-to-end table alone (the machine's table always runs). The
+# sections' bodies are left unindented.
+want() { case " ${BENCH_SECTIONS:-all} " in *" all "* | *" $1 "*) return 0 ;; esac; return 1; }
 table() { "$PY" "$HERE/tables.py" "$OUT" "$1" || say "tables.py failed on section $1"; }
 
 # --- the machine, the tools -------------------------------------------------
@@ -119,11 +125,14 @@ fi
 } >"$OUT/machine.jsonl"
 table machine
 
+if want stream; then
 say "memory bandwidth (bench/stream.c)"
 cell_n 1 "$OUT/stream.jsonl" "$OUT/stream" # best of 3-5 inside
 table stream
+fi
 
 # --- accumulation: the paper's Table 2 grid, raster and random ---------------
+if want accumulate; then
 say "accumulation: M x N grid, raster and random order"
 for m in 10000 100000 1000000; do
     for n in 100 1000 10000 100000; do
@@ -145,8 +154,10 @@ for n in 100 1000 10000 100000 1000000; do
     done
 done
 table accumulate
+fi
 
 # --- solvers: Tables 3 and 4 -------------------------------------------------
+if want solve; then
 say "solve: gs, pcg, chol on M = 10 N random points"
 for n in 100 1000 10000 100000; do
     for s in gs pcg; do
@@ -180,8 +191,10 @@ done
 say "solve: pcg at N = 10^6 (10^7 random points to accumulate first)"
 cell "$OUT/solve.jsonl" "$CF" bench solve --cp 1000000 --solver pcg --json
 table solve
+fi
 
 # --- CHOLMOD on the same normal equations ------------------------------------
+if want cholmod; then
 say "CHOLMOD on the exported normal equations"
 for n in 1000 10000 100000; do
     if ! run "$CF" bench export --cp "$n" --out "$OUT/ne_$n.cfne"; then
@@ -193,8 +206,10 @@ for n in 1000 10000 100000; do
     rm -f "$OUT/ne_$n.cfne"
 done
 table cholmod
+fi
 
 # --- FITPACK (scipy LSQBivariateSpline) against our fit ----------------------
+if want fitpack; then
 say "FITPACK (scipy) and cellfit on the same random points"
 # N = 961 (31 x 31) beside 1024 (32 x 32): FITPACK slows down several times
 # when the coefficient count is a power of two (its band array's stride).
@@ -205,8 +220,10 @@ for mn in 10000:100 10000:1000 10000:10000 100000:100 100000:961 100000:1000 100
     cell "$OUT/fit.jsonl" "$CF" bench fit --count "$m" --cp "$n" --order random --json
 done
 table fitpack
+fi
 
 # --- end to end: 10^6 points, ASCII and binary, beside the peers (issue 20) --
+if want e2e; then
 # Per net: `cellfit gen` (not timed), bench/genbin converts its points to
 # .uvxyz.bin (not timed), then the wall time of `cellfit fit --uv` on each
 # file, best of REPS; the peers (bench/peers_e2e.py: scipy CG, and CHOLMOD
@@ -278,8 +295,10 @@ if [ "${BENCH_LONG:-0}" = 1 ]; then
 fi
 rm -rf "$OUT/e2e"
 table e2e
+fi
 
 # --- projection: closest points on a curved bicubic part, truth known --------
+if want project; then
 say "projection: cellfit bench project (random and raster order)"
 for n in 1000 10000 100000; do
     for o in random raster; do
@@ -287,8 +306,10 @@ for n in 1000 10000 100000; do
     done
 done
 table project
+fi
 
 # --- the fitting loop to a tolerance beside FITPACK surfit (issue 14) ---------
+if want loop; then
 # bench/loop_bench.py (also `make bench-loop`, with the firmware-level
 # chooser): `cellfit fit --tol T --within 99` (--refine auto) and surfit on
 # terrain-like fields, every 5th row held out; its own Markdown table.
@@ -299,6 +320,7 @@ if [ "${BENCH_LOOP:-1}" != 0 ]; then
     "$PY" "$HERE/loop_bench.py" --cellfit "$CF" --no-knotsel --sizes "${BENCH_LOOP_SIZES:-5000,20000}" \
         --surfit-s "${BENCH_LOOP_SURFIT_S:-60}" --json "$OUT/loop.jsonl" ||
         say "loop_bench.py failed"
+fi
 fi
 
 table targets

@@ -42,6 +42,16 @@ long cf_points_line(const cf_points_t *r);
  * the file cannot seek. */
 int cf_points_rewind(cf_points_t *r);
 
+/* Parse on a second thread from now on (host only; cf_points_mt.h): the
+ * text formats (ASCII, PLY ascii) are parsed into a ring of row blocks of
+ * fixed size (1.5 MiB at 5 columns) while the caller works on the rows it
+ * has; reads, line numbers, errors and rewinds give exactly what they give
+ * on one thread. Raw and binary PLY stay on the caller's thread (they read
+ * at memory speed). Call it before the first read or after a rewind:
+ * CF_EARG otherwise; CF_ENOMEM or CF_EIO (no thread) leave the reader on
+ * one thread, working. cf_points_close stops the thread. */
+int cf_points_thread(cf_points_t *r);
+
 void cf_points_close(cf_points_t *r);
 
 #endif

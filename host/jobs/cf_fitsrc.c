@@ -40,6 +40,10 @@ void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, c
 {
     ctx->r = r;
     ctx->path = path;
+    /* A text file is parsed on a second thread while the job accumulates
+     * (or evaluates) the rows it has; the same rows, lines and errors
+     * (cf_points.h). Without a thread it reads on this one. */
+    (void)cf_points_thread(r);
     *s = (cf_fitsrc_t){
         cf_points_cols(r) == 5 ? 5 : 3, -1, path, pts_rewind, pts_read, pts_where, ctx};
 }

@@ -11,6 +11,7 @@
  * strtod's bits. */
 #include "cf_err.h"
 #include "cf_points.h"
+#include "cf_points_el.h"
 #include "fuzz.h"
 #include <math.h>
 #include <stdio.h>
@@ -81,9 +82,32 @@ static void against_strtod(const uint8_t *data, size_t size)
         }
 }
 
+static void against_el(const uint8_t *data, size_t size)
+{
+    if (size < 10)
+        return;
+    uint64_t m = 0;
+    for (int i = 0; i < 8; i++)
+        m = m << 8 | data[i];
+    m %= UINT64_C(10000000000000000000); /* at most 19 digits */
+    long q = CF_PEL_QMIN + (long)((data[8] << 8 | data[9]) % (CF_PEL_QMAX - CF_PEL_QMIN + 1));
+    char tok[96];
+    int k = snprintf(tok, sizeof tok, "%llu", (unsigned long long)m), extra = 0;
+    for (size_t i = 10; i < size && extra < 40; i++, extra++)
+        tok[k++] = (char)('0' + data[i] % 10);
+    snprintf(tok + k, sizeof tok - (size_t)k, "e%ld", q - extra);
+    double got, want = strtod(tok, NULL);
+    int dec = extra ? cf_pel_decide_range(m, q, &got) : cf_pel_decide(m, q, &got);
+    if (dec && memcmp(&got, &want, sizeof got)) {
+        fprintf(stderr, "fuzz_points: '%s': Eisel-Lemire %a, strtod %a\n", tok, got, want);
+        abort();
+    }
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     against_strtod(data, size);
+    against_el(data, size);
     const char *path = fz_file("in.xyz", data, size);
     static const int want[3] = {0, 3, 5};
     cf_points_t *r;
