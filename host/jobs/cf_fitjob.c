@@ -4,6 +4,7 @@
  * each round and the tolerance loop of Section 2.2; the best round kept. */
 #include "cf_fitjob.h"
 #include "cf_cli.h"
+#include "cf_edges.h"
 #include "cf_err.h"
 #include "cf_fitpass.h"
 #include "cf_holdout.h"
@@ -244,6 +245,7 @@ typedef struct pass {
     cf_seedgrid_t pj;
     const nf_surf_t *proj;
     const weigh_t *wt;
+    cf_edges_t ed; /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
     long points, clamped, nfar, dropped;
     double ss0, mx0; /* |distance| to proj of the points projected */
 } pass_t;
@@ -269,6 +271,8 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
         return rc;
     if (proj && cf_seedgrid_init(&ps->pj, proj, SEEDS))
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+    if (!j->o.free_edges && (rc = cf_edges_begin(&ps->ed, cur)))
+        return cf_fail(msg, ml, rc, "data footprint: %s", cf_strerror(rc));
     return 0;
 }
 
@@ -313,6 +317,10 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
     int rc = cf_fitpass_rows(&ps->fp, uv, m, cols, &b);
     if (rc)
         *bad = uv != in && b >= 0 ? j->src[b] : b;
+    /* The footprint of the rows in the fit (weight > 0): where data are. */
+    for (long k = 0; !rc && ps->ed.mem && k < m; k++)
+        if (cols == 5 || uv[6 * k + 5] > 0)
+            cf_edges_add(&ps->ed, uv[(long)cols * k], uv[(long)cols * k + 1]);
     ps->points += n;
     return rc;
 }
@@ -321,12 +329,18 @@ static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *na
                       size_t ml)
 {
     nf_solve_opts_t so = {j->o.solve_tol, (int)j->o.max_iter, j->o.probe};
+    /* Outside the footprint the nominal, not an extrapolation (issue 14). */
+    long np = cf_edges_pin(&ps->ed, &j->base, &ps->fp);
+    if (np < 0)
+        return cf_fail(msg, ml, (int)np, "%s: pinning the control points without data: %s", name,
+                       cf_strerror((int)np));
     return cf_fitpass_solve(&ps->fp, &so, out, name, msg, ml);
 }
 
 static void pass_free(pass_t *ps)
 {
     cf_seedgrid_free(&ps->pj);
+    cf_edges_free(&ps->ed);
 }
 
 int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
@@ -840,6 +854,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->solve = po.fp.st;
             out->store_bytes = cf_fitpass_store_bytes(&po.fp);
             out->bytes = j->need;
+            out->pinned = po.ed.pinned;
             if (ck.fp) {
                 nf_footprint_stats_t fs;
                 nf_footprint_stats(ck.fp, &fs);
