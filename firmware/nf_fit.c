@@ -599,10 +599,18 @@ int nf_fit_pin(nf_fit_t *f, long i, double beta)
         return NF_ESTATE;
     if (i < 0 || i >= f->n || !(beta >= 0.0) || beta - beta != 0.0)
         return NF_EARG;
-    const double *P0 = f->base->cp;
+    return nf_fit_pin_to(f, i, beta, f->base->cp + 3 * i);
+}
+
+int nf_fit_pin_to(nf_fit_t *f, long i, double beta, const double q[3])
+{
+    if (!f->finished || f->shard)
+        return NF_ESTATE;
+    if (i < 0 || i >= f->n || !(beta >= 0.0) || beta - beta != 0.0 || !q)
+        return NF_EARG;
     f->A.S[i * f->A.K] += beta;
     for (int c = 0; c < 3; c++)
-        f->rhs[3 * i + c] += beta * P0[3 * i + c];
+        f->rhs[3 * i + c] += beta * q[c];
     return NF_OK;
 }
 #endif

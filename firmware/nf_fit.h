@@ -106,6 +106,13 @@ int nf_fit_finish(nf_fit_t *f);
  * on a shard, NF_EARG for i outside the net or beta < 0 / not finite. */
 int nf_fit_pin(nf_fit_t *f, long i, double beta);
 
+/* nf_fit_pin toward q (x y z) instead of P0_i: beta_i (P_i - q) in Eq. 7.
+ * The loop's P0 is the previous round's fit; outside the footprint the
+ * surface must follow the nominal itself (the nominal refined into this
+ * net's knots), not an earlier round's extrapolation. Same errors, and
+ * NF_EARG for a null q. */
+int nf_fit_pin_to(nf_fit_t *f, long i, double beta, const double q[3]);
+
 /* Solve Eq. 7 into f->P. NF_ESINGULAR / NF_ENOCONV leave no answer. */
 int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf_solve_stats_t *st);
 

@@ -109,6 +109,29 @@ double nf_knotsel_span_rss(const nf_knotsel_t *a, int dir, int i)
     return span_slot(a, dir, i)[S_RSS];
 }
 
+int nf_knotsel_merge_span(nf_knotsel_t *a, const nf_knotsel_t *b, int dir, int i)
+{
+    if (!a || !b || a->s != b->s || i < 0 || i >= (dir ? a->s->nv - a->s->q : a->s->nu - a->s->p))
+        return NF_EARG;
+    double *d = (dir ? a->sv : a->su) + (long)NF_KNOTSEL_SPAN * i;
+    const double *e = span_slot(b, dir, i);
+    double g = 0.0;
+    for (int k = 0; k < NF_KNOTSEL_BINS; k++) {
+        d[NF_KNOTSEL_BIN * k + B_G] += e[NF_KNOTSEL_BIN * k + B_G];
+        d[NF_KNOTSEL_BIN * k + B_GT] += e[NF_KNOTSEL_BIN * k + B_GT];
+        g += e[NF_KNOTSEL_BIN * k + B_G];
+    }
+    d[S_OUT] += e[S_OUT];
+    d[S_RSS] += g;
+    /* The totals: a direction's spans hold every point once. */
+    if (dir == 0) {
+        a->g += g;
+        a->out += (long)e[S_OUT];
+        a->rss += g;
+    }
+    return NF_OK;
+}
+
 const char *nf_knotsel_status_str(int status)
 {
     switch (status) {
@@ -127,40 +150,36 @@ static int rows_of(const double *c)
     return c[B_N] > 0.0 ? (c[B_HI] > c[B_LO] ? 2 : 1) : 0;
 }
 
-/* The candidate knot of span slot i of direction dir, or 0 when the span
- * has no misfit or no admissible position. Positions are the sub-bin
- * boundaries NF_KNOTSEL_BINS/4 .. 3/4 of the way (a new span at least a
- * quarter of the old); of those where both sides hold min_pts points and
- * min_rows rows, the one nearest the misfit's centroid (fpknot places its
- * knot by the residual too, and only between data points). *blocked is
- * set when the span has misfit but no admissible position. */
-static int candidate(const nf_knotsel_t *a, int dir, int i, int min_pts, int min_rows, double *x,
-                     double *g, int *blocked)
+/* The best knot among the boundaries jmin .. jmax of the sub-bins b0 ..
+ * b1 - 1 of span sp (t0 its start, w a sub-bin's width): of those where
+ * both sides, within b0 .. b1 - 1, hold min_pts points and min_rows rows,
+ * the one nearest the centroid of the misfit there (fpknot places its knot
+ * by the residual too, and only between data points). 1 and *x, *jx, with
+ * *g the misfit of b0 .. b1 - 1, or 0 (*g still set). */
+static int best_split(const double *sp, double t0, double t1, int b0, int b1, int jmin, int jmax,
+                      int min_pts, int min_rows, double *x, int *jx, double *g)
 {
-    const nf_surf_t *s = a->s;
-    const int deg = dir ? s->q : s->p;
-    const double *T = dir ? s->V : s->U, *sp = span_slot(a, dir, i);
-    const double t0 = T[deg + i], t1 = T[deg + i + 1];
+    const double w = (t1 - t0) / NF_KNOTSEL_BINS;
     double gs = 0.0, gt = 0.0, ntot = 0.0;
     int rtot = 0;
-    *blocked = 0;
-    for (int b = 0; b < NF_KNOTSEL_BINS; b++) {
+    for (int b = b0; b < b1; b++) {
         const double *c = sp + NF_KNOTSEL_BIN * b;
         gs += c[B_G];
         gt += c[B_GT];
         ntot += c[B_N];
         rtot += rows_of(c);
     }
-    if (!(gs > 0.0) || !(t0 < t1))
+    *g = gs;
+    if (!(gs > 0.0))
         return 0;
-    const double mid = gt / gs, w = (t1 - t0) / NF_KNOTSEL_BINS;
+    const double mid = gt / gs;
     double nl = 0.0, best = HUGE_VAL;
     int rl = 0, found = 0;
-    for (int j = 1; j < NF_KNOTSEL_BINS; j++) {
+    for (int j = b0 + 1; j < b1; j++) {
         const double *c = sp + NF_KNOTSEL_BIN * (j - 1);
         nl += c[B_N];
         rl += rows_of(c);
-        if (4 * j < NF_KNOTSEL_BINS || 4 * j > 3 * NF_KNOTSEL_BINS)
+        if (j < jmin || j > jmax)
             continue;
         if (nl < min_pts || ntot - nl < min_pts || rl < min_rows || rtot - rl < min_rows)
             continue;
@@ -168,16 +187,69 @@ static int candidate(const nf_knotsel_t *a, int dir, int i, int min_pts, int min
         if (fabs(xj - mid) < best) {
             best = fabs(xj - mid);
             *x = xj;
+            *jx = j;
             found = 1;
         }
     }
     /* A boundary so close to t0 or t1 in floating point that it rounds
      * onto a knot would make no new span. */
-    if (found && !(t0 < *x && *x < t1))
-        found = 0;
-    *blocked = !found;
-    *g = gs;
-    return found;
+    return found && t0 < *x && *x < t1;
+}
+
+/* The candidates of span slot i of direction dir into c (room for
+ * per_span, at most 3), their count; 0 when the span has no misfit or no
+ * admissible position (*blocked set when it has misfit). The first is at
+ * the sub-bin boundary nearest the misfit's centroid, NF_KNOTSEL_BINS/4 ..
+ * 3/4 of the way (a new span at least a quarter of the old). Then, as
+ * FITPACK's fpknot does when it gives one interval several knots in one
+ * iteration (each new interval keeps its share of the residual sum and
+ * competes again), each side of it with misfit gets a knot at its own
+ * misfit's centroid, scored by that side's misfit (level 1): a wide span
+ * with much misfit is split in up to four in one round, a narrow feature
+ * bracketed, instead of one halving per round. */
+static int candidates(const nf_knotsel_t *a, int dir, int i, int min_pts, int min_rows,
+                      int per_span, double cost, nf_knotsel_cand_t *c, int *blocked)
+{
+    const nf_surf_t *s = a->s;
+    const int deg = dir ? s->q : s->p;
+    const double *T = dir ? s->V : s->U, *sp = span_slot(a, dir, i);
+    const double t0 = T[deg + i], t1 = T[deg + i + 1];
+    double x = 0.0, g = 0.0;
+    int j = 0;
+    *blocked = 0;
+    if (!(t0 < t1))
+        return 0;
+    if (!best_split(sp, t0, t1, 0, NF_KNOTSEL_BINS, NF_KNOTSEL_BINS / 4, 3 * NF_KNOTSEL_BINS / 4,
+                    min_pts, min_rows, &x, &j, &g)) {
+        *blocked = g > 0.0;
+        return 0;
+    }
+    c[0] = (nf_knotsel_cand_t){dir, i, x, g / cost, 0};
+    int n = 1;
+    /* The sides, the one holding more misfit first (per_span 2: that one). */
+    double gl = 0.0;
+    for (int b = 0; b < j; b++)
+        gl += sp[NF_KNOTSEL_BIN * b + B_G];
+    const int first = gl >= 0.5 * g ? 0 : 1;
+    for (int k = 0; k < 2 && n < per_span; k++) {
+        const int side = k ? !first : first;
+        double x2 = 0.0, g2 = 0.0;
+        int j2 = 0;
+        const int b0 = side ? j : 0, b1 = side ? NF_KNOTSEL_BINS : j;
+        if (best_split(sp, t0, t1, b0, b1, b0 + 1, b1 - 1, min_pts, min_rows, &x2, &j2, &g2) &&
+            x2 != x)
+            c[n++] = (nf_knotsel_cand_t){dir, i, x2, g2 / cost, 1};
+    }
+    return n;
+}
+
+/* 1 when the first k picks hold the level-0 knot of span slot span of dir. */
+static int taken(const nf_knotsel_cand_t *c, int k, int dir, int span)
+{
+    for (int i = 0; i < k; i++)
+        if (c[i].dir == dir && c[i].span == span && c[i].level == 0)
+            return 1;
+    return 0;
 }
 
 /* c[i] ranks before c[j]: higher score, then u before v, then lower span
@@ -197,7 +269,7 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
     if (!a || !out || !n || !status || cap < 0)
         return NF_EARG;
     const nf_surf_t *s = a->s;
-    nf_knotsel_opts_t o = {0, 0, 0, 0.0, 0.0, 0, 0};
+    nf_knotsel_opts_t o = {0, 0, 0, 0.0, 0.0, 0, 0, 0};
     if (opts)
         o = *opts;
     long max_cp = o.max_cp > 0 && o.max_cp < NF_MAX_CP ? o.max_cp : NF_MAX_CP;
@@ -211,28 +283,34 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
         return NF_OK;
 
     /* Every admissible candidate, sorted by insertion (a span or two per
-     * control point line: few). */
-    int m = 0, blocked_any = 0;
+     * control point line: few). Room for the first of each span is the
+     * caller's promise; a second knot without room waits a round. */
+    const int per_span = o.per_span > 0 ? o.per_span : NF_KNOTSEL_PER_SPAN;
+    int m = 0, blocked_any = 0, left = (s->nu - s->p) + (s->nv - s->q); /* spans to go */
     for (int dir = 0; dir < 2; dir++) {
         const int deg = dir ? s->q : s->p, ns = dir ? s->nv - s->q : s->nu - s->p;
         const int min_pts = o.min_pts > 0 ? o.min_pts : deg + 1;
         const double cost = dir ? s->nu : s->nv; /* control points one knot line adds */
         for (int i = 0; i < ns; i++) {
-            double x = 0.0, g = 0.0;
+            nf_knotsel_cand_t cs[3];
             int blocked;
-            if (!candidate(a, dir, i, min_pts, min_rows, &x, &g, &blocked)) {
-                blocked_any |= blocked;
-                continue;
+            const int nc = candidates(a, dir, i, min_pts, min_rows, per_span < 3 ? per_span : 3,
+                                      cost, cs, &blocked);
+            blocked_any |= blocked;
+            left--;
+            for (int q = 0; q < nc; q++) {
+                if (q == 0 && m >= cap)
+                    return NF_EARG;
+                if (q > 0 && m >= cap - left)
+                    break; /* the room of the spans to go: their first knots */
+                const nf_knotsel_cand_t c = cs[q];
+                int j = m++;
+                while (j > 0 && before(&c, &out[j - 1])) {
+                    out[j] = out[j - 1];
+                    j--;
+                }
+                out[j] = c;
             }
-            if (m >= cap)
-                return NF_EARG;
-            nf_knotsel_cand_t c = {dir, i, x, g / cost};
-            int j = m++;
-            while (j > 0 && before(&c, &out[j - 1])) {
-                out[j] = out[j - 1];
-                j--;
-            }
-            out[j] = c;
         }
     }
     if (m == 0) {
@@ -248,7 +326,10 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
         const nf_knotsel_cand_t c = out[i];
         if (c.score < ratio * best || (o.max_knots > 0 && k >= o.max_knots))
             break;
-        if (got[c.dir] >= share * a->g)
+        /* A side's knot goes with its span's first (taken this round),
+         * whatever the direction's share: it refines misfit already
+         * counted; a first knot waits once the direction has its share. */
+        if (c.level ? !taken(out, k, c.dir, c.span) : got[c.dir] >= share * a->g)
             continue;
         const long nu = s->nu + r[0] + (c.dir == 0), nv = s->nv + r[1] + (c.dir == 1);
         if (nu * nv > half || nu * nv > max_cp) {
@@ -260,7 +341,8 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
             continue; /* the round's budget: a cheaper line may still fit */
         out[k++] = c;
         r[c.dir]++;
-        got[c.dir] += c.score * (c.dir ? s->nu : s->nv);
+        /* A level-1 knot refines misfit its span's first knot counted. */
+        got[c.dir] += c.level ? 0.0 : c.score * (c.dir ? s->nu : s->nv);
     }
     *n = k;
     *status = k > 0 ? NF_KNOTSEL_INSERT : capped;

@@ -21,7 +21,9 @@
  *    the host's heap).
  * 2. Choose (nf_knotsel_choose): one candidate per span with misfit, at the
  *    sub-bin boundary nearest the misfit's centroid, no closer than a
- *    quarter span to the span's ends, and only where each new span holds at
+ *    quarter span to the span's ends (and one on each side of it with
+ *    misfit, at that side's centroid: NF_KNOTSEL_PER_SPAN), and only where
+ *    each new span holds at
  *    least min_pts points and min_rows data rows (a knot between two scan
  *    rows with no data between them would leave control points that no
  *    point determines: the ripple between rows of issue 14). Candidates are
@@ -53,6 +55,13 @@
 /* A direction stops taking knots this round once its picks hold this share
  * of its misfit. */
 #define NF_KNOTSEL_SHARE 0.5
+/* Knots a span may get in one round (nf_knotsel_opts_t.per_span, at most
+ * 3): the first near the misfit's centroid, then one on each side of it
+ * with misfit, at that side's centroid, the side holding more first (2:
+ * that side only); FITPACK's several knots per interval. */
+#define NF_KNOTSEL_PER_SPAN 3
+/* Candidates nf_knotsel_choose may list: NF_KNOTSEL_PER_SPAN per span. */
+#define NF_KNOTSEL_CANDS(nu, nv, p, q) (NF_KNOTSEL_PER_SPAN * ((nu) - (p) + (nv) - (q)))
 /* Data rows each new span must hold by default (lower bound from the
  * sub-bins: a sub-bin with points counts 1, with two distinct values 2). */
 #define NF_KNOTSEL_MIN_ROWS 1
@@ -80,6 +89,15 @@ long nf_knotsel_span_points(const nf_knotsel_t *a, int dir, int i);
 /* Sum of d^2 of all points of the span (FITPACK's interval sum). */
 double nf_knotsel_span_rss(const nf_knotsel_t *a, int dir, int i);
 
+/* Add the misfit of b's span slot i of direction dir (its points out of
+ * tolerance: sums of d^2 and d^2 t per sub-bin, the count out) to a's, and
+ * to a's totals. b counts, on the same surface, points a holds as data
+ * without misfit (nf_knotsel_add with d NaN): a robust pass's rejected
+ * points, whose misfit the caller found clustered in that span (a feature
+ * the net cannot follow yet, not spikes: issue 14). NF_EARG for a
+ * different surface or a slot outside the net. */
+int nf_knotsel_merge_span(nf_knotsel_t *a, const nf_knotsel_t *b, int dir, int i);
+
 typedef struct nf_knotsel_opts {
     long max_cp;   /* cap on Nu Nv after the round; <= 0: the board's NF_MAX_CP */
     int min_rows;  /* data rows each new span must hold; <= 0: NF_KNOTSEL_MIN_ROWS */
@@ -89,6 +107,7 @@ typedef struct nf_knotsel_opts {
     int max_knots; /* knots a round may insert in all; <= 0: no limit */
     long max_add;  /* control points a round may add (nf_loopctl_budget); <= 0: no limit;
                       the best candidate is always taken */
+    int per_span;  /* knots a span may get in a round (1 .. 3); <= 0: NF_KNOTSEL_PER_SPAN */
 } nf_knotsel_opts_t;
 
 /* One knot line to insert. */
@@ -96,7 +115,8 @@ typedef struct nf_knotsel_cand {
     int dir;      /* 0: a knot in u (adds Nv control points), 1: in v (adds Nu) */
     int span;     /* its span slot (span index - degree) */
     double x;     /* the new knot */
-    double score; /* misfit of the span per control point added */
+    double score; /* misfit of the span (level 1: of its side) per control point added */
+    int level;    /* 0: the span's first knot; 1: one on a side of it (same round) */
 } nf_knotsel_cand_t;
 
 /* Why a round inserts what it does. */
@@ -111,8 +131,9 @@ typedef enum nf_knotsel_status {
 /* Static string for a status ("insert", "none_out", ...). */
 const char *nf_knotsel_status_str(int status);
 
-/* The knot lines of this round into out (room for cap entries; the spans
- * of both directions, (nu - p) + (nv - q), always suffice), best score
+/* The knot lines of this round into out (room for cap entries: the spans
+ * of both directions, (nu - p) + (nv - q), always suffice for the first
+ * knot of each; NF_KNOTSEL_CANDS for the second ones too), best score
  * first; *n their count, *status why (NF_KNOTSEL_INSERT when *n > 0).
  * opts NULL: the defaults. Returns NF_OK, or NF_EARG for null pointers or
  * cap < 0. */

@@ -78,6 +78,11 @@ long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line)
     return (long)ceil(b);
 }
 
+int nf_loopctl_per_span(double within_pct, double need_pct)
+{
+    return need_pct - within_pct > NF_LOOPCTL_SIDES_GAP ? NF_KNOTSEL_PER_SPAN : 1;
+}
+
 int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, double min_gain,
                        int round, int max_rounds, int chooser_status)
 {

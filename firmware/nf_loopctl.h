@@ -88,6 +88,15 @@ int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, doub
  * control points the missing share needs. */
 long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line);
 
+/* Knots a span may get in the next round (nf_knotsel_opts_t.per_span):
+ * while more than NF_LOOPCTL_SIDES_GAP points of the share are missing,
+ * NF_KNOTSEL_PER_SPAN (a span's first knot and its sides: a narrow feature
+ * bracketed in one round, issue 14's narrow ridge met within 12 rounds);
+ * nearer the target one per span, FITPACK's step, so that the last rounds
+ * do not add lines the missing share does not need. */
+#define NF_LOOPCTL_SIDES_GAP 5.0
+int nf_loopctl_per_span(double within_pct, double need_pct);
+
 /* Record a round for nf_loopctl_budget: its share within and its control
  * points (once per round, before nf_loopctl_budget). */
 void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp);

@@ -127,6 +127,12 @@ static int parse(int argc, char **argv, fit_args_t *a)
          .kind = CF_OPT_FLAG,
          .dst = &o->drop_far,
          .help = "leave the points beyond --far out of the fit"},
+        {.name = "free-edges",
+         .kind = CF_OPT_FLAG,
+         .dst = &o->free_edges,
+         .help = "leave control points with no point in their support to alpha and beta "
+                 "(default: pinned to the nominal, so the fit does not extrapolate past the "
+                 "data)"},
         {.name = "holdout",
          .kind = CF_OPT_LONG,
          .dst = &o->holdout,
@@ -138,7 +144,8 @@ static int parse(int argc, char **argv, fit_args_t *a)
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &a->json, .help = "print the summary as JSON"},
         {0}};
     /* The job's shared options after own's first ten rows (--base to
-     * --max-iter), --record and --db, then --far, --drop-far, --json. */
+     * --max-iter), --record and --db, then --far, --drop-far, --free-edges,
+     * --holdout, --json. */
     cf_opt_t opts[CF_OPT_MAX];
     int n = 10, m = (int)(sizeof own / sizeof own[0]);
     memcpy(opts, own, sizeof(cf_opt_t) * (size_t)n);
@@ -191,6 +198,7 @@ static void print_json(const fit_args_t *a, const cf_fitjob_result_t *r, double 
     cf_json_num(&j, "rel_residual", r->solve.rel_residual);
     cf_json_num(&j, "rms", r->rms);
     cf_json_num(&j, "max_abs", r->max_abs);
+    cf_json_int(&j, "pinned_cp", r->pinned);
     cf_json_str(&j, "fit_status", cf_fitjob_status_name(r->status));
     cmd_fitopts_json(&j, o, r);
     if (o->holdout >= 2) {
@@ -246,6 +254,8 @@ static void print_text(const fit_args_t *a, const cf_fitjob_result_t *r, double 
                "  stopped (%s): %s\n",
                o->tol, r->within_pct, o->within, r->status == CF_FITJOB_MET ? "met" : "NOT met",
                cf_fitjob_status_name(r->status), r->why);
+    if (r->pinned > 0)
+        printf("  %ld control points without data under them follow the nominal\n", r->pinned);
     if (r->fp_cells > 0)
         printf("  footprint: %ld of %ld cells with points, %ld without, %ld on its edge\n",
                r->fp_filled, r->fp_cells, r->fp_empty, r->fp_outline);

@@ -8,10 +8,13 @@
  * for an SPC system (Q-DAS DFQ). The points are streamed (three passes with
  * --png: plane, extent, deviations; one more for the PLY, whose colours
  * need the scale); memory is fixed by the surface, the map raster and the
- * histogram. */
+ * histogram. The data footprint (cf_fpmap: the feet per cell of the
+ * surface's knot spans) is counted (no_data_cells, footprint_share) and
+ * marked on the map: "no data" cells hatched, the outline drawn. */
 #include "cf_cli.h"
 #include "cf_devmap.h"
 #include "cf_dfq.h"
+#include "cf_fpmap.h"
 #include "cf_iges.h"
 #include "cf_json.h"
 #include "cf_opt.h"
@@ -232,11 +235,14 @@ int cmd_report(int argc, char **argv)
     cf_devmap_t *map = NULL;
     cf_ptsout_t csv;
     memset(&csv, 0, sizeof csv);
+    cf_fpmap_t fpm;
+    memset(&fpm, 0, sizeof fpm);
+    nf_footprint_stats_t fs;
     cf_stats_t *st = malloc(sizeof *st);
     double *buf = malloc(sizeof(double) * 5 * RBATCH);
     int ec = CLI_OK;
     long got, clamped = 0;
-    if (!st || !buf || cf_seedgrid_init(&sg, &s, 8)) {
+    if (!st || !buf || cf_seedgrid_init(&sg, &s, 8) || cf_fpmap_init(&fpm, &s)) {
         ec = cli_error("report", CLI_FAIL, "out of memory");
         goto done;
     }
@@ -294,6 +300,7 @@ int cmd_report(int argc, char **argv)
             nf_proj_t pj;
             cf_seedgrid_project(&sg, Q, 1e-9, &pj); /* best point kept on ENOCONV */
             clamped += pj.clamped;
+            cf_fpmap_add(&fpm, pj.u, pj.v, pj.clamped);
             cf_stats_add(st, pj.dist);
             if (map)
                 cf_devmap_add(map, Q, pj.dist);
@@ -311,6 +318,9 @@ int cmd_report(int argc, char **argv)
         ec = cli_error("report", CLI_USAGE, "%s: no points", o.points);
         goto done;
     }
+    cf_fpmap_stats(&fpm, &fs);
+    if (map)
+        cf_fpmap_mark(&fpm, map);
     if (o.png && cf_devmap_write_png(map, st, o.png, msg, sizeof msg)) {
         ec = cli_error("report", CLI_FAIL, "%s", msg);
         goto done;
@@ -330,6 +340,11 @@ int cmd_report(int argc, char **argv)
         cf_json_str(&j, "points_file", o.points);
         cf_stats_json_fields(st, &j);
         cf_json_int(&j, "boundary_feet", clamped);
+        cf_json_int(&j, "footprint_cells", fs.cells);
+        cf_json_int(&j, "footprint_filled", fs.filled);
+        cf_json_int(&j, "no_data_cells", fs.empty);
+        cf_json_int(&j, "footprint_outline", fs.outline);
+        cf_json_num(&j, "footprint_share", fs.cells ? (double)fs.filled / (double)fs.cells : 0.0);
         if (o.png)
             cf_json_str(&j, "png", o.png);
         if (map)
@@ -348,6 +363,10 @@ int cmd_report(int argc, char **argv)
         cf_stats_print(st, stdout);
         if (clamped)
             printf("  %ld points project onto the surface boundary\n", clamped);
+        printf("  footprint: %ld of %ld cells of the surface with points (%.1f %%), %ld no data, "
+               "%ld on its outline\n",
+               fs.filled, fs.cells, fs.cells ? 100.0 * (double)fs.filled / (double)fs.cells : 0.0,
+               fs.empty, fs.outline);
         if (o.png)
             printf("  deviation map: %s\n", o.png);
         if (o.csv)
@@ -362,6 +381,7 @@ done:
     if (ec != CLI_OK && o.csv)
         cf_ptsout_abort(&csv);
     cf_devmap_free(map);
+    cf_fpmap_free(&fpm);
     cf_points_close(pr);
     cf_seedgrid_free(&sg);
     free(buf);

@@ -4,6 +4,7 @@
  * each round and the tolerance loop of Section 2.2; the best round kept. */
 #include "cf_fitjob.h"
 #include "cf_cli.h"
+#include "cf_edges.h"
 #include "cf_err.h"
 #include "cf_fitpass.h"
 #include "cf_holdout.h"
@@ -244,6 +245,7 @@ typedef struct pass {
     cf_seedgrid_t pj;
     const nf_surf_t *proj;
     const weigh_t *wt;
+    cf_edges_t ed; /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
     long points, clamped, nfar, dropped;
     double ss0, mx0; /* |distance| to proj of the points projected */
 } pass_t;
@@ -269,6 +271,8 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
         return rc;
     if (proj && cf_seedgrid_init(&ps->pj, proj, SEEDS))
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+    if (!j->o.free_edges && (rc = cf_edges_begin(&ps->ed, cur)))
+        return cf_fail(msg, ml, rc, "data footprint: %s", cf_strerror(rc));
     return 0;
 }
 
@@ -313,6 +317,10 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
     int rc = cf_fitpass_rows(&ps->fp, uv, m, cols, &b);
     if (rc)
         *bad = uv != in && b >= 0 ? j->src[b] : b;
+    /* The footprint of the rows in the fit (weight > 0): where data are. */
+    for (long k = 0; !rc && ps->ed.mem && k < m; k++)
+        if (cols == 5 || uv[6 * k + 5] > 0)
+            cf_edges_add(&ps->ed, uv[(long)cols * k], uv[(long)cols * k + 1]);
     ps->points += n;
     return rc;
 }
@@ -321,12 +329,18 @@ static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *na
                       size_t ml)
 {
     nf_solve_opts_t so = {j->o.solve_tol, (int)j->o.max_iter, j->o.probe};
+    /* Outside the footprint the nominal, not an extrapolation (issue 14). */
+    long np = cf_edges_pin(&ps->ed, &j->base, &ps->fp);
+    if (np < 0)
+        return cf_fail(msg, ml, (int)np, "%s: pinning the control points without data: %s", name,
+                       cf_strerror((int)np));
     return cf_fitpass_solve(&ps->fp, &so, out, name, msg, ml);
 }
 
 static void pass_free(pass_t *ps)
 {
     cf_seedgrid_free(&ps->pj);
+    cf_edges_free(&ps->ed);
 }
 
 int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
@@ -442,6 +456,7 @@ typedef struct resid {
 typedef struct check {
     nf_spanres_t *sr;
     nf_knotsel_t *ks;
+    nf_knotsel_t *kr; /* auto + robust: the rejected points' misfit (cf_loop_fold_auto) */
     nf_footprint_t *fp;
 } check_t;
 
@@ -515,6 +530,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
              * rejected cluster, a feature, has no auto counterpart yet.) */
             if (ck && ck->ks)
                 nf_knotsel_add(ck->ks, q[0], q[1], cut > 0 && d >= cut ? NAN : d);
+            if (ck && ck->kr && cut > 0 && d >= cut)
+                nf_knotsel_add(ck->kr, q[0], q[1], d);
             if (ck && ck->fp && !clamped)
                 nf_footprint_add(ck->fp, q[0], q[1]); /* outside the domain: not counted */
             if (st)
@@ -559,6 +576,9 @@ typedef struct surfs {
     cf_stats_t *st; /* the round's deviations (swapped with the best's) */
     double *srmem;
     void *fpmem;       /* auto: the footprint's cells */
+    double *krmem;     /* auto + robust: kr's spans */
+    double *crmem;     /* auto + robust: the cells of the rejected points (sr) */
+    nf_knotsel_t kr;   /* auto + robust: the rejected points' misfit */
     nf_knotsel_t ks;   /* auto: the check pass's spans (in srmem) */
     nf_footprint_t fp; /* auto: where the points are */
     nf_robust_t rb;    /* the last robust pass's scale */
@@ -573,6 +593,8 @@ static void surfs_free(surfs_t *s)
     free(s->st);
     free(s->srmem);
     free(s->fpmem);
+    free(s->krmem);
+    free(s->crmem);
 }
 
 /* Round k on S->cur: the fit passes (the first from the live points when
@@ -657,8 +679,12 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
      * out of tolerance (per knot span). */
     free(S->srmem);
     free(S->fpmem);
+    free(S->krmem);
+    free(S->crmem);
     S->srmem = NULL;
     S->fpmem = NULL;
+    S->krmem = NULL;
+    S->crmem = NULL;
     memset(ck, 0, sizeof *ck);
     if (o->loop && o->refine == CF_REFINE_RESIDUAL) {
         S->srmem = malloc(sizeof(double) *
@@ -679,13 +705,28 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             return cf_fail(r->msg, r->ml, rc, "check pass: %s", nf_strerror(rc));
         ck->ks = &S->ks;
         ck->fp = &S->fp;
+        if (o->robust) { /* rejected clusters: a feature still draws knots */
+            S->krmem = malloc(sizeof(double) *
+                              (size_t)NF_KNOTSEL_DOUBLES(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q));
+            S->crmem = malloc(sizeof(double) *
+                              (size_t)NF_SPANRES_DOUBLES(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q));
+            if (!S->krmem || !S->crmem)
+                return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+            if ((rc = nf_knotsel_init(&S->kr, &S->fit, o->tol, S->krmem)))
+                return cf_fail(r->msg, r->ml, rc, "check pass: %s", nf_strerror(rc));
+            nf_spanres_init(sr, &S->fit, o->tol, S->crmem);
+            ck->kr = &S->kr;
+            ck->sr = sr;
+        }
     }
     if (S->st && (rc = cf_stats_init(S->st, o->stats_tol > 0 ? o->stats_tol : o->tol)))
         return cf_fail(r->msg, r->ml, rc, "statistics: %s", cf_strerror(rc));
     set_pass(r, lo, hi, npass - 1, npass);
     if ((rc = measure(r, &S->fit, ck, *c, res, S->st, 0)))
         return rc;
-    if (ck->sr)
+    if (ck->kr && cf_loop_fold_auto(ck->ks, ck->kr, ck->sr) < 0)
+        return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    else if (!ck->kr && ck->sr)
         nf_spanres_fold(ck->sr); /* rejected misfit in one place: a feature */
     return 0;
 }
@@ -704,8 +745,9 @@ static int auto_verdict(const cf_fitjob_opts_t *o, nf_loopctl_t *lc, const nf_kn
     ko.max_cp = o->max_cp;
     nf_loopctl_record(lc, pct, (long)fit->nu * fit->nv);
     ko.max_add = nf_loopctl_budget(lc, o->within, fit->nu < fit->nv ? fit->nu : fit->nv);
+    ko.per_span = nf_loopctl_per_span(pct, o->within);
     *n = 0;
-    nf_knotsel_choose(ks, &ko, cand, (fit->nu - fit->p) + (fit->nv - fit->q), n, &kst);
+    nf_knotsel_choose(ks, &ko, cand, NF_KNOTSEL_CANDS(fit->nu, fit->nv, fit->p, fit->q), n, &kst);
     /* min_gain 0 means no gain is asked: the least the rules take. Near
      * the target a round cannot gain more than what is missing: the least
      * gain is at most a quarter of the gap to the best share so far. */
@@ -843,6 +885,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->solve = po.fp.st;
             out->store_bytes = cf_fitpass_store_bytes(&po.fp);
             out->bytes = j->need;
+            out->pinned = po.ed.pinned;
             if (ck.fp) {
                 nf_footprint_stats_t fs;
                 nf_footprint_stats(ck.fp, &fs);
@@ -864,7 +907,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         int stop = 0, n = 0;
         if (o->refine == CF_REFINE_AUTO) {
             free(cand);
-            cand = malloc(sizeof *cand * (size_t)((S.fit.nu - S.fit.p) + (S.fit.nv - S.fit.q)));
+            cand = malloc(sizeof *cand *
+                          (size_t)NF_KNOTSEL_CANDS(S.fit.nu, S.fit.nv, S.fit.p, S.fit.q));
             if (!cand) {
                 rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
                 goto fail;

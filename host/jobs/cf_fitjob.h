@@ -72,6 +72,8 @@ typedef struct cf_fitjob_opts {
     double min_gain;  /* auto: least gain of a round, points of percent (nf_loopctl) */
     double noise;     /* robust: the probe's noise, mm, a floor under the scale */
     long holdout;     /* >= 2: every holdout-th scan row left out and measured (cf_holdout) */
+    int free_edges;   /* 1: no pins; else (issue 14) control points with no point in their
+                       * support follow the nominal (cf_edges) */
     double stats_tol; /* the statistics' tolerance when it is not the loop's (0: tol); the
                        * cell's verdict tolerance beside its fit loop's goal */
 } cf_fitjob_opts_t;
@@ -111,6 +113,7 @@ typedef struct cf_fitjob_result {
     /* The best round's data footprint (nf_footprint): cells of the knot
      * spans with points, without ("no data"), on the edge; fp_cells 0: none. */
     long fp_cells, fp_filled, fp_empty, fp_outline;
+    long pinned; /* control points of the best fit pinned to the nominal (cf_edges) */
     /* Held-out rows (opts.holdout): points, rms, p99 (the histogram's
      * estimate, within NF_RHIST_RELERR) and max of their distances. */
     long ho_points;

@@ -130,6 +130,12 @@ int cf_fitpass_solve(cf_fitpass_t *ps, const nf_solve_opts_t *so, nf_surf_t *out
     double t2 = cli_now();
     if (!rc)
         rc = nf_fit_finish(&ps->f);
+    /* A control point no data determine follows its pin target (the
+     * nominal): beta_i in Eq. 7's beta term, after finish, before the solve. */
+    for (long i = 0; !rc && ps->pin && i < ps->f.n; i++)
+        if (ps->pin[i])
+            rc = ps->pin_to ? nf_fit_pin_to(&ps->f, i, ps->pin_beta, ps->pin_to + 3 * i)
+                            : nf_fit_pin(&ps->f, i, ps->pin_beta);
     if (!rc)
         rc = nf_fit_solve(&ps->f, ps->f.prm.solver, so, &ps->st);
     if (rc)

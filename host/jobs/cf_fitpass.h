@@ -29,6 +29,13 @@ typedef struct cf_fitpass {
     double t_rows;  /* of it, inside the fitter's accumulation (and the merge) */
     double t_merge; /* of it, the second core's sums joining the first's */
     double t_solve;
+    /* Honest edges (issue 14): per control point a flag (NULL: none), the
+     * flagged ones pulled to pin_to[3 i ..] (NULL: P0) with pin_beta
+     * between nf_fit_finish and the solve (nf_fit_pin_to); set by the
+     * caller before cf_fitpass_solve. */
+    const unsigned char *pin;
+    const double *pin_to;
+    double pin_beta;
 } cf_fitpass_t;
 
 /* Bytes of the block for a pass on s's space with solver: nf_fit_bytes,
@@ -58,7 +65,8 @@ int cf_fitpass_rows(cf_fitpass_t *ps, const double *rows, long n, int cols, long
 int cf_fitpass_row_error(const cf_fitpass_t *ps, int rc, const double *row, const char *at,
                          char *msg, size_t ml);
 
-/* Merge the second core's sums, add Eq. 7's alpha and beta terms, solve
+/* Merge the second core's sums, add Eq. 7's alpha and beta terms (and
+ * the pins, when ps->pin is set), solve
  * with so, and copy the net into out (s's shape). 0, or NF_ENODATA /
  * NF_ESINGULAR naming the control point left free, NF_ENOCONV, ... with
  * msg. Once per pass. */

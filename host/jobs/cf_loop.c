@@ -162,3 +162,25 @@ void cf_round_print(FILE *f, int i, const cf_round_t *r, double tol, int robust)
     fprintf(f, " (%.2f s)\n", r->seconds);
     fflush(f);
 }
+
+int cf_loop_fold_auto(nf_knotsel_t *ks, const nf_knotsel_t *kr, const nf_spanres_t *sr)
+{
+    const nf_surf_t *s = ks->s;
+    const int nsu = s->nu - s->p, nsv = s->nv - s->q;
+    const double share = sr->all > 0 ? (double)sr->rej / (double)sr->all : 0.0;
+    unsigned char *f = calloc((size_t)(nsu + nsv), 1); /* u spans, then v spans */
+    if (!f)
+        return CF_ENOMEM;
+    for (int k = 0; k < nsv; k++)
+        for (int l = 0; l < nsu; l++) {
+            const double *c = sr->cell + NF_SPANRES_CELL * (l + (long)k * nsu);
+            if (c[1] >= NF_KNOTS_MIN_REJ && c[1] >= NF_KNOTS_COHERENT * share * c[0])
+                f[l] = f[nsu + k] = 1;
+        }
+    int merged = 0;
+    for (int i = 0; i < nsu + nsv; i++)
+        if (f[i] && nf_knotsel_merge_span(ks, kr, i >= nsu, i >= nsu ? i - nsu : i) == NF_OK)
+            merged++;
+    free(f);
+    return merged;
+}

@@ -48,6 +48,16 @@ int cf_loop_next(const nf_surf_t *fit, const nf_spanres_t *sr, cf_refine_t how, 
 int cf_loop_insert(const nf_surf_t *fit, const nf_knotsel_cand_t *c, int n, long max_cp,
                    nf_solver_t solver, nf_surf_t *nxt, int *stop, char *msg, size_t ml);
 
+/* --refine auto with robust passes (issue 14): points a robust pass
+ * rejected reach ks as data without misfit (a spike is not a shape), and
+ * kr with their misfit; sr counts them per cell. Where a cell's rejected
+ * share passes nf_spanres_fold's test (NF_KNOTS_COHERENT times the share
+ * over all cells, at least NF_KNOTS_MIN_REJ points: a feature the net
+ * cannot follow yet, not spikes), kr's misfit of that cell's u and v spans
+ * joins ks (nf_knotsel_merge_span), so a narrow feature still draws knots.
+ * Returns the spans merged, or CF_ENOMEM. */
+int cf_loop_fold_auto(nf_knotsel_t *ks, const nf_knotsel_t *kr, const nf_spanres_t *sr);
+
 /* One round as reported. */
 typedef struct cf_round {
     int nu, nv;

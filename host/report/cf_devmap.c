@@ -33,8 +33,10 @@
  * bin edge and the share of points per colour is counted exactly. */
 #define DM_HMAX 1000
 #define DM_NBIN (4 * DM_HMAX + 2)
-#define DM_GREY 0xD9D9D9 /* no data */
-#define DM_INK 0x1A1A1A  /* text */
+#define DM_GREY 0xD9D9D9    /* no data */
+#define DM_INK 0x1A1A1A     /* text */
+#define DM_HATCH 0x5A5A5A   /* footprint "no data" cells: diagonal hatch (cf_devmap_mark) */
+#define DM_OUTLINE 0x000000 /* the footprint's outline */
 
 /* Segmented diverging scale, from below -range * tol up to above it: the
  * metrology convention (blue short of material, green in tolerance, red
@@ -74,6 +76,8 @@ struct cf_devmap {
     float *val;          /* render: cell values */
     unsigned char *flag; /* render: 0 empty, 1 measured, 2 filled (4, 8 while filling) */
     unsigned char *dist; /* render: chessboard distances */
+    unsigned char *mark; /* CF_DEVMAP_NODATA | CF_DEVMAP_OUTLINE per cell (cf_devmap_mark) */
+    int marked;          /* any mark: the legend shows the hatch */
     /* the points on the map */
     long long n, within, outside, seg[DM_NCOL];
     double sum_d, sq, dmin, dmax, at_min[2], at_max[2];
@@ -319,6 +323,7 @@ void cf_devmap_free(cf_devmap_t *m)
     free(m->val);
     free(m->flag);
     free(m->dist);
+    free(m->mark);
     free(m->hist);
     free(m);
 }
@@ -507,7 +512,8 @@ int cf_devmap_begin(cf_devmap_t *m, char *msg, size_t msglen)
     m->val = calloc(nc, sizeof *m->val);
     m->flag = calloc(nc, 1);
     m->dist = calloc(nc, 1);
-    if (!m->sum || !m->ext || !m->cnt || !m->val || !m->flag || !m->dist)
+    m->mark = calloc(nc, 1);
+    if (!m->sum || !m->ext || !m->cnt || !m->val || !m->flag || !m->dist || !m->mark)
         return cf_fail(msg, msglen, CF_ENOMEM, "deviation map: out of memory for %d x %d cells",
                        m->cw, m->ch);
     m->begun = 1;
@@ -556,6 +562,27 @@ int cf_devmap_add(cf_devmap_t *m, const double p[3], double d)
 long long cf_devmap_outside(const cf_devmap_t *m)
 {
     return m->outside;
+}
+
+int cf_devmap_mark(cf_devmap_t *m, const double p[3], int what)
+{
+    if (!m->begun || (what & ~(CF_DEVMAP_NODATA | CF_DEVMAP_OUTLINE)))
+        return CF_EARG;
+    double u, v;
+    to_plane(m, p, &u, &v);
+    if (!isfinite(u) || !isfinite(v))
+        return CF_EARG;
+    double x = floor((u - m->U0) / m->pitch), y = floor((v - m->V0) / m->pitch);
+    if (!(x >= 0 && x < m->cw && y >= 0 && y < m->ch))
+        return CF_OK; /* off the map: counted by the caller, not drawn */
+    m->mark[(size_t)(m->ch - 1 - (int)y) * (size_t)m->cw + (size_t)x] |= (unsigned char)what;
+    m->marked = 1;
+    return CF_OK;
+}
+
+double cf_devmap_pitch(const cf_devmap_t *m)
+{
+    return m->begun ? m->pitch : 0.0;
 }
 
 void cf_devmap_size(const cf_devmap_t *m, int *cells_w, int *cells_h, int *img_w, int *img_h)
@@ -767,6 +794,13 @@ static void draw_map(cf_devmap_t *m, cf_image_t *im)
                     }
                 col = palette[seg_of(m, ws > 0 ? acc / ws : m->val[(size_t)cj * cw + ci])];
             }
+            /* The footprint's marks over it: its outline solid, the cells
+             * no point reached hatched (what shows there is not measured). */
+            unsigned char mk = m->mark[(size_t)cj * cw + ci];
+            if (mk & CF_DEVMAP_OUTLINE)
+                col = DM_OUTLINE;
+            else if ((mk & CF_DEVMAP_NODATA) && (x + y) % 6 < 2)
+                col = DM_HATCH;
             cf_image_set(im, m->mx + x, m->my + y, col);
         }
     }
@@ -892,7 +926,16 @@ static void draw_scale(const cf_devmap_t *m, cf_image_t *im)
     int kx = x + px + 10 + cf_image_text(im, x + px + 10, y + 1 - DM_TH / 2, DM_FS, DM_INK, s) + 40;
     cf_image_fill(im, kx, y - 7, 18, 16, DM_GREY);
     cf_image_box(im, kx, y - 7, 18, 16, 0x707070);
-    cf_image_text(im, kx + 26, y + 1 - DM_TH / 2, DM_FS, DM_INK, "no data");
+    int w = cf_image_text(im, kx + 26, y + 1 - DM_TH / 2, DM_FS, DM_INK, "no data");
+    if (!m->marked)
+        return;
+    /* The hatch of the footprint's "no data" cells (cf_devmap_mark). */
+    kx += 26 + w + 24;
+    for (int j = 0; j < 16; j++)
+        for (int i = 0; i < 18; i++)
+            cf_image_set(im, kx + i, y - 7 + j, (kx + i + y - 7 + j) % 6 < 2 ? DM_HATCH : DM_GREY);
+    cf_image_box(im, kx, y - 7, 18, 16, DM_OUTLINE);
+    cf_image_text(im, kx + 26, y + 1 - DM_TH / 2, DM_FS, DM_INK, "surface cells without points");
 }
 
 int cf_devmap_render(cf_devmap_t *m, const cf_stats_t *st, cf_image_t *im, char *msg, size_t msglen)

@@ -112,6 +112,19 @@ int cf_devmap_begin(cf_devmap_t *m, char *msg, size_t msglen);
 int cf_devmap_add(cf_devmap_t *m, const double p[3], double d);
 long long cf_devmap_outside(const cf_devmap_t *m);
 
+/* Marks of the data footprint (issue 14, honest edges; cf_fpmap): the
+ * raster cell under p (a point of the surface) drawn hatched (NODATA: no
+ * measured point on the surface there) or solid (OUTLINE: the footprint's
+ * edge), over the deviations, with a key under the map. Points off the map
+ * are left out. After cf_devmap_begin; CF_EARG before it, for another
+ * what or non-finite p. */
+#define CF_DEVMAP_NODATA 1
+#define CF_DEVMAP_OUTLINE 2
+int cf_devmap_mark(cf_devmap_t *m, const double p[3], int what);
+
+/* The raster's cell size, mm (0 before cf_devmap_begin). */
+double cf_devmap_pitch(const cf_devmap_t *m);
+
 /* Draw the report image into im (allocated here; cf_image_free it). st, when
  * not NULL, supplies the title's figures (so they match the text report);
  * otherwise the map's own points do. CF_EARG before cf_devmap_begin,

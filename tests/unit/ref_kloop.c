@@ -128,7 +128,7 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
         free(cur.U);
         cur.U = NULL;
         /* Check pass: distances at the points' parameters, per span. */
-        const int ncand = fit.nu - fit.p + fit.nv - fit.q;
+        const int ncand = NF_KNOTSEL_CANDS(fit.nu, fit.nv, fit.p, fit.q);
         double *mem =
             malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(fit.nu, fit.nv, fit.p, fit.q));
         nf_knotsel_cand_t *cand = malloc(sizeof *cand * (size_t)ncand);
@@ -170,6 +170,7 @@ int ref_kloop_run(const nf_surf_t *base, const double *pts, long M, const ref_kl
             if (c->budget) {
                 nf_loopctl_record(&lc, pct, (long)fit.nu * fit.nv);
                 so.max_add = nf_loopctl_budget(&lc, c->within, fit.nu < fit.nv ? fit.nu : fit.nv);
+                so.per_span = so.per_span > 0 ? so.per_span : nf_loopctl_per_span(pct, c->within);
             }
             nf_knotsel_choose(&a, &so, cand, ncand, &n, &st);
         }

@@ -122,6 +122,10 @@ static void sel_end(sel_t *x)
     free(x->s.U);
 }
 
+/* The first knot of a span alone (per_span 1): the rules below test its
+ * placement; test_sides the knots on its sides. */
+static const nf_knotsel_opts_t one = {0, 0, 0, 0.0, 0.0, 0, 0, 1};
+
 /* Misfit in one cell only: the first knot in each direction goes into
  * that cell's spans, a quarter span or more from their ends, near the
  * misfit's centre; nothing elsewhere. */
@@ -135,7 +139,7 @@ static void test_concentrated(void **state)
     for (int j = 0; j < 6; j++)
         for (int i = 0; i < 6; i++)
             nf_knotsel_add(&x.a, 0.40 + 0.01 * i, 0.30 + 0.01 * j, 1.0);
-    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(nf_knotsel_choose(&x.a, &one, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.st, NF_KNOTSEL_INSERT);
     assert_int_equal(x.n, 2); /* one per direction: the rest has no misfit */
     int seen[2] = {0, 0};
@@ -160,6 +164,107 @@ static void test_concentrated(void **state)
     sel_end(&x);
 }
 
+/* The same cell with the default per_span (3): each direction also gets a
+ * knot on each side of its first, at that side's misfit centroid (the
+ * nearest sub-bin boundary within the side), scored by the side's misfit
+ * per control point; worked out by hand from the sub-bins (width 1/64):
+ * u span [0.375, 0.5): misfit rows 0.40 | 0.41 0.42 | 0.43 | 0.44 0.45 in
+ * sub-bins 1, 2, 3, 4, centroid 0.425 -> 0.421875 (boundary 3); left
+ * (0.40 .. 0.42, centroid 0.41) -> 0.40625, right (0.43 .. 0.45, 0.44) ->
+ * 0.4375. v span [0.25, 0.375): 0.30 0.31 | 0.32 | 0.33 0.34 | 0.35 in
+ * sub-bins 3 .. 6, centroid 0.325 -> 0.328125; left (0.31) -> 0.3125,
+ * right (0.34) -> 0.34375. g = 36 points of d^2 = 1, 18 a side; a knot
+ * line adds 11 control points. */
+static void test_sides(void **state)
+{
+    (void)state;
+    sel_t x;
+    sel_start(&x, 8, 8, 0.1);
+    grid(&x.a, 64, 64);
+    for (int j = 0; j < 6; j++)
+        for (int i = 0; i < 6; i++)
+            nf_knotsel_add(&x.a, 0.40 + 0.01 * i, 0.30 + 0.01 * j, 1.0);
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.st, NF_KNOTSEL_INSERT);
+    assert_int_equal(x.n, 6);
+    const double want[2][3] = {{0.421875, 0.40625, 0.4375}, {0.328125, 0.3125, 0.34375}};
+    int seen[2][3] = {{0, 0, 0}, {0, 0, 0}};
+    for (int k = 0; k < x.n; k++) {
+        const nf_knotsel_cand_t *c = &x.c[k];
+        int hit = -1;
+        for (int w = 0; w < 3; w++)
+            if (fabs(c->x - want[c->dir][w]) < 1e-12)
+                hit = w;
+        assert_true(hit >= 0);
+        if (hit < 0)
+            break; /* (assert_true has failed; for the analyser) */
+        seen[c->dir][hit]++;
+        assert_int_equal(c->level, hit > 0);
+        assert_near(c->score, (hit ? 18.0 : 36.0) / 11.0, 1e-9);
+    }
+    for (int d = 0; d < 2; d++)
+        for (int w = 0; w < 3; w++)
+            assert_int_equal(seen[d][w], 1);
+    /* Best first: the two first knots (36 / 11), then the sides. */
+    assert_int_equal(x.c[0].level, 0);
+    assert_int_equal(x.c[1].level, 0);
+    /* A side goes only with its span's first knot: with room for one knot
+     * in the round (max_knots 1) it is the first knot alone. */
+    nf_knotsel_opts_t k1 = {0, 0, 0, 0.0, 0.0, 1, 0, 0};
+    assert_int_equal(nf_knotsel_choose(&x.a, &k1, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 1);
+    assert_int_equal(x.c[0].level, 0);
+    /* Room for the first knots only (cap 2, the spans with misfit): the
+     * sides wait, the first knots go in. */
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 2, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 2);
+    assert_int_equal(x.c[0].level + x.c[1].level, 0);
+    /* per_span 2: the first knot and the side holding more misfit (here
+     * both hold 18: the left one, the first of equals). */
+    nf_knotsel_opts_t two = {0, 0, 0, 0.0, 0.0, 0, 0, 2};
+    assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 4);
+    for (int k = 0; k < x.n; k++)
+        assert_true(x.c[k].level == 0 || fabs(x.c[k].x - want[x.c[k].dir][1]) < 1e-12);
+    sel_end(&x);
+}
+
+/* nf_knotsel_merge_span: points a holds as data without misfit (NaN, a
+ * robust pass's rejects) whose misfit b holds join a's span: a's
+ * candidate then scores their d^2 per control point (closed form), and
+ * nothing changes in the spans not merged. */
+static void test_merge(void **state)
+{
+    (void)state;
+    sel_t x, y;
+    sel_start(&x, 8, 8, 0.1);
+    grid(&x.a, 64, 64);
+    y = x; /* the same surface: b counts on x's net */
+    y.mem = malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(11, 11, 3, 3));
+    assert_int_equal(nf_knotsel_init(&y.a, &x.s, 0.1, y.mem), NF_OK);
+    double g = 0.0;
+    for (int i = 0; i < 20; i++) { /* a cluster in u span 3, v span 2 */
+        const double u = 0.40 + 0.002 * i, v = 0.30 + 0.001 * i, d = 2.0 + 0.1 * i;
+        nf_knotsel_add(&x.a, u, v, NAN);
+        nf_knotsel_add(&y.a, u, v, d);
+        g += d * d;
+    }
+    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 0); /* rejected points alone: no misfit */
+    assert_int_equal(nf_knotsel_merge_span(&x.a, &y.a, 0, 3), NF_OK);
+    assert_int_equal(nf_knotsel_merge_span(&x.a, &y.a, 1, 2), NF_OK);
+    assert_int_equal(nf_knotsel_merge_span(&x.a, &y.a, 0, 8), NF_EARG);
+    assert_near(x.a.g, g, 1e-9 * g);
+    assert_int_equal(nf_knotsel_choose(&x.a, &one, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(x.n, 2);
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(x.c[k].span, x.c[k].dir ? 2 : 3);
+        assert_near(x.c[k].score, g / 11.0, 1e-9 * g);
+    }
+    free(y.mem);
+    sel_end(&x);
+}
+
 /* Data rows at v = 0.05 + 0.1 j: each v span of width 1/16 holds one row
  * at most, so no v knot may go in (it would leave a span without a row, or
  * with one row for its new control points); u, densely sampled, gets its
@@ -175,7 +280,7 @@ static void test_rows(void **state)
             nf_knotsel_add(&x.a, (i + 0.5) / 200, 0.05 + 0.1 * j, 0.0);
     for (int i = 0; i < 20; i++)
         nf_knotsel_add(&x.a, 0.52 + 0.001 * i, 0.45, 1.0);
-    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(nf_knotsel_choose(&x.a, &one, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.st, NF_KNOTSEL_INSERT);
     assert_int_equal(x.n, 1);
     assert_int_equal(x.c[0].dir, 0);
@@ -189,11 +294,11 @@ static void test_rows(void **state)
      * (scoring low per control point, but the only candidates) ... */
     for (int i = 0; i < 200; i++)
         nf_knotsel_add(&x.a, (i + 0.5) / 200, 0.45, 1.0);
-    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(nf_knotsel_choose(&x.a, &one, x.c, 64, &x.n, &x.st), NF_OK);
     for (int k = 0; k < x.n; k++)
         assert_int_equal(x.c[k].dir, 0);
     /* ... unless u needs more points per new span than its spans hold. */
-    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0, 0};
+    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0, 0, 1};
     assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 0);
     assert_int_equal(x.st, NF_KNOTSEL_DATA);
@@ -206,13 +311,13 @@ static void test_rows(void **state)
         nf_knotsel_add(&x.a, (i + 0.5) / 1000, 0.40, 0.0);
         nf_knotsel_add(&x.a, (i + 0.5) / 1000, 0.43, i % 7 == 0 ? 1.0 : 0.0);
     }
-    assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+    assert_int_equal(nf_knotsel_choose(&x.a, &one, x.c, 64, &x.n, &x.st), NF_OK);
     double xv = -1.0; /* the v knot */
     for (int k = 0; k < x.n; k++)
         if (x.c[k].dir == 1)
             xv = x.c[k].x;
     assert_true(xv > 0.40 && xv < 0.43);
-    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0};
+    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0, 1};
     assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
     for (int k = 0; k < x.n; k++)
         assert_int_equal(x.c[k].dir, 0);
@@ -236,7 +341,7 @@ static void test_gain_order(void **state)
             nf_knotsel_add(&x.a, 0.51 + 0.0005 * i, 0.52 + 0.0005 * i, d);
             g += d * d;
         }
-        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0, 0};
+        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0, 0, 1};
         assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
         assert_int_equal(x.n, 2);
         const int first = flip ? 1 : 0; /* the direction adding fewer control points */
@@ -274,7 +379,7 @@ static void test_caps(void **state)
     assert_true(x.n >= 1);
     /* The round budget: the best candidate always, then only what fits. */
     for (long add = 1; add <= 16; add += 15) {
-        nf_knotsel_opts_t b = {0, 0, 0, 0.0, 0.0, 0, add};
+        nf_knotsel_opts_t b = {0, 0, 0, 0.0, 0.0, 0, add, 0};
         assert_int_equal(nf_knotsel_choose(&x.a, &b, x.c, 64, &x.n, &x.st), NF_OK);
         ru = rv = 0;
         for (int k = 0; k < x.n; k++)
@@ -283,7 +388,7 @@ static void test_caps(void **state)
         assert_true(add == 1 || (8L + ru) * (8 + rv) - 64 <= add);
     }
     /* max_cp below half the points binds instead. */
-    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0, 0};
+    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0, 0, 0};
     assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 0);
     assert_int_equal(x.st, NF_KNOTSEL_MAX_CP);
@@ -530,6 +635,7 @@ int main(void)
 {
     const struct CMUnitTest t[] = {
         cmocka_unit_test(test_counts),    cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_sides),     cmocka_unit_test(test_merge),
         cmocka_unit_test(test_rows),      cmocka_unit_test(test_gain_order),
         cmocka_unit_test(test_caps),      cmocka_unit_test(test_verdict),
         cmocka_unit_test(test_budget),    cmocka_unit_test(test_alpha),
