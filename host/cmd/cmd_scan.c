@@ -420,7 +420,7 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
 
 /* The fast methods' counts (cf_scanfast_res_t) into the summary. */
 static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, double fit_ready,
-                         const cf_fitjob_result_t *fr)
+                         const cf_fitjob_result_t *fr, int held)
 {
     cf_json_int(js, "rows", x->rows);
     cf_json_int(js, "rows_done", x->rows_done);
@@ -431,6 +431,10 @@ static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, 
      * point read back from the journal, which is statistics, not the fit). */
     cf_json_num(js, "fit_solve_s", fr ? fr->t_solve : 0);
     cf_json_num(js, "fit_ready_s", fit_ready);
+    /* Where the passes after the scan read the points: "held" (the job's
+     * memory, issue 19) or "journal" (read back: more than the hold). */
+    if (fr)
+        cf_json_str(js, "fit_points_from", held ? "held" : "journal");
     if (method == CF_SCAN_OTF) {
         cf_json_num(js, "speed", x->speed);
         cf_json_num(js, "period_us", x->period_us);
@@ -456,7 +460,7 @@ static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, 
 
 static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const scan_result_t *res,
                     const jnl_t *j, const cf_fitjob_result_t *fr, double secs, int method,
-                    const cf_scanfast_res_t *fast, double fit_ready)
+                    const cf_scanfast_res_t *fast, double fit_ready, int held)
 {
     cf_json_t js;
     cf_json_begin(&js, f);
@@ -490,7 +494,7 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
     }
     cf_json_str(&js, "method", cf_scanfast_method_name((cf_scan_method_t)method));
     if (method != CF_SCAN_STOP)
-        summary_fast(&js, method, fast, fit_ready, fr);
+        summary_fast(&js, method, fast, fit_ready, fr, held);
     cf_json_num(&js, "seconds", secs);
     cf_json_end(&js);
 }
@@ -633,7 +637,7 @@ int cmd_scan(int argc, char **argv)
     }
     if (sc.tty && rc)
         fputc('\n', stderr);
-    int fitted = 0;
+    int fitted = 0, held = 0;
     double t_fit0 = 0, fit_ready = 0;
     if (rc) {
         double x = NAN, y = NAN;
@@ -652,20 +656,24 @@ int cmd_scan(int argc, char **argv)
                        at[res.where], sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), rc,
                        *det ? ": " : "", det, o.journal, (unsigned long long)jnl_acked(&j));
     } else if (fj) {
-        /* The first pass took the points as they arrived; the job reads
-         * them back from the journal for the residuals (not in memory). */
+        /* The first pass took the points as they arrived; the job holds
+         * them (cf_fitjob_held) for the residuals and later passes, up to
+         * CF_FITJOB_HOLD_ROWS, and else reads them back from the journal
+         * (verified first: a pass over the whole file). */
         jnl_reader_t rd;
         jnl_header_t h2;
         jnl_info_t in;
-        if ((rc = jnl_reader_open(&rd, st, &h2, &in)) != 0) {
+        cf_fitsrc_t src;
+        cf_fitsrc_jnl_t jc;
+        held = cf_fitjob_held(fj);
+        t_fit0 = fast.t_last_row > 0 ? fast.t_last_row : cli_now();
+        if (!held && (rc = jnl_reader_open(&rd, st, &h2, &in)) != 0) {
             ec = cli_error(CMD, CLI_FAIL, "%s: cannot read the journal back: %d", o.journal, rc);
             goto out_dev;
         }
-        cf_fitsrc_t src;
-        cf_fitsrc_jnl_t jc;
-        cf_fitsrc_journal(&src, &jc, &rd, o.journal, (long)in.points);
-        t_fit0 = fast.t_last_row > 0 ? fast.t_last_row : cli_now();
-        if ((rc = cf_fitjob_run(fj, &src, NULL, 0, 100, &fr, msg, sizeof msg)) != 0) {
+        if (!held)
+            cf_fitsrc_journal(&src, &jc, &rd, o.journal, (long)in.points);
+        if ((rc = cf_fitjob_run(fj, held ? NULL : &src, NULL, 0, 100, &fr, msg, sizeof msg)) != 0) {
             ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
             goto out_dev;
         }
@@ -683,7 +691,7 @@ int cmd_scan(int argc, char **argv)
         int werr = rf ? 0 : errno;
         if (rf) {
             summary(rf, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs, method, &fast,
-                    fit_ready);
+                    fit_ready, held);
             werr = ferror(rf) ? errno : 0;
             if (fclose(rf) && !werr)
                 werr = errno ? errno : EIO;
@@ -694,7 +702,7 @@ int cmd_scan(int argc, char **argv)
     }
     if (o.json)
         summary(stdout, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs, method, &fast,
-                fit_ready);
+                fit_ready, held);
     else if (!rc) {
         printf("cellfit scan: %ld points (%ld x %ld grid, step %g), %ld without a surface; "
                "journal %s\n",

@@ -42,6 +42,14 @@ struct cf_fitjob {
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
+    /* The live points held (issue 19): u v (their feet on the base, the
+     * start of each later projection) x y z, at most CF_FITJOB_HOLD_ROWS;
+     * the passes after the scan read them, not the journal. hold_over: more
+     * came, the hold is gone and the source serves. */
+    double *hold;
+    long nhold, hcap;
+    int hold_over;
+    long nlive; /* live points added */
 };
 
 void cf_fitjob_defaults(cf_fitjob_opts_t *o)
@@ -183,6 +191,11 @@ int cf_fitjob_open(cf_fitjob_t **jp, const nf_surf_t *nominal, const cf_fitjob_o
     return 0;
 }
 
+int cf_fitjob_held(const cf_fitjob_t *j)
+{
+    return j->live && !j->hold_over && j->nhold > 0 && j->nhold == j->nlive;
+}
+
 const nf_surf_t *cf_fitjob_base(const cf_fitjob_t *j)
 {
     return &j->base;
@@ -237,11 +250,43 @@ typedef struct weigh {
     const nf_surf_t *prev;
 } weigh_t;
 
+/* Feet on a surface: Newton (nf_project) from a start known to be near (a
+ * held foot on the base: one to three steps), else, and where that start
+ * does not converge, the seed grid's search, set up at its first use (a
+ * pass whose starts all serve never builds it). */
+typedef struct proj {
+    const nf_surf_t *s;
+    cf_seedgrid_t g;
+    int ready;
+} proj_t;
+
+static int proj_foot(proj_t *p, const double Q[3], const double *start, nf_proj_t *out)
+{
+    if (start && nf_project(p->s, Q, start[0], start[1], PROJ_TOL, out) == NF_OK)
+        return 0;
+    if (!p->ready) {
+        if (cf_seedgrid_init(&p->g, p->s, SEEDS))
+            return CF_ENOMEM;
+        p->ready = 1;
+    }
+    cf_seedgrid_project(&p->g, Q, PROJ_TOL, out); /* best point kept on ENOCONV */
+    return 0;
+}
+
+static void proj_free(proj_t *p)
+{
+    if (p->ready)
+        cf_seedgrid_free(&p->g);
+    p->ready = 0;
+}
+
 /* One pass: a fresh fitter on cur's space (P0 = cur's net, cf_fitpass in
- * the job's arena), parameters given or by projection onto proj. */
+ * the job's arena), parameters given or by projection onto proj (warm: the
+ * rows are u v x y z with u v the start of the projection, not given). */
 typedef struct pass {
     cf_fitpass_t fp;
-    cf_seedgrid_t pj;
+    proj_t pj;
+    int warm;
     const nf_surf_t *proj;
     const weigh_t *wt;
     long points, clamped, nfar, dropped;
@@ -267,16 +312,15 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
                               j->o.solver, j->o.threads, name, msg, ml);
     if (rc)
         return rc;
-    if (proj && cf_seedgrid_init(&ps->pj, proj, SEEDS))
-        return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+    ps->pj.s = proj;
     return 0;
 }
 
-/* n rows (x y z, or u v x y z without proj) into the fit: projected (far
- * points counted, dropped with drop_far), weighted (robust: a sixth
- * column), added. On an error *bad is the batch index of the row that
- * failed. */
-static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long *bad)
+/* n rows (x y z, or u v x y z without proj or warm) into the fit:
+ * projected (far points counted, dropped with drop_far), weighted (robust:
+ * a sixth column), added. feet (if not NULL) gets each row's u v. On an
+ * error *bad is the batch index of the row that failed. */
+static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long *bad, double *feet)
 {
     const double *uv = in;
     long m = n;
@@ -286,9 +330,14 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
         for (long k = 0; k < n; k++) {
             double *r = j->rows + cols * m;
             if (ps->proj) {
-                const double *Q = in + 3 * k;
+                const double *Q = ps->warm ? in + 5 * k + 2 : in + 3 * k;
                 nf_proj_t pr;
-                cf_seedgrid_project(&ps->pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+                if (proj_foot(&ps->pj, Q, ps->warm ? in + 5 * k : NULL, &pr)) {
+                    *bad = k;
+                    return CF_ENOMEM;
+                }
+                if (feet)
+                    feet[2 * k] = pr.u, feet[2 * k + 1] = pr.v;
                 double d = fabs(pr.dist);
                 ps->clamped += pr.clamped != 0;
                 ps->ss0 += d * d;
@@ -326,15 +375,73 @@ static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *na
 
 static void pass_free(pass_t *ps)
 {
-    cf_seedgrid_free(&ps->pj);
+    proj_free(&ps->pj);
+}
+
+/* The live point xyz with its foot uv into the hold (doubling up to
+ * CF_FITJOB_HOLD_ROWS; past it, or without memory, the hold is let go and
+ * the later passes read the source). */
+static void hold_add(cf_fitjob_t *j, const double uv[2], const double xyz[3])
+{
+    if (j->hold_over)
+        return;
+    if (j->nhold == j->hcap) {
+        long cap = j->hcap ? 2 * j->hcap : 4096;
+        double *h =
+            cap <= CF_FITJOB_HOLD_ROWS ? realloc(j->hold, sizeof(double) * 5 * (size_t)cap) : NULL;
+        if (!h) {
+            free(j->hold);
+            j->hold = NULL;
+            j->nhold = j->hcap = 0;
+            j->hold_over = 1;
+            return;
+        }
+        j->hold = h;
+        j->hcap = cap;
+    }
+    double *r = j->hold + 5 * j->nhold++;
+    r[0] = uv[0], r[1] = uv[1], r[2] = xyz[0], r[3] = xyz[1], r[4] = xyz[2];
+}
+
+/* The hold as a source: rows u v x y z, u v the starts (run_t.warm). */
+typedef struct held {
+    const cf_fitjob_t *j;
+    long next;
+} held_t;
+
+static int held_rewind(void *ctx, char *msg, size_t ml)
+{
+    (void)msg, (void)ml;
+    ((held_t *)ctx)->next = 0;
+    return 0;
+}
+
+static long held_read(void *ctx, double *rows, long max, char *msg, size_t ml)
+{
+    held_t *h = ctx;
+    (void)msg, (void)ml;
+    long n = h->j->nhold - h->next < max ? h->j->nhold - h->next : max;
+    memcpy(rows, h->j->hold + 5 * h->next, sizeof(double) * 5 * (size_t)n);
+    h->next += n;
+    return n;
+}
+
+static void held_where(void *ctx, long k, char *buf, size_t n)
+{
+    (void)ctx;
+    snprintf(buf, n, "live point %ld", k);
 }
 
 int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
 {
     int rc;
     if (!j->live) {
-        if (!j->lp)
-            j->lp = calloc(1, sizeof *j->lp);
+        /* The fitter's accumulator holds _Alignas(32) members: calloc's
+         * 16 bytes are not enough for them. */
+        if (!j->lp && (j->lp = aligned_alloc(_Alignof(pass_t),
+                                             (sizeof *j->lp + _Alignof(pass_t) - 1) /
+                                                 _Alignof(pass_t) * _Alignof(pass_t))) != NULL)
+            memset(j->lp, 0, sizeof *j->lp);
         if (!j->mem)
             j->mem = malloc((size_t)j->need);
         if (!j->lp || !j->mem || buffers(j, 1, 1))
@@ -344,7 +451,11 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
         j->live = 1;
     }
     long bad;
-    rc = pass_rows(j, j->lp, xyz, 1, &bad);
+    double uv[2] = {NAN, NAN};
+    rc = pass_rows(j, j->lp, xyz, 1, &bad, uv);
+    j->nlive++;
+    if (!rc)
+        hold_add(j, uv, xyz);
     return rc ? cf_fail(msg, ml, rc, "%s", nf_strerror(rc)) : 0;
 }
 
@@ -358,6 +469,7 @@ typedef struct run {
     long total;      /* points per pass (-1: not known yet) */
     char *msg;
     size_t ml;
+    int warm; /* src's rows are the hold's: u v x y z, u v where projection starts */
 } run_t;
 
 static void progress(const run_t *r, long done)
@@ -386,7 +498,9 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
 {
     cf_fitjob_t *j = r->j;
     const cf_fitsrc_t *s = r->src;
-    int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, s->name, r->msg, r->ml);
+    int rc =
+        pass_begin(j, ps, cur, s->cols == 5 && !r->warm ? NULL : proj, wt, s->name, r->msg, r->ml);
+    ps->warm = r->warm;
     if (!rc)
         rc = rewind_src(r);
     long got;
@@ -400,7 +514,7 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
             break;
         }
         long before = ps->points, bad = 0;
-        rc = pass_rows(j, ps, j->buf, got, &bad);
+        rc = pass_rows(j, ps, j->buf, got, &bad, NULL);
         if (rc) {
             char at[4200];
             s->where(s->ctx, before + bad, at, sizeof at);
@@ -460,16 +574,13 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     double tol = j->o.tol;
     memset(out, 0, sizeof *out);
     nf_rhist_init(&out->hist);
-    cf_seedgrid_t pj;
+    proj_t pj;
     memset(&pj, 0, sizeof pj);
-    int uv = src->cols == 5;
-    if ((!uv || st) && cf_seedgrid_init(&pj, s, SEEDS))
-        return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    pj.s = s;
+    int uv = src->cols == 5 && !r->warm;
     cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
-    if (cf_surfrow_init(&ev, s)) {
-        cf_seedgrid_free(&pj);
+    if (cf_surfrow_init(&ev, s))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
-    }
     int rc = rewind_src(r);
     long got = 0;
     while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
@@ -485,7 +596,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
-                cf_seedgrid_project(&pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+                if (proj_foot(&pj, Q, r->warm ? j->buf + 5 * k : NULL, &pr)) {
+                    rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+                    break;
+                }
                 sd = pr.dist;
                 clamped = !uv && pr.clamped;
                 if (!uv)
@@ -519,10 +633,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
         }
         progress(r, out->n);
     }
-    if (got < 0)
+    if (!rc && got < 0)
         rc = (int)got;
     cf_surfrow_free(&ev);
-    cf_seedgrid_free(&pj);
+    proj_free(&pj);
     return rc;
 }
 
@@ -579,7 +693,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
 {
     cf_fitjob_t *j = r->j;
     const cf_fitjob_opts_t *o = &j->o;
-    int uv = r->src->cols == 5, rc;
+    int uv = r->src->cols == 5 && !r->warm, rc;
     double lo, hi;
     round_span(o, k, &lo, &hi);
     int npass = (int)(o->reparam + 1 + (o->robust ? 2 * o->robust_iters : 0) + 1), ip = 0;
@@ -772,6 +886,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     memset(out, 0, sizeof *out);
     if (o->holdout >= 2 && j->live)
         return cf_fail(msg, ml, CF_EARG, "--holdout needs a points source, not live points");
+    if (!src && !cf_fitjob_held(j))
+        return cf_fail(msg, ml, CF_EARG, "no point source, and the live points are not all held");
     /* With a holdout the rounds read only the rows kept for the fit. */
     const cf_fitsrc_t *all = src;
     cf_holdout_t hk;
@@ -780,7 +896,17 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         cf_holdout_src(&ks_src, &hk, src, o->holdout, 0);
         src = &ks_src;
     }
-    run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml};
+    /* A live job whose points are all held reads them, not the source:
+     * no journal read back, every projection from the point's foot on the
+     * base (issue 19: the result within a fraction of a second of the last
+     * row). */
+    held_t hc = {j, 0};
+    int warm = cf_fitjob_held(j);
+    cf_fitsrc_t hs = {5,          j->nhold, src ? src->name : "live points", held_rewind, held_read,
+                      held_where, &hc};
+    if (warm)
+        src = &hs;
+    run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml, warm};
     surfs_t S;
     memset(&S, 0, sizeof S);
     cf_stats_t *best_st = NULL;
@@ -794,7 +920,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (buffers(j, src->total, src->cols != 5) || cf_surf_copy(&S.cur, &j->base)) {
+    if (buffers(j, src->total, src->cols != 5 || warm) || cf_surf_copy(&S.cur, &j->base)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }
@@ -959,6 +1085,7 @@ void cf_fitjob_close(cf_fitjob_t *j)
     free(j->buf);
     free(j->rows);
     free(j->src);
+    free(j->hold);
     cf_surf_free(&j->base);
     free(j);
 }
