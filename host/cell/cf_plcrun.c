@@ -289,6 +289,7 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
     cf_scanjob_opts_t o;
     scan_opts(rr, p, &o);
     o.journal = rr->journal;
+    o.part_id = p->part_id;
     scan_result_t res;
     rig_take(rr, ctl);
     int rc = cf_scanjob_run(&o, ctl, &res, msg, sizeof msg);

@@ -136,6 +136,11 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
         unlink(o->journal);
         return rc;
     }
+    if (o->part_id && *o->part_id && (rc = jnl_meta(&j, JNL_META_PART_ID, o->part_id, h.t_start))) {
+        jnl_end(&j, rc, cli_now());
+        cf_store_file_close(&f);
+        return cf_fail(msg, ml, rc, "%s: the part ID: %s", o->journal, rig_strerror(rc));
+    }
     sj_ctx_t sc = {o, ctl, -1};
     job.clock = (rig_clock_t){&sj_clock, &sc};
     job.cb = (scan_cb_t){NULL, on_progress, &sc};

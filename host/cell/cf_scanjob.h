@@ -30,6 +30,7 @@ typedef struct cf_scanjob_opts {
     int method;
     hal_rig_t *rig;
     double period_us;
+    const char *part_id; /* the PLC's PART_ID: a meta record in the journal, or NULL */
 } cf_scanjob_opts_t;
 
 /* The plan of the region (RIG_EARG when it has no point or too many). */

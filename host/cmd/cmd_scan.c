@@ -75,6 +75,7 @@ typedef struct scan_opts {
     cmd_fitopts_t fa;
     /* issue 19: the method and its settings (cf_scanfast.h) */
     const char *method, *geometry;
+    const char *part_id; /* the part's ID, a meta record in the journal */
     double period_us, frame_rate, pitch;
     long profiles;
 } scan_opts_t;
@@ -265,6 +266,11 @@ static int parse(int argc, char **argv, scan_opts_t *o)
          .help = "the surface's directory entry in NOMINAL (0: the first surface)",
          .lo = 0,
          .hi = 9999999},
+        {.name = "part-id",
+         .kind = CF_OPT_STR,
+         .dst = &o->part_id,
+         .arg = "STR",
+         .help = "the part's ID (serial number), kept in the journal (at most 47 characters)"},
         {.name = "home", .kind = CF_OPT_FLAG, .dst = &o->home, .help = "home the stage first"},
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "print the summary as JSON"},
         {0}};
@@ -424,6 +430,7 @@ static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, 
 {
     cf_json_int(js, "rows", x->rows);
     cf_json_int(js, "rows_done", x->rows_done);
+    cf_json_int(js, "gap_records", x->gap_records);
     cf_json_num(js, "scan_seconds", x->seconds);
     cf_json_num(js, "points_per_s", x->seconds > 0 ? (double)x->points / x->seconds : 0);
     /* After the last row: the surface solved from the accumulated stripes
@@ -466,6 +473,7 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
     cf_json_begin(&js, f);
     cf_json_str(&js, "journal", o->journal);
     cf_json_int(&js, "job_id", o->job_id);
+    cf_json_str(&js, "part_id", o->part_id ? o->part_id : "");
     cf_json_str(&js, "nominal", o->nominal);
     cf_json_num(&js, "x0", pl->x0);
     cf_json_num(&js, "y0", pl->y0);
@@ -597,6 +605,11 @@ int cmd_scan(int argc, char **argv)
         ec = cli_error(CMD, CLI_FAIL, "%s: %s [%d] (%s); nothing measured", o.journal,
                        rig_strerror(rc), rc, f.err);
         unlink(o.journal); /* jnl_create cut it to 0 bytes: no empty journal behind */
+        goto out_dev;
+    }
+    if (o.part_id && *o.part_id && (rc = jnl_meta(&j, JNL_META_PART_ID, o.part_id, h.t_start))) {
+        ec = cli_error(CMD, CLI_FAIL, "%s: the part ID: %s [%d]; nothing measured", o.journal,
+                       rig_strerror(rc), rc);
         goto out_dev;
     }
     struct sigaction sa;
