@@ -122,6 +122,8 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     int rc = cf_store_file_open(&f, o->journal, CF_STORE_CREATE, &st, msg, ml);
     if (rc)
         return rc;
+    if (o->method == CF_SCAN_OTF)
+        (void)cf_store_file_buffer(&f, 65536); /* one sync a row: records gathered (cmd_scan.c) */
     h.sync_every = JNL_SYNC_EVERY_DEFAULT;
     h.job_id = (uint64_t)o->job_id;
     h.t_start = cli_now();

@@ -576,14 +576,88 @@ static void test_file_full(void **state)
     unlink(path);
 }
 
+/* The file store gathering appends (cf_store_file_buffer, a fast scan's):
+ * nothing reaches the file between syncs until the buffer is full, every
+ * sync and read sees all, and a full disk met by a gathered write leaves
+ * the file at the last whole write (records, not a torn piece), the
+ * journal holding what was written before. */
+static void test_file_buffered(void **state)
+{
+    (void)state;
+    char path[600], msg[512];
+    tmp_path(path, sizeof path, "buf.jnl");
+    unlink(path);
+    cf_store_file_t f;
+    rig_store_t fs;
+    struct stat sb;
+    assert_int_equal(cf_store_file_open(&f, path, CF_STORE_CREATE, &fs, msg, sizeof msg), RIG_OK);
+    assert_int_equal(cf_store_file_buffer(&f, 5 * JNL_REC_BYTES), RIG_OK);
+    jnl_t j;
+    jnl_header_t h = hdr(1000);
+    assert_int_equal(jnl_create(&j, fs, &h), RIG_OK);
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES); /* the create's sync wrote it */
+    for (uint32_t i = 0; i < 4; i++) {
+        jnl_rec_t r = point(i);
+        assert_int_equal(jnl_append(&j, &r), RIG_OK);
+    }
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES); /* gathered */
+    for (uint32_t i = 4; i < 12; i++) {
+        jnl_rec_t r = point(i);
+        assert_int_equal(jnl_append(&j, &r), RIG_OK);
+    }
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES + 10 * JNL_REC_BYTES); /* two full buffers */
+    st = fs;
+    assert_int_equal(read_back(), 12); /* a read sees the buffer too */
+    assert_int_equal(jnl_sync(&j), RIG_OK);
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES + 12 * JNL_REC_BYTES);
+    cf_store_file_close(&f);
+    unlink(path);
+    /* A full disk: RLIMIT_FSIZE 20 bytes past 10 records, 5 records a write. */
+    const long limit = JNL_HDR_BYTES + 10 * JNL_REC_BYTES + 20;
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        signal(SIGXFSZ, SIG_IGN);
+        struct rlimit rl = {(rlim_t)limit, (rlim_t)limit};
+        if (setrlimit(RLIMIT_FSIZE, &rl) ||
+            cf_store_file_open(&f, path, CF_STORE_CREATE, &fs, msg, sizeof msg) ||
+            cf_store_file_buffer(&f, 5 * JNL_REC_BYTES) || jnl_create(&j, fs, &h))
+            _exit(100);
+        for (int ok = 0;; ok++) {
+            jnl_rec_t r = point((uint32_t)ok);
+            int rc = jnl_append(&j, &r);
+            if (rc)
+                _exit(rc == RIG_EFULL ? ok : 102);
+        }
+    }
+    int ws;
+    assert_int_equal(waitpid(pid, &ws, 0), pid);
+    assert_true(WIFEXITED(ws));
+    assert_int_equal(WEXITSTATUS(ws), 15); /* the append that filled the third buffer */
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES + 10 * JNL_REC_BYTES);
+    assert_int_equal(cf_store_file_open(&f, path, CF_STORE_READ, &fs, msg, sizeof msg), RIG_OK);
+    jnl_info_t in;
+    assert_int_equal(jnl_scan(fs, &h, &in), RIG_OK);
+    assert_int_equal(in.records, 10);
+    assert_int_equal(in.tail_bytes, 0);
+    cf_store_file_close(&f);
+    unlink(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_crc),         cmocka_unit_test(test_roundtrip),
-        cmocka_unit_test(test_torn_tail),   cmocka_unit_test(test_corrupt_middle),
-        cmocka_unit_test(test_power_cut),   cmocka_unit_test(test_disk_full),
-        cmocka_unit_test(test_sync_policy), cmocka_unit_test(test_file_store),
-        cmocka_unit_test(test_file_full),   cmocka_unit_test(test_gap_meta),
+        cmocka_unit_test(test_crc),           cmocka_unit_test(test_roundtrip),
+        cmocka_unit_test(test_torn_tail),     cmocka_unit_test(test_corrupt_middle),
+        cmocka_unit_test(test_power_cut),     cmocka_unit_test(test_disk_full),
+        cmocka_unit_test(test_sync_policy),   cmocka_unit_test(test_file_store),
+        cmocka_unit_test(test_file_full),     cmocka_unit_test(test_gap_meta),
+        cmocka_unit_test(test_file_buffered),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
