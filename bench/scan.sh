@@ -106,5 +106,6 @@ echo "|---|---|---|---|---|---|"
 awk -v rate="$RATE" '
 function f(k,   m) { m = $0; if (!match(m, "\"" k "\": [^,}]*")) return ""; m = substr(m, RSTART, RLENGTH); sub(/.*: /, "", m); gsub(/"/, "", m); return m }
 f("failed") != "" { printf "| failed: %s |||||\n", f("failed"); next }
-{ printf "| %s x %s at %s frames/s | %s | %.0f | %.3f s | %s | %s kB |\n", f("ny"), f("nx"), rate,
-    f("points"), f("points_per_s"), f("fit_ready_s"), f("fit_points_from"), f("peak_rss_kb") }' "$C"
+{ printf "| %s profiles of %s points at %s frames/s (%s lost) | %s | %.0f | %.3f s | %s | %s kB |\n",
+    f("rows"), f("ny"), rate, f("profiles_lost"), f("points"), f("points_per_s"), f("fit_ready_s"),
+    f("fit_points_from"), f("peak_rss_kb") }' "$C"
