@@ -42,8 +42,7 @@ struct cf_fitjob {
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
-    /* The live points held (issue 19): u v (their feet on the base, the
-     * start of each later projection) x y z, at most CF_FITJOB_HOLD_ROWS;
+    /* The live points held (issue 19): x y z, at most CF_FITJOB_HOLD_ROWS;
      * the passes after the scan read them, not the journal. hold_over: more
      * came, the hold is gone and the source serves. */
     double *hold;
@@ -250,20 +249,16 @@ typedef struct weigh {
     const nf_surf_t *prev;
 } weigh_t;
 
-/* Feet on a surface: Newton (nf_project) from a start known to be near (a
- * held foot on the base: one to three steps), else, and where that start
- * does not converge, the seed grid's search, set up at its first use (a
- * pass whose starts all serve never builds it). */
+/* Feet on a surface by the seed grid's search, the grid set up at its
+ * first use (a pass that projects nothing never builds it). */
 typedef struct proj {
     const nf_surf_t *s;
     cf_seedgrid_t g;
     int ready;
 } proj_t;
 
-static int proj_foot(proj_t *p, const double Q[3], const double *start, nf_proj_t *out)
+static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
 {
-    if (start && nf_project(p->s, Q, start[0], start[1], PROJ_TOL, out) == NF_OK)
-        return 0;
     if (!p->ready) {
         if (cf_seedgrid_init(&p->g, p->s, SEEDS))
             return CF_ENOMEM;
@@ -281,12 +276,10 @@ static void proj_free(proj_t *p)
 }
 
 /* One pass: a fresh fitter on cur's space (P0 = cur's net, cf_fitpass in
- * the job's arena), parameters given or by projection onto proj (warm: the
- * rows are u v x y z with u v the start of the projection, not given). */
+ * the job's arena), parameters given or by projection onto proj. */
 typedef struct pass {
     cf_fitpass_t fp;
     proj_t pj;
-    int warm;
     const nf_surf_t *proj;
     const weigh_t *wt;
     long points, clamped, nfar, dropped;
@@ -316,11 +309,11 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
     return 0;
 }
 
-/* n rows (x y z, or u v x y z without proj or warm) into the fit:
- * projected (far points counted, dropped with drop_far), weighted (robust:
- * a sixth column), added. feet (if not NULL) gets each row's u v. On an
- * error *bad is the batch index of the row that failed. */
-static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long *bad, double *feet)
+/* n rows (x y z, or u v x y z without proj) into the fit: projected (far
+ * points counted, dropped with drop_far), weighted (robust: a sixth
+ * column), added. On an error *bad is the batch index of the row that
+ * failed. */
+static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long *bad)
 {
     const double *uv = in;
     long m = n;
@@ -330,14 +323,12 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
         for (long k = 0; k < n; k++) {
             double *r = j->rows + cols * m;
             if (ps->proj) {
-                const double *Q = ps->warm ? in + 5 * k + 2 : in + 3 * k;
+                const double *Q = in + 3 * k;
                 nf_proj_t pr;
-                if (proj_foot(&ps->pj, Q, ps->warm ? in + 5 * k : NULL, &pr)) {
+                if (proj_foot(&ps->pj, Q, &pr)) {
                     *bad = k;
                     return CF_ENOMEM;
                 }
-                if (feet)
-                    feet[2 * k] = pr.u, feet[2 * k + 1] = pr.v;
                 double d = fabs(pr.dist);
                 ps->clamped += pr.clamped != 0;
                 ps->ss0 += d * d;
@@ -378,17 +369,17 @@ static void pass_free(pass_t *ps)
     proj_free(&ps->pj);
 }
 
-/* The live point xyz with its foot uv into the hold (doubling up to
+/* The live point xyz into the hold (doubling up to
  * CF_FITJOB_HOLD_ROWS; past it, or without memory, the hold is let go and
  * the later passes read the source). */
-static void hold_add(cf_fitjob_t *j, const double uv[2], const double xyz[3])
+static void hold_add(cf_fitjob_t *j, const double xyz[3])
 {
     if (j->hold_over)
         return;
     if (j->nhold == j->hcap) {
         long cap = j->hcap ? 2 * j->hcap : 4096;
         double *h =
-            cap <= CF_FITJOB_HOLD_ROWS ? realloc(j->hold, sizeof(double) * 5 * (size_t)cap) : NULL;
+            cap <= CF_FITJOB_HOLD_ROWS ? realloc(j->hold, sizeof(double) * 3 * (size_t)cap) : NULL;
         if (!h) {
             free(j->hold);
             j->hold = NULL;
@@ -399,11 +390,10 @@ static void hold_add(cf_fitjob_t *j, const double uv[2], const double xyz[3])
         j->hold = h;
         j->hcap = cap;
     }
-    double *r = j->hold + 5 * j->nhold++;
-    r[0] = uv[0], r[1] = uv[1], r[2] = xyz[0], r[3] = xyz[1], r[4] = xyz[2];
+    memcpy(j->hold + 3 * j->nhold++, xyz, sizeof(double) * 3);
 }
 
-/* The hold as a source: rows u v x y z, u v the starts (run_t.warm). */
+/* The hold as a source: rows x y z, as the journal's. */
 typedef struct held {
     const cf_fitjob_t *j;
     long next;
@@ -421,7 +411,7 @@ static long held_read(void *ctx, double *rows, long max, char *msg, size_t ml)
     held_t *h = ctx;
     (void)msg, (void)ml;
     long n = h->j->nhold - h->next < max ? h->j->nhold - h->next : max;
-    memcpy(rows, h->j->hold + 5 * h->next, sizeof(double) * 5 * (size_t)n);
+    memcpy(rows, h->j->hold + 3 * h->next, sizeof(double) * 3 * (size_t)n);
     h->next += n;
     return n;
 }
@@ -451,11 +441,10 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
         j->live = 1;
     }
     long bad;
-    double uv[2] = {NAN, NAN};
-    rc = pass_rows(j, j->lp, xyz, 1, &bad, uv);
+    rc = pass_rows(j, j->lp, xyz, 1, &bad);
     j->nlive++;
     if (!rc)
-        hold_add(j, uv, xyz);
+        hold_add(j, xyz);
     return rc ? cf_fail(msg, ml, rc, "%s", nf_strerror(rc)) : 0;
 }
 
@@ -469,7 +458,6 @@ typedef struct run {
     long total;      /* points per pass (-1: not known yet) */
     char *msg;
     size_t ml;
-    int warm; /* src's rows are the hold's: u v x y z, u v where projection starts */
 } run_t;
 
 static void progress(const run_t *r, long done)
@@ -498,9 +486,7 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
 {
     cf_fitjob_t *j = r->j;
     const cf_fitsrc_t *s = r->src;
-    int rc =
-        pass_begin(j, ps, cur, s->cols == 5 && !r->warm ? NULL : proj, wt, s->name, r->msg, r->ml);
-    ps->warm = r->warm;
+    int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, s->name, r->msg, r->ml);
     if (!rc)
         rc = rewind_src(r);
     long got;
@@ -514,7 +500,7 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
             break;
         }
         long before = ps->points, bad = 0;
-        rc = pass_rows(j, ps, j->buf, got, &bad, NULL);
+        rc = pass_rows(j, ps, j->buf, got, &bad);
         if (rc) {
             char at[4200];
             s->where(s->ctx, before + bad, at, sizeof at);
@@ -577,7 +563,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     proj_t pj;
     memset(&pj, 0, sizeof pj);
     pj.s = s;
-    int uv = src->cols == 5 && !r->warm;
+    int uv = src->cols == 5;
     cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
     if (cf_surfrow_init(&ev, s))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
@@ -596,7 +582,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
-                if (proj_foot(&pj, Q, r->warm ? j->buf + 5 * k : NULL, &pr)) {
+                if (proj_foot(&pj, Q, &pr)) {
                     rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
                     break;
                 }
@@ -693,7 +679,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
 {
     cf_fitjob_t *j = r->j;
     const cf_fitjob_opts_t *o = &j->o;
-    int uv = r->src->cols == 5 && !r->warm, rc;
+    int uv = r->src->cols == 5, rc;
     double lo, hi;
     round_span(o, k, &lo, &hi);
     int npass = (int)(o->reparam + 1 + (o->robust ? 2 * o->robust_iters : 0) + 1), ip = 0;
@@ -897,16 +883,14 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         src = &ks_src;
     }
     /* A live job whose points are all held reads them, not the source:
-     * no journal read back, every projection from the point's foot on the
-     * base (issue 19: the result within a fraction of a second of the last
-     * row). */
+     * no journal verified and read back (issue 19), the same points in the
+     * same order, so the same fit as the journal's replay. */
     held_t hc = {j, 0};
-    int warm = cf_fitjob_held(j);
-    cf_fitsrc_t hs = {5,          j->nhold, src ? src->name : "live points", held_rewind, held_read,
+    cf_fitsrc_t hs = {3,          j->nhold, src ? src->name : "live points", held_rewind, held_read,
                       held_where, &hc};
-    if (warm)
+    if (cf_fitjob_held(j))
         src = &hs;
-    run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml, warm};
+    run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml};
     surfs_t S;
     memset(&S, 0, sizeof S);
     cf_stats_t *best_st = NULL;
@@ -920,7 +904,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (buffers(j, src->total, src->cols != 5 || warm) || cf_surf_copy(&S.cur, &j->base)) {
+    if (buffers(j, src->total, src->cols != 5) || cf_surf_copy(&S.cur, &j->base)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }

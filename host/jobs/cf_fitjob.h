@@ -38,11 +38,11 @@ typedef struct cf_job_ctl {
 } cf_job_ctl_t;
 
 #define CF_FITJOB_MAX_ROUNDS 64
-/* Live points the job holds (u v x y z, 40 bytes each: at most 40 MiB,
- * grown as they come): the passes after a live scan read them, each
- * projection starting from the point's foot on the base, instead of
- * reading the journal back and searching. A scan of more points lets the
- * hold go at this count and reads its source, as before (issue 19). */
+/* Live points the job holds (x y z, 24 bytes each: at most 24 MiB, grown
+ * as they come): the passes after a live scan read them instead of
+ * verifying and reading the journal back (the same points in the same
+ * order: the same fit). A scan of more points lets the hold go at this
+ * count and reads its source, as before (issue 19). */
 #define CF_FITJOB_HOLD_ROWS (1L << 20)
 #define CF_FITJOB_MAX_WARN 4
 

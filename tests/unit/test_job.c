@@ -413,8 +413,7 @@ static void test_fitjob_live(void **state)
 
 /* One job on bumpy points (the nominal's, z moved by a smooth bump and a
  * few spikes): live (added one at a time; the later passes read the held
- * points, projecting from their feet) or not (every pass reads the file,
- * every foot searched on the seed grid). */
+ * points) or not (every pass reads the file). */
 static int run_bumpy(const char *file, int live, cf_fitjob_result_t *r)
 {
     cf_fitjob_opts_t o;
@@ -442,11 +441,9 @@ static int run_bumpy(const char *file, int live, cf_fitjob_result_t *r)
     return rc;
 }
 
-/* Issue 19: after a live scan the job reads the points it held, each
- * projection starting from the point's foot on the base (no journal read
- * back, no search): the fit, its distances and the statistics are those of
- * the job that reads the file and searches every foot, to the projection's
- * tolerance. */
+/* Issue 19: after a live scan the job reads the points it held (no
+ * journal read back): the fit, its distances and the statistics are
+ * exactly those of the job that reads the file for every pass. */
 static void test_fitjob_held(void **state)
 {
     (void)state;
@@ -468,17 +465,19 @@ static void test_fitjob_held(void **state)
     assert_int_equal(a.points, 3000);
     assert_int_equal(b.points, 3000);
     assert_true(b.rms > 1e-3 && b.max_abs > 0.1); /* the bump and the spikes are there */
-    assert_true(fabs(a.rms - b.rms) < 1e-9 * b.rms + 1e-12);
-    assert_true(fabs(a.max_abs - b.max_abs) < 1e-9);
-    assert_true(fabs(a.nominal_rms - b.nominal_rms) < 1e-12);
-    assert_true(fabs(a.within_pct - b.within_pct) < 1e-12);
-    assert_true(gap(&a.surf, &b.surf) < 1e-9);
+    /* Rounding only: the live pass adds one point at a time, the file's
+     * pass a batch (the sums in another order). */
+    assert_true(fabs(a.rms - b.rms) <= 1e-12 * b.rms);
+    assert_true(fabs(a.max_abs - b.max_abs) <= 1e-12);
+    assert_true(fabs(a.nominal_rms - b.nominal_rms) <= 1e-12);
+    assert_true(a.within_pct == b.within_pct);
+    assert_true(gap(&a.surf, &b.surf) <= 1e-10); /* 3e-12 mm on a 120 mm part seen */
     assert_non_null(a.stats);
     assert_non_null(b.stats);
     assert_int_equal(a.stats->n, b.stats->n);
-    assert_true(fabs(a.stats->max - b.stats->max) < 1e-9);
-    assert_true(fabs(a.stats->min - b.stats->min) < 1e-9);
-    assert_true(fabs(cf_stats_rms(a.stats) - cf_stats_rms(b.stats)) < 1e-9);
+    assert_true(fabs(a.stats->max - b.stats->max) <= 1e-12);
+    assert_true(fabs(a.stats->min - b.stats->min) <= 1e-12);
+    assert_true(fabs(cf_stats_rms(a.stats) - cf_stats_rms(b.stats)) <= 1e-12 * b.rms);
     cf_fitjob_result_free(&a);
     cf_fitjob_result_free(&b);
     remove(bumpy);
