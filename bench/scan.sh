@@ -5,8 +5,10 @@
 # Modbus TCP (otf-rig: the probe's streaming FIFO), and the laser line
 # profiler over GigE Vision on loopback (cellsim --gev, build/scan-bench
 # gev) at 0 % and 1 % injected packet loss, every profile streamed into the
-# fit; prints a Markdown table and keeps the JSON lines in
-# BUILD/bench/scan.jsonl. Measures, asserts nothing. Environment:
+# fit; then the profiler through `cellfit scan --fit` at 10^6 and 10^7
+# points (points/s, the result's time after the last profile, the peak
+# RSS); prints Markdown tables and keeps the JSON lines in
+# BUILD/bench/scan.jsonl and scan_cmd.jsonl. Measures, asserts nothing. Environment:
 # SCAN_RATE (frames/s asked of the profiler, 20), SCAN_WIDTH (2048),
 # SCAN_HEIGHT (64). The fake camera takes port 3956 on 127.0.0.1: one
 # profiler per machine at a time.
@@ -61,6 +63,24 @@ sim_start 0.01
 timeout 300 "$B/scan-bench" gev "gev:127.0.0.1:$SER" "$G" 1000000 "$RATE" | tee -a "$J"
 sim_stop
 
+# Through the command (issue 19): `cellfit scan --method profiler` with the
+# streamed fit, 10^6 and 10^7 points (SCAN_CMD_POINTS): points/s, the
+# result's time after the last profile, where the passes after the scan
+# read the points (held in the job up to 2^20, else the journal read back)
+# and the command's peak RSS (getrusage). The nominal is cellfit gen's part.
+"$B/cellfit" gen --dir "$T/part" --count 1 --noise 0 >/dev/null
+C=$OUT/scan_cmd.jsonl
+: >"$C"
+sim_start 0
+for n in ${SCAN_CMD_POINTS:-1000000 10000000}; do
+    rm -f "$T/c.jnl"
+    timeout 900 "$B/cellfit" scan --probe "gev:127.0.0.1:$SER" --geometry "$G" --frame-rate "$RATE" \
+        --profiles $(((n + W - 1) / W)) --nominal "$T/part/nominal.igs" --journal "$T/c.jnl" \
+        --fit "$T/c.igs" --json >>"$C" 2>"$T/c.err" || echo "{\"failed\": \"$(head -1 "$T/c.err")\"}" >>"$C"
+done
+rm -f "$T/c.jnl"
+sim_stop
+
 echo
 echo "| method | points | points/s | lost (counted) | fit ready after last | peak RSS |"
 echo "|---|---|---|---|---|---|"
@@ -80,3 +100,12 @@ f("mode") == "\"gev\"" {
         w, h, rate, loss, f("points"), f("points_per_s"), f("lost_profiles"), f("lost_frames"),
         f("bad_frames"), f("fit_ready_s"), f("maxrss_kb") }
 ' "$J"
+echo
+echo "| cellfit scan --method profiler --fit | points | points/s | fit ready after the last profile | passes after the scan read | peak RSS |"
+echo "|---|---|---|---|---|---|"
+awk -v rate="$RATE" '
+function f(k,   m) { m = $0; if (!match(m, "\"" k "\": [^,}]*")) return ""; m = substr(m, RSTART, RLENGTH); sub(/.*: /, "", m); gsub(/"/, "", m); return m }
+f("failed") != "" { printf "| failed: %s |||||\n", f("failed"); next }
+{ printf "| %s profiles of %s points at %s frames/s (%s lost) | %s | %.0f | %.3f s | %s | %s kB |\n",
+    f("rows"), f("ny"), rate, f("profiles_lost"), f("points"), f("points_per_s"), f("fit_ready_s"),
+    f("fit_points_from"), f("peak_rss_kb") }' "$C"

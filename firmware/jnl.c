@@ -87,8 +87,8 @@ static void hdr_encode(const jnl_header_t *h, uint8_t b[JNL_HDR_BYTES])
 static int hdr_decode(const uint8_t b[JNL_HDR_BYTES], jnl_header_t *h)
 {
     if (get32(b) != JNL_MAGIC || get32(b + 124) != jnl_crc32(0, b, 124) ||
-        get16(b + 4) != JNL_VERSION || get16(b + 6) != JNL_HDR_BYTES ||
-        get16(b + 8) != JNL_REC_BYTES || get32(b + 12) == 0)
+        get16(b + 4) < JNL_VERSION_MIN || get16(b + 4) > JNL_VERSION ||
+        get16(b + 6) != JNL_HDR_BYTES || get16(b + 8) != JNL_REC_BYTES || get32(b + 12) == 0)
         return RIG_ECORRUPT;
     memset(h, 0, sizeof *h);
     h->version = get16(b + 4);
@@ -114,12 +114,24 @@ void jnl_rec_encode(const jnl_rec_t *r, uint8_t b[JNL_REC_BYTES])
     put16(b + 8, r->type);
     put16(b + 10, r->flags);
     put32(b + 12, (uint32_t)r->code);
-    putd(b + 16, r->stage[0]);
-    putd(b + 24, r->stage[1]);
-    putd(b + 32, r->dist);
-    putd(b + 40, r->xyz[0]);
-    putd(b + 48, r->xyz[1]);
-    putd(b + 56, r->xyz[2]);
+    if (r->type == JNL_T_META) { /* bytes 16..63: the text */
+        memcpy(b + 16, r->text, JNL_TEXT_LEN);
+        b[16 + JNL_TEXT_LEN - 1] = 0;
+    } else if (r->type == JNL_T_GAP) { /* stage, then num, row, count */
+        putd(b + 16, r->stage[0]);
+        putd(b + 24, r->stage[1]);
+        put64(b + 32, r->num);
+        put64(b + 40, (uint64_t)r->row);
+        put64(b + 48, r->count);
+        put64(b + 56, 0);
+    } else {
+        putd(b + 16, r->stage[0]);
+        putd(b + 24, r->stage[1]);
+        putd(b + 32, r->dist);
+        putd(b + 40, r->xyz[0]);
+        putd(b + 48, r->xyz[1]);
+        putd(b + 56, r->xyz[2]);
+    }
     putd(b + 64, r->t);
     put32(b + 72, 0);
     put32(b + 76, jnl_crc32(0, b, 76));
@@ -134,12 +146,27 @@ int jnl_rec_decode(const uint8_t b[JNL_REC_BYTES], jnl_rec_t *r)
     r->type = get16(b + 8);
     r->flags = get16(b + 10);
     r->code = (int32_t)get32(b + 12);
-    r->stage[0] = getd(b + 16);
-    r->stage[1] = getd(b + 24);
-    r->dist = getd(b + 32);
-    r->xyz[0] = getd(b + 40);
-    r->xyz[1] = getd(b + 48);
-    r->xyz[2] = getd(b + 56);
+    r->num = r->count = 0;
+    r->row = -1;
+    r->text[0] = 0;
+    r->stage[0] = r->stage[1] = r->dist = r->xyz[0] = r->xyz[1] = r->xyz[2] = NAN;
+    if (r->type == JNL_T_META) {
+        memcpy(r->text, b + 16, JNL_TEXT_LEN);
+        r->text[JNL_TEXT_LEN - 1] = 0;
+    } else if (r->type == JNL_T_GAP) {
+        r->stage[0] = getd(b + 16);
+        r->stage[1] = getd(b + 24);
+        r->num = get64(b + 32);
+        r->row = (int64_t)get64(b + 40);
+        r->count = get64(b + 48);
+    } else {
+        r->stage[0] = getd(b + 16);
+        r->stage[1] = getd(b + 24);
+        r->dist = getd(b + 32);
+        r->xyz[0] = getd(b + 40);
+        r->xyz[1] = getd(b + 48);
+        r->xyz[2] = getd(b + 56);
+    }
     r->t = getd(b + 64);
     return RIG_OK;
 }
@@ -189,11 +216,15 @@ int jnl_create(jnl_t *j, rig_store_t st, const jnl_header_t *h)
     return RIG_OK;
 }
 
+static int type_known(unsigned type)
+{
+    return type >= JNL_T_POINT && type <= JNL_T_META;
+}
+
 /* Record i is valid where it stands: CRC, sequence, a known type. */
 static int rec_valid(const uint8_t *b, uint64_t i, jnl_rec_t *r)
 {
-    return jnl_rec_decode(b, r) == RIG_OK && r->seq == (uint32_t)i &&
-           (r->type == JNL_T_POINT || r->type == JNL_T_END);
+    return jnl_rec_decode(b, r) == RIG_OK && r->seq == (uint32_t)i && type_known(r->type);
 }
 
 int jnl_scan(rig_store_t st, jnl_header_t *h, jnl_info_t *s)
@@ -225,6 +256,13 @@ int jnl_scan(rig_store_t st, jnl_header_t *h, jnl_info_t *s)
         if (r.type == JNL_T_END) {
             s->ended = 1;
             s->end_code = r.code;
+        } else if (r.type == JNL_T_GAP) {
+            s->gaps++;
+            if (r.code > 0 && r.code < JNL_GAP_KINDS)
+                s->lost[r.code] += r.count;
+        } else if (r.type == JNL_T_META) {
+            if (r.code == JNL_META_PART_ID && !s->part_id[0])
+                memcpy(s->part_id, r.text, JNL_TEXT_LEN);
         } else if (r.flags & JNL_F_NOSURF)
             s->flagged++;
         else
@@ -291,7 +329,7 @@ int jnl_sync(jnl_t *j)
 
 int jnl_append(jnl_t *j, jnl_rec_t *r)
 {
-    if (!j || !r || (r->type != JNL_T_POINT && r->type != JNL_T_END))
+    if (!j || !r || !type_known(r->type))
         return RIG_EARG;
     if (j->state != JNL_S_OPEN)
         return RIG_ESTATE;
@@ -329,6 +367,53 @@ int jnl_end(jnl_t *j, int code, double t)
     if (!rc)
         j->state = JNL_S_ENDED;
     return rc;
+}
+
+int jnl_gap(jnl_t *j, int kind, int64_t row, uint64_t num, uint64_t count, const double stage[2],
+            double t)
+{
+    if (kind <= 0 || kind >= JNL_GAP_KINDS || count == 0)
+        return RIG_EARG;
+    jnl_rec_t r;
+    memset(&r, 0, sizeof r);
+    r.type = JNL_T_GAP;
+    r.code = kind;
+    r.stage[0] = stage ? stage[0] : NAN;
+    r.stage[1] = stage ? stage[1] : NAN;
+    r.dist = r.xyz[0] = r.xyz[1] = r.xyz[2] = NAN;
+    r.num = num;
+    r.count = count;
+    r.row = row;
+    r.t = t;
+    return jnl_append(j, &r);
+}
+
+int jnl_meta(jnl_t *j, int key, const char *text, double t)
+{
+    if (key != JNL_META_PART_ID || !text)
+        return RIG_EARG;
+    jnl_rec_t r;
+    memset(&r, 0, sizeof r);
+    r.type = JNL_T_META;
+    r.code = key;
+    r.row = -1;
+    r.stage[0] = r.stage[1] = r.dist = r.xyz[0] = r.xyz[1] = r.xyz[2] = NAN;
+    size_t n = strlen(text);
+    n = n < JNL_TEXT_LEN - 1 ? n : JNL_TEXT_LEN - 1;
+    memcpy(r.text, text, n);
+    r.t = t;
+    return jnl_append(j, &r);
+}
+
+const char *jnl_gap_name(int kind)
+{
+    switch (kind) {
+    case JNL_GAP_NO_READING: return "no_reading";
+    case JNL_GAP_NO_TRIGGER: return "no_trigger";
+    case JNL_GAP_BOTH: return "both";
+    case JNL_GAP_PROFILE: return "profile";
+    default: return "unknown";
+    }
 }
 
 uint64_t jnl_acked(const jnl_t *j)

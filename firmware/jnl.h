@@ -15,19 +15,36 @@
 #include <stdint.h>
 
 #define JNL_MAGIC 0x314E4A43u /* "CJN1" in file byte order */
-#define JNL_VERSION 1
+#define JNL_VERSION 2         /* written; 1 (no gap or meta records) is still read */
+#define JNL_VERSION_MIN 1
 #define JNL_HDR_BYTES 128 /* header record, CRC included */
 #define JNL_REC_BYTES 80  /* one record, CRC included */
 #define JNL_SYNC_EVERY_DEFAULT 64
 #define JNL_READ_RECS 16 /* records the reader buffers (1280 bytes) */
 #define JNL_NAME_LEN 32  /* nominal name field, NUL padded */
+#define JNL_TEXT_LEN 48  /* a meta record's text, NUL padded (47 characters) */
 
 /* CRC-32 (IEEE 802.3, reflected 0xEDB88320, as zlib's crc32): start with
  * crc = 0, chain calls over consecutive pieces. */
 uint32_t jnl_crc32(uint32_t crc, const void *buf, size_t n);
 
-/* Record types and point flags. */
-enum { JNL_T_POINT = 1, JNL_T_END = 2 };
+/* Record types and point flags. Version 2 (issue 19) adds gaps (what a
+ * fast scan lost, at its trigger or profile number) and meta records
+ * (the part's ID); a version 1 journal holds neither. */
+enum { JNL_T_POINT = 1, JNL_T_END = 2, JNL_T_GAP = 3, JNL_T_META = 4 };
+
+/* A gap record's kind (its code field): what was lost, `count` numbers
+ * from `num` on, in row `row`. */
+enum {
+    JNL_GAP_NO_READING = 1, /* on the fly: a trigger (position) whose reading never came */
+    JNL_GAP_NO_TRIGGER = 2, /* on the fly: a reading whose position never came */
+    JNL_GAP_BOTH = 3,       /* on the fly: numbers lost on both sides (a gap in both) */
+    JNL_GAP_PROFILE = 4,    /* profiler: a profile that never came (its frame lost) */
+    JNL_GAP_KINDS = 5
+};
+
+/* A meta record's key (its code field). */
+enum { JNL_META_PART_ID = 1 /* the part's ID string (the PLC's PART_ID, --part-id) */ };
 enum {
     JNL_F_NOSURF = 1u << 0, /* probe saw no surface: no point (code RIG_ENOSURF) */
     JNL_F_ROWEND = 1u << 1  /* last point of a stage row */
@@ -59,18 +76,27 @@ typedef struct jnl_rec {
     double dist;     /* probe distance (mm), NaN without a reading */
     double xyz[3];   /* the measured point (mm), NaN without a reading */
     double t;        /* clock seconds */
+    /* A gap (JNL_T_GAP; code its kind, stage where known, else NaN): */
+    uint64_t num;   /* the first number lost: trigger number in its row, profile number */
+    uint64_t count; /* numbers lost from num on (>= 1) */
+    int64_t row;    /* the row (on the fly), -1 */
+    /* A meta record (JNL_T_META; code its key): */
+    char text[JNL_TEXT_LEN];
 } jnl_rec_t;
 
 /* What a verification pass found (jnl_scan, jnl_open, jnl_reader_open). */
 typedef struct jnl_info {
-    uint64_t records;       /* valid records, end record included */
-    uint64_t points;        /* valid point records with a reading */
-    uint64_t flagged;       /* point records without a reading */
-    uint64_t tail_bytes;    /* bytes after the valid records: a torn tail */
-    int64_t bad_record;     /* RIG_ECORRUPT: the damaged record (-1: the header) */
-    int ended;              /* an end record closes the journal */
-    int end_code;           /* its code */
-    double t_first, t_last; /* time span of the valid records (NaN if none) */
+    uint64_t records;             /* valid records, end record included */
+    uint64_t points;              /* valid point records with a reading */
+    uint64_t flagged;             /* point records without a reading */
+    uint64_t tail_bytes;          /* bytes after the valid records: a torn tail */
+    int64_t bad_record;           /* RIG_ECORRUPT: the damaged record (-1: the header) */
+    int ended;                    /* an end record closes the journal */
+    int end_code;                 /* its code */
+    double t_first, t_last;       /* time span of the valid records (NaN if none) */
+    uint64_t gaps;                /* gap records */
+    uint64_t lost[JNL_GAP_KINDS]; /* numbers lost, by kind (the gaps' counts summed) */
+    char part_id[JNL_TEXT_LEN];   /* the first JNL_META_PART_ID record's text, "" */
 } jnl_info_t;
 
 typedef struct jnl {
@@ -109,6 +135,15 @@ int jnl_append(jnl_t *j, jnl_rec_t *r);
 
 /* Make every appended record durable (no store call if none is pending). */
 int jnl_sync(jnl_t *j);
+
+/* A gap record (kind JNL_GAP_*, count >= 1; stage NULL when unknown) and
+ * a meta record (key JNL_META_*, text cut to JNL_TEXT_LEN - 1), appended
+ * as jnl_append. RIG_EARG for a bad kind, key or count. */
+int jnl_gap(jnl_t *j, int kind, int64_t row, uint64_t num, uint64_t count, const double stage[2],
+            double t);
+int jnl_meta(jnl_t *j, int key, const char *text, double t);
+/* "no_reading", "no_trigger", "both", "profile"; "unknown". */
+const char *jnl_gap_name(int kind);
 
 /* Append the end record with the job's result code, and sync. */
 int jnl_end(jnl_t *j, int code, double t);

@@ -21,6 +21,12 @@ int scan_otf_init(scan_otf_t *o, const scan_kin_t *kin, const scan_otf_enc_t *en
     return RIG_OK;
 }
 
+void scan_otf_set_gap(scan_otf_t *o, scan_otf_gap_fn fn)
+{
+    if (o)
+        o->gap_fn = fn;
+}
+
 int scan_otf_row_begin(scan_otf_t *o, long row)
 {
     if (!o || row < 0)
@@ -29,6 +35,7 @@ int scan_otf_row_begin(scan_otf_t *o, long row)
         return o->err ? o->err : RIG_ESTATE;
     o->row = row;
     o->base = 0;
+    o->gp_count = 0;
     o->hi_trig = o->hi_read = 0;
     o->any_trig = o->any_read = 0;
     o->n_out = 0;
@@ -62,6 +69,44 @@ static int flush_out(scan_otf_t *o, int last)
     return rc;
 }
 
+/* The run of losses held back, to the gap callback (after the points
+ * before it). */
+static int gap_emit(scan_otf_t *o)
+{
+    if (!o->gp_count)
+        return RIG_OK;
+    int rc = flush_out(o, 0);
+    if (!rc && (rc = o->gap_fn(o->row_ctx, o->row, o->gp_kind, o->gp_num, o->gp_count,
+                               o->gp_has_xy ? o->gp_xy : NULL)) != 0)
+        o->err = rc;
+    o->gp_count = 0;
+    return rc;
+}
+
+/* count numbers from num lost (kind JNL_GAP_*; xy a position, or NULL):
+ * joined to the run held back when it continues it, else that run is
+ * handed on and this one held. */
+static int gap_add(scan_otf_t *o, int kind, uint64_t num, uint64_t count, const double *xy)
+{
+    if (!o->gap_fn || !count)
+        return RIG_OK;
+    if (o->gp_count && o->gp_kind == kind && !xy && !o->gp_has_xy &&
+        num == o->gp_num + o->gp_count) {
+        o->gp_count += count;
+        return RIG_OK;
+    }
+    int rc = gap_emit(o);
+    if (rc)
+        return rc;
+    o->gp_kind = kind;
+    o->gp_num = num;
+    o->gp_count = count;
+    o->gp_has_xy = xy != NULL;
+    if (xy)
+        o->gp_xy[0] = xy[0], o->gp_xy[1] = xy[1];
+    return RIG_OK;
+}
+
 /* Settle the slot of number base and move the window on by one. */
 static int retire_one(scan_otf_t *o)
 {
@@ -69,6 +114,8 @@ static int retire_one(scan_otf_t *o)
     int rc = RIG_OK;
     if (s->state == (HAVE_POS | HAVE_RD) && s->num == o->base) {
         if (s->rst == RIG_RD_VALID) {
+            if (o->gp_count && (rc = gap_emit(o)) != RIG_OK)
+                return rc;
             scan_kin_point(&o->kin, s->x, s->y, s->d, o->out + 3 * o->n_out);
             o->out_num[o->n_out++] = s->num;
             o->c.paired++;
@@ -78,12 +125,17 @@ static int retire_one(scan_otf_t *o)
             o->c.nosurf++;
         else
             o->c.errors++;
-    } else if (s->state == HAVE_POS)
+    } else if (s->state == HAVE_POS) {
         o->c.trig_no_read++;
-    else if (s->state == HAVE_RD)
+        const double xy[2] = {s->x, s->y};
+        rc = gap_add(o, JNL_GAP_NO_READING, o->base, 1, xy);
+    } else if (s->state == HAVE_RD) {
         o->c.read_no_trig++;
-    else
+        rc = gap_add(o, JNL_GAP_NO_TRIGGER, o->base, 1, NULL);
+    } else {
         o->c.both_lost++;
+        rc = gap_add(o, JNL_GAP_BOTH, o->base, 1, NULL);
+    }
     s->state = 0;
     o->base++;
     return rc;
@@ -101,6 +153,9 @@ static int make_room(scan_otf_t *o, uint64_t num)
             if (rc)
                 return rc;
             o->c.both_lost += num - SCAN_OTF_WINDOW + 1 - o->base;
+            if ((rc = gap_add(o, JNL_GAP_BOTH, o->base, num - SCAN_OTF_WINDOW + 1 - o->base,
+                              NULL)) != RIG_OK)
+                return rc;
             o->base = num - SCAN_OTF_WINDOW + 1;
             continue;
         }
@@ -219,8 +274,12 @@ int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected)
     int rc = RIG_OK;
     while (!rc && o->base < end)
         rc = retire_one(o);
-    if (!rc && !stage_fault && expected > o->base) /* the last triggers, lost on both sides */
+    if (!rc && !stage_fault && expected > o->base) { /* the last triggers, lost on both sides */
         o->c.both_lost += expected - o->base;
+        rc = gap_add(o, JNL_GAP_BOTH, o->base, expected - o->base, NULL);
+    }
+    if (!rc)
+        rc = gap_emit(o);
     if (!rc)
         rc = flush_out(o, 1);
     o->c.rows++;

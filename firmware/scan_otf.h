@@ -59,6 +59,15 @@ typedef struct scan_otf_counts {
 typedef int (*scan_otf_row_fn)(void *ctx, long row, const double *xyz, const uint64_t *trig, long n,
                                int last);
 
+/* A loss at its numbers (issue 19), for the journal's gap records: kind
+ * JNL_GAP_NO_READING (a position whose reading never came; xy its latched
+ * stage position), JNL_GAP_NO_TRIGGER or JNL_GAP_BOTH (xy NULL), count
+ * numbers from num on (runs of one kind without a position are joined).
+ * The row's points before it are handed on first, so that the caller sees
+ * points and gaps in number order. Non-zero stops the pairing. */
+typedef int (*scan_otf_gap_fn)(void *ctx, long row, int kind, uint64_t num, uint64_t count,
+                               const double *xy);
+
 typedef struct scan_otf_slot {
     uint64_t num;  /* unwrapped trigger number held, when state != 0 */
     uint8_t state; /* bit 0 position, bit 1 reading */
@@ -82,12 +91,21 @@ typedef struct scan_otf {
     long n_out;
     double out[3 * SCAN_OTF_ROW_MAX];
     uint64_t out_num[SCAN_OTF_ROW_MAX];
+    /* The gap callback and the run of losses not yet handed to it. */
+    scan_otf_gap_fn gap_fn;
+    int gp_kind, gp_has_xy;
+    uint64_t gp_num, gp_count;
+    double gp_xy[2];
 } scan_otf_t;
 
 /* Errors beyond rig_err_t's: none; RIG_EARG for a bad call, RIG_ESTATE for
  * events outside a row, or the callback's own code. */
 int scan_otf_init(scan_otf_t *o, const scan_kin_t *kin, const scan_otf_enc_t *enc,
                   scan_otf_row_fn fn, void *ctx);
+
+/* Hand every loss to fn too (NULL: counts only, the default); after
+ * scan_otf_init, with the row callback's ctx. */
+void scan_otf_set_gap(scan_otf_t *o, scan_otf_gap_fn fn);
 
 /* A row starts (the box and the probe were armed for it: numbering from 0). */
 int scan_otf_row_begin(scan_otf_t *o, long row);

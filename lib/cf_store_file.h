@@ -19,6 +19,10 @@ typedef struct cf_store_file {
     int fd;
     int mode;
     char err[256]; /* detail of the last failure */
+    /* Appends gathered (cf_store_file_buffer): written when full and before
+     * every sync, read, size and close. */
+    unsigned char *wbuf;
+    size_t wlen, wcap;
 } cf_store_file_t;
 
 /* Open path in mode; *st then uses f (which must outlive it). CREATE also
@@ -27,5 +31,14 @@ typedef struct cf_store_file {
 int cf_store_file_open(cf_store_file_t *f, const char *path, int mode, rig_store_t *st, char *msg,
                        size_t len);
 void cf_store_file_close(cf_store_file_t *f);
+
+/* Gather appends in bytes of memory (a fast scan's records: one write per
+ * bytes instead of one per record; issue 19). Nothing changes for the
+ * journal's durability, which is its syncs': the buffer is written before
+ * each. A write that fails is reported by the append that filled the
+ * buffer or by the sync; a truncate (the journal cutting a failed append
+ * back) drops what the buffer held and never lengthens the file. 0, or
+ * RIG_EIO without memory (the store then writes each append). */
+int cf_store_file_buffer(cf_store_file_t *f, size_t bytes);
 
 #endif

@@ -5,6 +5,8 @@
 #define BOARD_CONFIG_H
 
 #define BOARD_NAME "linux-cell"
+/* The journal's CRC from a 256-entry table (firmware/jnl_crc.c). */
+#define BOARD_JNL_CRC_TABLE256 1
 
 /* Largest control net a job may ask for, in control points (Nu*Nv). */
 #define NF_MAX_CP 1100000L

@@ -301,6 +301,7 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
     cf_scanfast_res_t fr;
     memset(&fr, 0, sizeof fr);
     o.fast_out = &fr;
+    o.part_id = p->part_id;
     scan_result_t res;
     rig_take(rr, ctl);
     int rc = cf_scanjob_run(&o, ctl, &res, msg, sizeof msg);

@@ -119,6 +119,19 @@ static int otf_row(void *ctx, long row, const double *xyz, const uint64_t *trig,
     return 0;
 }
 
+/* A loss at its trigger numbers (scan_otf_gap_fn): a gap record, in
+ * number order with the row's points (issue 19). */
+static int otf_gap(void *ctx, long row, int kind, uint64_t num, uint64_t count, const double *xy)
+{
+    otf_ctx_t *c = ctx;
+    int rc = jnl_gap(c->j, kind, row, num, count, xy, cli_now());
+    if (rc)
+        c->res->where = SCAN_AT_JOURNAL;
+    else
+        c->res->gap_records++;
+    return rc;
+}
+
 static void otf_counts(const scan_otf_t *o, unsigned long dropped, cf_scanfast_res_t *res)
 {
     const scan_otf_counts_t *c = &o->c;
@@ -245,6 +258,7 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
     const scan_otf_enc_t enc = {{0, 0}, {0.001, 0.001}};
     otf_ctx_t oc = {j, cb, kin, res};
     int rc = scan_otf_init(&o, kin, &enc, otf_row, &oc);
+    scan_otf_set_gap(&o, otf_gap);
     /* The speed at which period_us apart the triggers fall dx apart
      * (whole mm/s: the register's unit), then the period that matches it. */
     double old_speed = rig->st.speed;
@@ -380,21 +394,16 @@ int cf_scanfast_profiler(const char *uri, const cf_scanfast_geom_t *g, long prof
         /* Profile r of frame id k is profile k * height + r of the scan,
          * k as on the wire (1..65535, docs/rig-profiler.md). */
         for (uint64_t lost = f.gap_before; lost > 0 && seen < want && !rc; lost--) {
+            /* A lost frame: one gap record per profile it held, at the
+             * profile's own number and x (never a shifted row). */
             uint64_t wire = (f.id - lost - 1) % 65535 + 1;
             for (int r = 0; r < f.height && seen < want && !rc; r++, seen++) {
                 uint64_t n = wire * (uint64_t)f.height + (uint64_t)r;
-                jnl_rec_t rec;
-                memset(&rec, 0, sizeof rec);
-                rec.type = JNL_T_POINT;
-                rec.flags = JNL_F_NOSURF | JNL_F_ROWEND;
-                rec.code = RIG_ETIMEOUT; /* the profile never came: a gap at its own x */
-                rec.stage[0] = g->x0 + (double)(n % (uint64_t)g->profiles) * g->dx;
-                rec.stage[1] = g->y0;
-                rec.dist = rec.xyz[0] = rec.xyz[1] = rec.xyz[2] = NAN;
-                rec.t = cli_now();
-                if ((rc = jnl_append(j, &rec)) != 0)
+                const double at[2] = {g->x0 + (double)(n % (uint64_t)g->profiles) * g->dx, g->y0};
+                if ((rc = jnl_gap(j, JNL_GAP_PROFILE, -1, n, 1, at, cli_now())) != 0)
                     res->where = SCAN_AT_JOURNAL;
-                res->flagged++;
+                else
+                    res->gap_records++;
                 res->profiles_lost++;
             }
         }

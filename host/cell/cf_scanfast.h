@@ -9,8 +9,10 @@
  * Both journal every point (jnl.h; one sync per row: docs/journal.md) and
  * hand it to the caller (the live fit, cf_fitjob_add) as it arrives; the
  * stop check (ABORT, watchdog, a signal) is asked between stream reads, so
- * it acts within one row. Every loss is counted (cf_scanfast_res_t); a lost
- * profile is a flagged journal record at its own x, never a shifted row.
+ * it acts within one row. Every loss is counted (cf_scanfast_res_t) and
+ * journalled as a gap record at its numbers (jnl_gap: a trigger's reading
+ * or position lost, numbers lost on both sides, a lost profile at its own
+ * number and x), never a shifted row.
  * Memory: scan_otf's struct and one frame, never a function of the points.
  * Prefix cf_scanfast_. Errors: rig_err_t codes, msg says where. */
 #ifndef CF_SCANFAST_H
@@ -57,13 +59,14 @@ int cf_scanfast_geom_parse(const char *s, cf_scanfast_geom_t *g);
 typedef struct cf_scanfast_res {
     long rows, rows_done; /* rows (profiles) planned, ended */
     long points;          /* journalled with a reading */
-    long flagged;         /* journalled without: lost profiles (profiler) */
+    long flagged;         /* journalled without a reading (losses are gap records) */
     /* on the fly (scan_otf_counts_t) */
     long triggers, nosurf, sensor_errors, lost_readings, lost_triggers, both_lost, dup, late,
         overrun, dropped_by_probe, rows_cut;
     double speed, period_us; /* the stage's speed and the trigger period used */
     /* profiler (hal_gev_stats_t) */
     long frames, frames_lost, profiles_lost, frames_bad, dropouts;
+    long gap_records;           /* losses journalled as gap records (JNL_T_GAP, issue 19) */
     long fail_row;              /* the row the job ended in, -1 */
     int code;                   /* as returned */
     int where;                  /* SCAN_AT_* */
@@ -82,8 +85,8 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
 
 /* The profiler at uri (gev:ADDRESS[:SERIAL]) for `profiles` profiles
  * (0: one pass, g->profiles) at frame_rate frames/s (0: the device's); a
- * lost frame is height flagged records (code RIG_ETIMEOUT) at the x of its
- * profiles. ROWEND marks each profile's last record; one sync a frame. */
+ * lost frame is height gap records (JNL_GAP_PROFILE) at the numbers and x
+ * of its profiles. ROWEND marks each profile's last record; one sync a frame. */
 int cf_scanfast_profiler(const char *uri, const cf_scanfast_geom_t *g, long profiles,
                          double frame_rate, jnl_t *j, const cf_scanfast_cb_t *cb,
                          cf_scanfast_res_t *res, char *msg, size_t ml);

@@ -125,6 +125,8 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     int rc = cf_store_file_open(&f, o->journal, CF_STORE_CREATE, &st, msg, ml);
     if (rc)
         return rc;
+    if (o->method == CF_SCAN_OTF)
+        (void)cf_store_file_buffer(&f, 65536); /* one sync a row: records gathered (cmd_scan.c) */
     h.sync_every = JNL_SYNC_EVERY_DEFAULT;
     h.job_id = (uint64_t)o->job_id;
     h.t_start = cli_now();
@@ -138,6 +140,11 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
         cf_store_file_close(&f);
         unlink(o->journal);
         return rc;
+    }
+    if (o->part_id && *o->part_id && (rc = jnl_meta(&j, JNL_META_PART_ID, o->part_id, h.t_start))) {
+        jnl_end(&j, rc, cli_now());
+        cf_store_file_close(&f);
+        return cf_fail(msg, ml, rc, "%s: the part ID: %s", o->journal, rig_strerror(rc));
     }
     sj_ctx_t sc = {o, ctl, -1};
     job.clock = (rig_clock_t){&sj_clock, &sc};

@@ -33,6 +33,7 @@ typedef struct cf_scanjob_opts {
     /* Appended (map version 3): on the fly, the scan's counts (triggers,
      * losses) copied here when not NULL (struct cf_scanfast_res, cf_scanfast.h). */
     struct cf_scanfast_res *fast_out;
+    const char *part_id; /* the PLC's PART_ID: a meta record in the journal, or NULL */
 } cf_scanjob_opts_t;
 
 /* The plan of the region (RIG_EARG when it has no point or too many). */

@@ -89,13 +89,19 @@ static int valid_point(const jnl_rec_t *r)
 static int do_export(int argc, char **argv)
 {
     const char *pos[1], *out = NULL;
-    int times = 0;
+    int times = 0, records = 0;
     const cf_opt_t opts[] = {{.name = "out",
                               .kind = CF_OPT_STR,
                               .dst = &out,
                               .arg = "FILE",
                               .help = "write the points here",
                               .def = "standard output"},
+                             {.name = "records",
+                              .kind = CF_OPT_FLAG,
+                              .dst = &records,
+                              .help = "every record in order, one line each: 'point SEQ CODE SX "
+                                      "SY X Y Z', 'gap SEQ KIND ROW NUM COUNT SX SY', 'meta SEQ "
+                                      "KEY TEXT', 'end SEQ CODE'"},
                              {.name = "times",
                               .kind = CF_OPT_FLAG,
                               .dst = &times,
@@ -132,9 +138,29 @@ static int do_export(int argc, char **argv)
                          "without a clock wrote it)",
                          path);
     }
+    if (times && records) {
+        if (out)
+            fclose(f);
+        cf_store_file_close(&j.f);
+        return cli_error(CMD, CLI_USAGE, "--times and --records: one or the other");
+    }
     if (times)
         fputs("utc,x,y,z\n", f);
     while ((rc = jnl_reader_next(&j.rd, &r)) == 1) {
+        if (records) { /* every record, one line each, in journal order */
+            if (r.type == JNL_T_GAP)
+                fprintf(f, "gap %u %s %lld %llu %llu %.17g %.17g\n", r.seq, jnl_gap_name(r.code),
+                        (long long)r.row, (unsigned long long)r.num, (unsigned long long)r.count,
+                        r.stage[0], r.stage[1]);
+            else if (r.type == JNL_T_META)
+                fprintf(f, "meta %u %d %s\n", r.seq, r.code, r.text);
+            else if (r.type == JNL_T_END)
+                fprintf(f, "end %u %d\n", r.seq, r.code);
+            else
+                fprintf(f, "point %u %d %.17g %.17g %.17g %.17g %.17g\n", r.seq, r.code, r.stage[0],
+                        r.stage[1], r.xyz[0], r.xyz[1], r.xyz[2]);
+            continue;
+        }
         if (!valid_point(&r))
             continue;
         if (times)
@@ -216,6 +242,14 @@ static int do_info(int argc, char **argv)
         cf_json_num(&o, "cx", j.h.cal[0]);
         cf_json_num(&o, "cy", j.h.cal[1]);
         cf_json_num(&o, "cz", j.h.cal[2]);
+        /* Version 2 (issue 19): the part's ID and the losses journalled. */
+        cf_json_str(&o, "part_id", in->part_id);
+        cf_json_int(&o, "gaps", (long)in->gaps);
+        for (int k = 1; k < JNL_GAP_KINDS; k++) {
+            char key[32];
+            snprintf(key, sizeof key, "lost_%s", jnl_gap_name(k));
+            cf_json_int(&o, key, (long)in->lost[k]);
+        }
         cf_json_end(&o);
         return CLI_OK;
     }
@@ -225,6 +259,15 @@ static int do_info(int argc, char **argv)
     printf("  %llu records: %llu points, %llu without a surface; %llu planned\n",
            (unsigned long long)in->records, (unsigned long long)in->points,
            (unsigned long long)in->flagged, (unsigned long long)j.h.planned);
+    if (in->part_id[0])
+        printf("  part ID '%s'\n", in->part_id);
+    if (in->gaps)
+        printf("  %llu gap records: lost %llu readings, %llu triggers, %llu on both sides, %llu "
+               "profiles\n",
+               (unsigned long long)in->gaps, (unsigned long long)in->lost[JNL_GAP_NO_READING],
+               (unsigned long long)in->lost[JNL_GAP_NO_TRIGGER],
+               (unsigned long long)in->lost[JNL_GAP_BOTH],
+               (unsigned long long)in->lost[JNL_GAP_PROFILE]);
     if (in->ended)
         printf("  ended: %s (%d)\n", rig_strerror(in->end_code), in->end_code);
     else

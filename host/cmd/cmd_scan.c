@@ -30,6 +30,7 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -90,6 +91,7 @@ typedef struct scan_opts {
     cmd_record_t rec; /* --record, --db */
     /* issue 19: the method and its settings (cf_scanfast.h) */
     const char *method, *geometry;
+    const char *part_id; /* the part's ID, a meta record in the journal */
     double period_us, frame_rate, pitch;
     long profiles;
 } scan_opts_t;
@@ -280,6 +282,11 @@ static int parse(int argc, char **argv, scan_opts_t *o)
          .help = "the surface's directory entry in NOMINAL (0: the first surface)",
          .lo = 0,
          .hi = 9999999},
+        {.name = "part-id",
+         .kind = CF_OPT_STR,
+         .dst = &o->part_id,
+         .arg = "STR",
+         .help = "the part's ID (serial number), kept in the journal (at most 47 characters)"},
         {.name = "home", .kind = CF_OPT_FLAG, .dst = &o->home, .help = "home the stage first"},
         {.name = "json", .kind = CF_OPT_FLAG, .dst = &o->json, .help = "print the summary as JSON"},
         {0}};
@@ -434,10 +441,11 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
 
 /* The fast methods' counts (cf_scanfast_res_t) into the summary. */
 static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, double fit_ready,
-                         const cf_fitjob_result_t *fr)
+                         const cf_fitjob_result_t *fr, int held)
 {
     cf_json_int(js, "rows", x->rows);
     cf_json_int(js, "rows_done", x->rows_done);
+    cf_json_int(js, "gap_records", x->gap_records);
     cf_json_num(js, "scan_seconds", x->seconds);
     cf_json_num(js, "points_per_s", x->seconds > 0 ? (double)x->points / x->seconds : 0);
     /* After the last row: the surface solved from the accumulated stripes
@@ -445,6 +453,10 @@ static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, 
      * point read back from the journal, which is statistics, not the fit). */
     cf_json_num(js, "fit_solve_s", fr ? fr->t_solve : 0);
     cf_json_num(js, "fit_ready_s", fit_ready);
+    /* Where the passes after the scan read the points: "held" (the job's
+     * memory, issue 19) or "journal" (read back: more than the hold). */
+    if (fr)
+        cf_json_str(js, "fit_points_from", held ? "held" : "journal");
     if (method == CF_SCAN_OTF) {
         cf_json_num(js, "speed", x->speed);
         cf_json_num(js, "period_us", x->period_us);
@@ -470,12 +482,13 @@ static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, 
 
 static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const scan_result_t *res,
                     const jnl_t *j, const cf_fitjob_result_t *fr, double secs, int method,
-                    const cf_scanfast_res_t *fast, double fit_ready)
+                    const cf_scanfast_res_t *fast, double fit_ready, int held)
 {
     cf_json_t js;
     cf_json_begin(&js, f);
     cf_json_str(&js, "journal", o->journal);
     cf_json_int(&js, "job_id", o->job_id);
+    cf_json_str(&js, "part_id", o->part_id ? o->part_id : "");
     cf_json_str(&js, "nominal", o->nominal);
     cf_json_num(&js, "x0", pl->x0);
     cf_json_num(&js, "y0", pl->y0);
@@ -504,8 +517,12 @@ static void summary(FILE *f, const scan_opts_t *o, const scan_plan_t *pl, const 
     }
     cf_json_str(&js, "method", cf_scanfast_method_name((cf_scan_method_t)method));
     if (method != CF_SCAN_STOP)
-        summary_fast(&js, method, fast, fit_ready, fr);
+        summary_fast(&js, method, fast, fit_ready, fr, held);
     cf_json_num(&js, "seconds", secs);
+    /* The process's peak resident memory so far (make bench prints it for
+     * 10^6 and 10^7 points: flat in the points). */
+    struct rusage ru;
+    cf_json_int(&js, "peak_rss_kb", getrusage(RUSAGE_SELF, &ru) ? -1 : (long)ru.ru_maxrss);
     cf_json_end(&js);
 }
 
@@ -594,6 +611,10 @@ int cmd_scan(int argc, char **argv)
                        rc);
         goto out;
     }
+    /* The fast methods sync once a row: their records are written 64 KiB
+     * at a time (819 records), not one write each (docs/journal.md). */
+    if (method != CF_SCAN_STOP)
+        (void)cf_store_file_buffer(&f, 65536); /* without memory: one write a record */
     h.sync_every = (uint32_t)o.sync_every;
     h.job_id = (uint64_t)o.job_id;
     h.t_start = cli_now();
@@ -607,6 +628,11 @@ int cmd_scan(int argc, char **argv)
         ec = cli_error(CMD, CLI_FAIL, "%s: %s [%d] (%s); nothing measured", o.journal,
                        rig_strerror(rc), rc, f.err);
         unlink(o.journal); /* jnl_create cut it to 0 bytes: no empty journal behind */
+        goto out_dev;
+    }
+    if (o.part_id && *o.part_id && (rc = jnl_meta(&j, JNL_META_PART_ID, o.part_id, h.t_start))) {
+        ec = cli_error(CMD, CLI_FAIL, "%s: the part ID: %s [%d]; nothing measured", o.journal,
+                       rig_strerror(rc), rc);
         goto out_dev;
     }
     struct sigaction sa;
@@ -647,7 +673,7 @@ int cmd_scan(int argc, char **argv)
     }
     if (sc.tty && rc)
         fputc('\n', stderr);
-    int fitted = 0;
+    int fitted = 0, held = 0;
     double t_fit0 = 0, fit_ready = 0;
     if (rc) {
         double x = NAN, y = NAN;
@@ -666,20 +692,24 @@ int cmd_scan(int argc, char **argv)
                        at[res.where], sc.fit_err ? nf_strerror(sc.fit_err) : rig_strerror(rc), rc,
                        *det ? ": " : "", det, o.journal, (unsigned long long)jnl_acked(&j));
     } else if (fj) {
-        /* The first pass took the points as they arrived; the job reads
-         * them back from the journal for the residuals (not in memory). */
+        /* The first pass took the points as they arrived; the job holds
+         * them (cf_fitjob_held) for the residuals and later passes, up to
+         * CF_FITJOB_HOLD_ROWS, and else reads them back from the journal
+         * (verified first: a pass over the whole file). */
         jnl_reader_t rd;
         jnl_header_t h2;
         jnl_info_t in;
-        if ((rc = jnl_reader_open(&rd, st, &h2, &in)) != 0) {
+        cf_fitsrc_t src;
+        cf_fitsrc_jnl_t jc;
+        held = cf_fitjob_held(fj);
+        t_fit0 = fast.t_last_row > 0 ? fast.t_last_row : cli_now();
+        if (!held && (rc = jnl_reader_open(&rd, st, &h2, &in)) != 0) {
             ec = cli_error(CMD, CLI_FAIL, "%s: cannot read the journal back: %d", o.journal, rc);
             goto out_dev;
         }
-        cf_fitsrc_t src;
-        cf_fitsrc_jnl_t jc;
-        cf_fitsrc_journal(&src, &jc, &rd, o.journal, (long)in.points);
-        t_fit0 = fast.t_last_row > 0 ? fast.t_last_row : cli_now();
-        if ((rc = cf_fitjob_run(fj, &src, NULL, 0, 100, &fr, msg, sizeof msg)) != 0) {
+        if (!held)
+            cf_fitsrc_journal(&src, &jc, &rd, o.journal, (long)in.points);
+        if ((rc = cf_fitjob_run(fj, held ? NULL : &src, NULL, 0, 100, &fr, msg, sizeof msg)) != 0) {
             ec = cli_error(CMD, cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
             goto out_dev;
         }
@@ -697,7 +727,7 @@ int cmd_scan(int argc, char **argv)
         int werr = rf ? 0 : errno;
         if (rf) {
             summary(rf, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs, method, &fast,
-                    fit_ready);
+                    fit_ready, held);
             werr = ferror(rf) ? errno : 0;
             if (fclose(rf) && !werr)
                 werr = errno ? errno : EIO;
@@ -708,7 +738,7 @@ int cmd_scan(int argc, char **argv)
     }
     if (o.json)
         summary(stdout, &o, &job.plan, &res, &j, fitted ? &fr : NULL, secs, method, &fast,
-                fit_ready);
+                fit_ready, held);
     else if (!rc) {
         printf("cellfit scan: %ld points (%ld x %ld grid, step %g), %ld without a surface; "
                "journal %s\n",

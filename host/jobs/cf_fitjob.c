@@ -43,6 +43,13 @@ struct cf_fitjob {
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
+    /* The live points held (issue 19): x y z, at most CF_FITJOB_HOLD_ROWS;
+     * the passes after the scan read them, not the journal. hold_over: more
+     * came, the hold is gone and the source serves. */
+    double *hold;
+    long nhold, hcap;
+    int hold_over;
+    long nlive; /* live points added */
 };
 
 void cf_fitjob_defaults(cf_fitjob_opts_t *o)
@@ -184,6 +191,11 @@ int cf_fitjob_open(cf_fitjob_t **jp, const nf_surf_t *nominal, const cf_fitjob_o
     return 0;
 }
 
+int cf_fitjob_held(const cf_fitjob_t *j)
+{
+    return j->live && !j->hold_over && j->nhold > 0 && j->nhold == j->nlive;
+}
+
 const nf_surf_t *cf_fitjob_base(const cf_fitjob_t *j)
 {
     return &j->base;
@@ -238,11 +250,37 @@ typedef struct weigh {
     const nf_surf_t *prev;
 } weigh_t;
 
+/* Feet on a surface by the seed grid's search, the grid set up at its
+ * first use (a pass that projects nothing never builds it). */
+typedef struct proj {
+    const nf_surf_t *s;
+    cf_seedgrid_t g;
+    int ready;
+} proj_t;
+
+static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
+{
+    if (!p->ready) {
+        if (cf_seedgrid_init(&p->g, p->s, SEEDS))
+            return CF_ENOMEM;
+        p->ready = 1;
+    }
+    cf_seedgrid_project(&p->g, Q, PROJ_TOL, out); /* best point kept on ENOCONV */
+    return 0;
+}
+
+static void proj_free(proj_t *p)
+{
+    if (p->ready)
+        cf_seedgrid_free(&p->g);
+    p->ready = 0;
+}
+
 /* One pass: a fresh fitter on cur's space (P0 = cur's net, cf_fitpass in
  * the job's arena), parameters given or by projection onto proj. */
 typedef struct pass {
     cf_fitpass_t fp;
-    cf_seedgrid_t pj;
+    proj_t pj;
     const nf_surf_t *proj;
     const weigh_t *wt;
     cf_edges_t ed; /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
@@ -269,8 +307,7 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
                               j->o.solver, j->o.threads, name, msg, ml);
     if (rc)
         return rc;
-    if (proj && cf_seedgrid_init(&ps->pj, proj, SEEDS))
-        return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
+    ps->pj.s = proj;
     if (!j->o.free_edges && (rc = cf_edges_begin(&ps->ed, cur)))
         return cf_fail(msg, ml, rc, "data footprint: %s", cf_strerror(rc));
     return 0;
@@ -292,7 +329,10 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
             if (ps->proj) {
                 const double *Q = in + 3 * k;
                 nf_proj_t pr;
-                cf_seedgrid_project(&ps->pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+                if (proj_foot(&ps->pj, Q, &pr)) {
+                    *bad = k;
+                    return CF_ENOMEM;
+                }
                 double d = fabs(pr.dist);
                 ps->clamped += pr.clamped != 0;
                 ps->ss0 += d * d;
@@ -339,8 +379,61 @@ static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *na
 
 static void pass_free(pass_t *ps)
 {
-    cf_seedgrid_free(&ps->pj);
+    proj_free(&ps->pj);
     cf_edges_free(&ps->ed);
+}
+
+/* The live point xyz into the hold (doubling up to
+ * CF_FITJOB_HOLD_ROWS; past it, or without memory, the hold is let go and
+ * the later passes read the source). */
+static void hold_add(cf_fitjob_t *j, const double xyz[3])
+{
+    if (j->hold_over)
+        return;
+    if (j->nhold == j->hcap) {
+        long cap = j->hcap ? 2 * j->hcap : 4096;
+        double *h =
+            cap <= CF_FITJOB_HOLD_ROWS ? realloc(j->hold, sizeof(double) * 3 * (size_t)cap) : NULL;
+        if (!h) {
+            free(j->hold);
+            j->hold = NULL;
+            j->nhold = j->hcap = 0;
+            j->hold_over = 1;
+            return;
+        }
+        j->hold = h;
+        j->hcap = cap;
+    }
+    memcpy(j->hold + 3 * j->nhold++, xyz, sizeof(double) * 3);
+}
+
+/* The hold as a source: rows x y z, as the journal's. */
+typedef struct held {
+    const cf_fitjob_t *j;
+    long next;
+} held_t;
+
+static int held_rewind(void *ctx, char *msg, size_t ml)
+{
+    (void)msg, (void)ml;
+    ((held_t *)ctx)->next = 0;
+    return 0;
+}
+
+static long held_read(void *ctx, double *rows, long max, char *msg, size_t ml)
+{
+    held_t *h = ctx;
+    (void)msg, (void)ml;
+    long n = h->j->nhold - h->next < max ? h->j->nhold - h->next : max;
+    memcpy(rows, h->j->hold + 3 * h->next, sizeof(double) * 3 * (size_t)n);
+    h->next += n;
+    return n;
+}
+
+static void held_where(void *ctx, long k, char *buf, size_t n)
+{
+    (void)ctx;
+    snprintf(buf, n, "live point %ld", k);
 }
 
 int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
@@ -362,6 +455,9 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
     }
     long bad;
     rc = pass_rows(j, j->lp, xyz, 1, &bad);
+    j->nlive++;
+    if (!rc)
+        hold_add(j, xyz);
     return rc ? cf_fail(msg, ml, rc, "%s", nf_strerror(rc)) : 0;
 }
 
@@ -478,16 +574,13 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     double tol = j->o.tol;
     memset(out, 0, sizeof *out);
     nf_rhist_init(&out->hist);
-    cf_seedgrid_t pj;
+    proj_t pj;
     memset(&pj, 0, sizeof pj);
+    pj.s = s;
     int uv = src->cols == 5;
-    if ((!uv || st) && cf_seedgrid_init(&pj, s, SEEDS))
-        return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
     cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
-    if (cf_surfrow_init(&ev, s)) {
-        cf_seedgrid_free(&pj);
+    if (cf_surfrow_init(&ev, s))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
-    }
     int rc = rewind_src(r);
     long got = 0;
     while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
@@ -503,7 +596,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
-                cf_seedgrid_project(&pj, Q, PROJ_TOL, &pr); /* best point kept on ENOCONV */
+                if (proj_foot(&pj, Q, &pr)) {
+                    rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+                    break;
+                }
                 sd = pr.dist;
                 clamped = !uv && pr.clamped;
                 if (!uv)
@@ -539,10 +635,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
         }
         progress(r, out->n);
     }
-    if (got < 0)
+    if (!rc && got < 0)
         rc = (int)got;
     cf_surfrow_free(&ev);
-    cf_seedgrid_free(&pj);
+    proj_free(&pj);
     return rc;
 }
 
@@ -817,6 +913,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     memset(out, 0, sizeof *out);
     if (o->holdout >= 2 && j->live)
         return cf_fail(msg, ml, CF_EARG, "--holdout needs a points source, not live points");
+    if (!src && !cf_fitjob_held(j))
+        return cf_fail(msg, ml, CF_EARG, "no point source, and the live points are not all held");
     /* With a holdout the rounds read only the rows kept for the fit. */
     const cf_fitsrc_t *all = src;
     cf_holdout_t hk;
@@ -825,6 +923,14 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         cf_holdout_src(&ks_src, &hk, src, o->holdout, 0);
         src = &ks_src;
     }
+    /* A live job whose points are all held reads them, not the source:
+     * no journal verified and read back (issue 19), the same points in the
+     * same order, so the same fit as the journal's replay. */
+    held_t hc = {j, 0};
+    cf_fitsrc_t hs = {3,          j->nhold, src ? src->name : "live points", held_rewind, held_read,
+                      held_where, &hc};
+    if (cf_fitjob_held(j))
+        src = &hs;
     run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml};
     surfs_t S;
     memset(&S, 0, sizeof S);
@@ -1006,6 +1112,7 @@ void cf_fitjob_close(cf_fitjob_t *j)
     free(j->buf);
     free(j->rows);
     free(j->src);
+    free(j->hold);
     cf_surf_free(&j->base);
     free(j);
 }

@@ -38,6 +38,12 @@ typedef struct cf_job_ctl {
 } cf_job_ctl_t;
 
 #define CF_FITJOB_MAX_ROUNDS 64
+/* Live points the job holds (x y z, 24 bytes each: at most 24 MiB, grown
+ * as they come): the passes after a live scan read them instead of
+ * verifying and reading the journal back (the same points in the same
+ * order: the same fit). A scan of more points lets the hold go at this
+ * count and reads its source, as before (issue 19). */
+#define CF_FITJOB_HOLD_ROWS (1L << 20)
 #define CF_FITJOB_MAX_WARN 4
 
 /* How a job ended (the cell's fit_status register, report.json). */
@@ -139,8 +145,13 @@ long cf_fitjob_bytes(const cf_fitjob_t *j);
  * the base and added as it arrives. 0, or an nf_err_t (msg). */
 int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml);
 
+/* 1 when every live point added so far is held (CF_FITJOB_HOLD_ROWS): the
+ * run then reads the hold, not src, which may be NULL (a live scan need
+ * not open its journal again). */
+int cf_fitjob_held(const cf_fitjob_t *j);
+
 /* Run the job: the first pass from the live points if any, else from src;
- * every later pass from src. Progress over pct0..pct1 of ctl. 0 with *r
+ * every later pass from src (from the hold when cf_fitjob_held). Progress over pct0..pct1 of ctl. 0 with *r
  * filled (cf_fitjob_result_free), also when the tolerance was not met
  * (r->status says so); RIG_EABORTED when ctl asked to stop; otherwise a
  * CF_E* / NF_E* / RIG_E* code with msg naming file and line or record. On

@@ -82,6 +82,11 @@ def cycle(port, simport, resdir, mbpoll, out):
     check(c.write(pc.PART, c.words(4711) + [3, 0] + c.fwords(0.05)) == 0,
           "cycle: part 4711, program 3, folder 0, tolerance 0.05 mm")
     check(region(c, 100, 50, 0, 0, 2.5) == 0, "cycle: region (100, 50)-(0, 0), step 2.5 mm written")
+    # The part's ID (PART_ID, 124..139, two characters a register, the first
+    # in the high byte) goes into the scan's journal (issue 19).
+    raw = b"CYCLE-4711".ljust(32, b"\0")
+    check(c.write(124, [raw[i] << 8 | raw[i + 1] for i in range(0, 32, 2)]) == 0,
+          "cycle: PART_ID 'CYCLE-4711' written")
     s = c.command(SCAN_FIT)
     seq = c.seq
     check(s["result"] == 0 and s["state"] == SCANNING, "cycle: SCAN_FIT seq %d: SCANNING" % seq)

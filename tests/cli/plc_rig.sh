@@ -53,10 +53,11 @@ start a --sim --sim-args="$SIMARGS" --nominal "$T/part/nominal.igs" --results "$
 py cycle "$port" "$simport" "$T/res" "$(command -v mbpoll)" "$T/cycle.out"
 jnl=$(sed -n 2p "$T/cycle.out")
 if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
-    [ "$(json "$T/info.json" records)" = 862 ] && [ "$(json "$T/info.json" points)" = 861 ] &&
+    [ "$(json "$T/info.json" records)" = 863 ] && [ "$(json "$T/info.json" points)" = 861 ] &&
         [ "$(json "$T/info.json" ended)" = 1 ] && [ "$(json "$T/info.json" end_code)" = 0 ] &&
-        [ "$(json "$T/info.json" torn_tail)" = 0 ] &&
-        ok "journal info: 861 points + end record, ended 0, no torn tail" || no "journal info: $(cat "$T/info.json")"
+        [ "$(json "$T/info.json" torn_tail)" = 0 ] && [ "$(json "$T/info.json" part_id)" = CYCLE-4711 ] &&
+        ok "journal info: part ID CYCLE-4711 (the PLC's PART_ID), 861 points + end record, ended 0, no torn tail" ||
+        no "journal info: $(cat "$T/info.json")"
     # The fit the cell exported = the journal replayed by `cellfit journal fit`
     # (alpha, beta as float32 in the registers: equal to 1e-6 mm).
     d=$(sed -n 1p "$T/cycle.out")
@@ -104,8 +105,9 @@ py abort "$port" "$simport" "$T/res" "$T/abort.out"
 jnl=$(cat "$T/abort.out")
 if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
     n=$(json "$T/info.json" points); f=$(json "$T/info.json" flagged)
+    m=$([ -n "$(json "$T/info.json" part_id)" ] && echo 1 || echo 0) # the part ID's meta record
     [ "$(json "$T/info.json" torn_tail)" = 0 ] && [ "$(json "$T/info.json" ended)" = 1 ] &&
-        [ "$(json "$T/info.json" end_code)" = -217 ] && [ "$(json "$T/info.json" records)" = $((n + f + 1)) ] &&
+        [ "$(json "$T/info.json" end_code)" = -217 ] && [ "$(json "$T/info.json" records)" = $((n + f + m + 1)) ] &&
         [ "$n" -gt 0 ] && [ "$n" -lt 7676 ] &&
         ok "aborted journal: $n of 7676 points + end record (RIG_EABORTED), no torn tail" ||
         no "aborted journal: $(cat "$T/info.json")"

@@ -185,6 +185,98 @@ static void test_roundtrip(void **state)
     assert_int_equal(jnl_create(&j, st, &h), RIG_ESTATE);
 }
 
+static uint64_t le64_at(const uint8_t *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; i--)
+        v = (v << 8) | p[i];
+    return v;
+}
+
+/* Version 2 (issue 19): the part's ID in a meta record and gaps at their
+ * numbers, each field at its byte offset of docs/journal.md (read from the
+ * store's bytes, not through the decoder); counted by jnl_scan, skipped as
+ * points; a version 1 journal (the header's version patched, its CRC
+ * recomputed bitwise) still reads. */
+static void test_gap_meta(void **state)
+{
+    (void)state;
+    ref_memstore_init(&ms, &st);
+    jnl_t j;
+    jnl_header_t h = hdr(1000);
+    assert_int_equal(jnl_create(&j, st, &h), RIG_OK);
+    assert_int_equal(ms.data[4] | ms.data[5] << 8, 2);
+    const char *id = "SN-0042/A: a part ID longer than the forty-seven characters kept";
+    assert_int_equal(jnl_meta(&j, JNL_META_PART_ID, id, 12.5), RIG_OK);
+    jnl_rec_t r = point(0);
+    assert_int_equal(jnl_append(&j, &r), RIG_OK);
+    const double at[2] = {1.5, -2.25};
+    assert_int_equal(jnl_gap(&j, JNL_GAP_NO_READING, 3, 17, 1, at, 13.0), RIG_OK);
+    assert_int_equal(jnl_gap(&j, JNL_GAP_BOTH, 3, 40, 5, NULL, 13.5), RIG_OK);
+    assert_int_equal(jnl_gap(&j, JNL_GAP_PROFILE, -1, 1u << 20, 16, NULL, 14.0), RIG_OK);
+    assert_int_equal(jnl_gap(&j, JNL_GAP_NO_TRIGGER, 4, 2, 1, NULL, 14.5), RIG_OK);
+    assert_int_equal(jnl_gap(&j, 0, 0, 0, 1, NULL, 0), RIG_EARG);
+    assert_int_equal(jnl_gap(&j, JNL_GAP_KINDS, 0, 0, 1, NULL, 0), RIG_EARG);
+    assert_int_equal(jnl_gap(&j, JNL_GAP_BOTH, 0, 0, 0, NULL, 0), RIG_EARG);
+    assert_int_equal(jnl_meta(&j, 99, "x", 0), RIG_EARG);
+    assert_int_equal(jnl_end(&j, 0, 15.0), RIG_OK);
+    /* Record 0 (meta): type 4, key 1, text at 16, NUL at 63. */
+    const uint8_t *m = ms.data + JNL_HDR_BYTES;
+    assert_int_equal(m[8], JNL_T_META);
+    assert_int_equal(m[12], JNL_META_PART_ID);
+    assert_memory_equal(m + 16, id, 47);
+    assert_int_equal(m[63], 0);
+    /* Record 2 (the first gap): kind, stage, num at 32, row at 40, count at 48. */
+    const uint8_t *g = ms.data + JNL_HDR_BYTES + 2 * JNL_REC_BYTES;
+    assert_int_equal(g[8], JNL_T_GAP);
+    assert_int_equal(g[12], JNL_GAP_NO_READING);
+    double x;
+    memcpy(&x, (uint64_t[]){le64_at(g + 16)}, sizeof x);
+    assert_true(x == 1.5);
+    assert_int_equal(le64_at(g + 32), 17);
+    assert_int_equal(le64_at(g + 40), 3);
+    assert_int_equal(le64_at(g + 48), 1);
+    jnl_header_t h2;
+    jnl_info_t in;
+    assert_int_equal(jnl_scan(st, &h2, &in), RIG_OK);
+    assert_int_equal(h2.version, 2);
+    assert_int_equal(in.records, 7);
+    assert_int_equal(in.points, 1);
+    assert_int_equal(in.gaps, 4);
+    assert_int_equal(in.lost[JNL_GAP_NO_READING], 1);
+    assert_int_equal(in.lost[JNL_GAP_NO_TRIGGER], 1);
+    assert_int_equal(in.lost[JNL_GAP_BOTH], 5);
+    assert_int_equal(in.lost[JNL_GAP_PROFILE], 16);
+    assert_int_equal(strlen(in.part_id), 47);
+    assert_memory_equal(in.part_id, id, 47);
+    jnl_reader_t rd;
+    assert_int_equal(jnl_reader_open(&rd, st, &h2, &in), RIG_OK);
+    int kinds[8], n = 0, rc;
+    while ((rc = jnl_reader_next(&rd, &r)) == 1 && n < 8)
+        kinds[n++] = r.type == JNL_T_GAP ? 100 + r.code : r.type;
+    assert_int_equal(n, 7);
+    assert_int_equal(kinds[0], JNL_T_META);
+    assert_int_equal(kinds[1], JNL_T_POINT);
+    assert_int_equal(kinds[3], 100 + JNL_GAP_BOTH);
+    assert_string_equal(jnl_gap_name(JNL_GAP_PROFILE), "profile");
+    /* Version 1: points only, the header saying 1. */
+    write_points(10, 4);
+    ms.data[4] = 1;
+    uint32_t c = crc_bitwise(ms.data, 124);
+    for (int i = 0; i < 4; i++)
+        ms.data[124 + i] = (uint8_t)(c >> (8 * i));
+    assert_int_equal(jnl_scan(st, &h2, &in), RIG_OK);
+    assert_int_equal(h2.version, 1);
+    assert_int_equal(in.points + in.flagged, 10);
+    assert_int_equal(read_back(), 10);
+    /* Version 3 is not ours: refused. */
+    ms.data[4] = 3;
+    c = crc_bitwise(ms.data, 124);
+    for (int i = 0; i < 4; i++)
+        ms.data[124 + i] = (uint8_t)(c >> (8 * i));
+    assert_int_equal(jnl_scan(st, &h2, &in), RIG_ECORRUPT);
+}
+
 /* A write cut at every byte of the last record, and a last record complete
  * in length but garbled: dropped, every earlier record intact. */
 static void test_torn_tail(void **state)
@@ -484,14 +576,88 @@ static void test_file_full(void **state)
     unlink(path);
 }
 
+/* The file store gathering appends (cf_store_file_buffer, a fast scan's):
+ * nothing reaches the file between syncs until the buffer is full, every
+ * sync and read sees all, and a full disk met by a gathered write leaves
+ * the file at the last whole write (records, not a torn piece), the
+ * journal holding what was written before. */
+static void test_file_buffered(void **state)
+{
+    (void)state;
+    char path[600], msg[512];
+    tmp_path(path, sizeof path, "buf.jnl");
+    unlink(path);
+    cf_store_file_t f;
+    rig_store_t fs;
+    struct stat sb;
+    assert_int_equal(cf_store_file_open(&f, path, CF_STORE_CREATE, &fs, msg, sizeof msg), RIG_OK);
+    assert_int_equal(cf_store_file_buffer(&f, 5 * JNL_REC_BYTES), RIG_OK);
+    jnl_t j;
+    jnl_header_t h = hdr(1000);
+    assert_int_equal(jnl_create(&j, fs, &h), RIG_OK);
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES); /* the create's sync wrote it */
+    for (uint32_t i = 0; i < 4; i++) {
+        jnl_rec_t r = point(i);
+        assert_int_equal(jnl_append(&j, &r), RIG_OK);
+    }
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES); /* gathered */
+    for (uint32_t i = 4; i < 12; i++) {
+        jnl_rec_t r = point(i);
+        assert_int_equal(jnl_append(&j, &r), RIG_OK);
+    }
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES + 10 * JNL_REC_BYTES); /* two full buffers */
+    st = fs;
+    assert_int_equal(read_back(), 12); /* a read sees the buffer too */
+    assert_int_equal(jnl_sync(&j), RIG_OK);
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES + 12 * JNL_REC_BYTES);
+    cf_store_file_close(&f);
+    unlink(path);
+    /* A full disk: RLIMIT_FSIZE 20 bytes past 10 records, 5 records a write. */
+    const long limit = JNL_HDR_BYTES + 10 * JNL_REC_BYTES + 20;
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        signal(SIGXFSZ, SIG_IGN);
+        struct rlimit rl = {(rlim_t)limit, (rlim_t)limit};
+        if (setrlimit(RLIMIT_FSIZE, &rl) ||
+            cf_store_file_open(&f, path, CF_STORE_CREATE, &fs, msg, sizeof msg) ||
+            cf_store_file_buffer(&f, 5 * JNL_REC_BYTES) || jnl_create(&j, fs, &h))
+            _exit(100);
+        for (int ok = 0;; ok++) {
+            jnl_rec_t r = point((uint32_t)ok);
+            int rc = jnl_append(&j, &r);
+            if (rc)
+                _exit(rc == RIG_EFULL ? ok : 102);
+        }
+    }
+    int ws;
+    assert_int_equal(waitpid(pid, &ws, 0), pid);
+    assert_true(WIFEXITED(ws));
+    assert_int_equal(WEXITSTATUS(ws), 15); /* the append that filled the third buffer */
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_size, JNL_HDR_BYTES + 10 * JNL_REC_BYTES);
+    assert_int_equal(cf_store_file_open(&f, path, CF_STORE_READ, &fs, msg, sizeof msg), RIG_OK);
+    jnl_info_t in;
+    assert_int_equal(jnl_scan(fs, &h, &in), RIG_OK);
+    assert_int_equal(in.records, 10);
+    assert_int_equal(in.tail_bytes, 0);
+    cf_store_file_close(&f);
+    unlink(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_crc),         cmocka_unit_test(test_roundtrip),
-        cmocka_unit_test(test_torn_tail),   cmocka_unit_test(test_corrupt_middle),
-        cmocka_unit_test(test_power_cut),   cmocka_unit_test(test_disk_full),
-        cmocka_unit_test(test_sync_policy), cmocka_unit_test(test_file_store),
-        cmocka_unit_test(test_file_full),
+        cmocka_unit_test(test_crc),           cmocka_unit_test(test_roundtrip),
+        cmocka_unit_test(test_torn_tail),     cmocka_unit_test(test_corrupt_middle),
+        cmocka_unit_test(test_power_cut),     cmocka_unit_test(test_disk_full),
+        cmocka_unit_test(test_sync_policy),   cmocka_unit_test(test_file_store),
+        cmocka_unit_test(test_file_full),     cmocka_unit_test(test_gap_meta),
+        cmocka_unit_test(test_file_buffered),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

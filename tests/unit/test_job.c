@@ -411,6 +411,78 @@ static void test_fitjob_live(void **state)
     cf_fitjob_close(j);
 }
 
+/* One job on bumpy points (the nominal's, z moved by a smooth bump and a
+ * few spikes): live (added one at a time; the later passes read the held
+ * points) or not (every pass reads the file). */
+static int run_bumpy(const char *file, int live, cf_fitjob_result_t *r)
+{
+    cf_fitjob_opts_t o;
+    cf_fitjob_defaults(&o);
+    o.reparam = 2;
+    o.tol = 0.02;
+    o.stats = 1;
+    cf_fitjob_t *j;
+    int rc = cf_fitjob_open(&j, &nom, &o, msg, sizeof msg);
+    if (rc)
+        return rc;
+    cf_points_t *pr = NULL;
+    if ((rc = cf_points_open(&pr, file, 3, msg, sizeof msg)) == 0) {
+        double q[3];
+        while (live && !rc && cf_points_read(pr, q, 1, msg, sizeof msg) == 1)
+            rc = cf_fitjob_add(j, q, msg, sizeof msg);
+        cf_fitsrc_t src;
+        cf_fitsrc_points_t pc;
+        cf_fitsrc_points(&src, &pc, pr, file);
+        if (!rc)
+            rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, msg, sizeof msg);
+    }
+    cf_points_close(pr);
+    cf_fitjob_close(j);
+    return rc;
+}
+
+/* Issue 19: after a live scan the job reads the points it held (no
+ * journal read back): the fit, its distances and the statistics are
+ * exactly those of the job that reads the file for every pass. */
+static void test_fitjob_held(void **state)
+{
+    (void)state;
+    char bumpy[600];
+    tmp_path(bumpy, sizeof bumpy, "bumpy.xyz");
+    FILE *f = fopen(bumpy, "w");
+    assert_non_null(f);
+    for (int j = 0; j < 50; j++)
+        for (int i = 0; i < 60; i++) {
+            double P[3];
+            nf_surf_eval(&nom, (i + 0.5) / 60.0, (j + 0.5) / 50.0, P);
+            P[2] += 0.05 * sin(P[0] / 7.0) * cos(P[1] / 5.0) + ((i * 7 + j * 3) % 97 ? 0 : 0.3);
+            fprintf(f, "%.17g %.17g %.17g\n", P[0], P[1], P[2]);
+        }
+    assert_int_equal(fclose(f), 0);
+    cf_fitjob_result_t a, b;
+    assert_int_equal(run_bumpy(bumpy, 1, &a), 0);
+    assert_int_equal(run_bumpy(bumpy, 0, &b), 0);
+    assert_int_equal(a.points, 3000);
+    assert_int_equal(b.points, 3000);
+    assert_true(b.rms > 1e-3 && b.max_abs > 0.1); /* the bump and the spikes are there */
+    /* Rounding only: the live pass adds one point at a time, the file's
+     * pass a batch (the sums in another order). */
+    assert_true(fabs(a.rms - b.rms) <= 1e-12 * b.rms);
+    assert_true(fabs(a.max_abs - b.max_abs) <= 1e-12);
+    assert_true(fabs(a.nominal_rms - b.nominal_rms) <= 1e-12);
+    assert_true(a.within_pct == b.within_pct);
+    assert_true(gap(&a.surf, &b.surf) <= 1e-10); /* 3e-12 mm on a 120 mm part seen */
+    assert_non_null(a.stats);
+    assert_non_null(b.stats);
+    assert_int_equal(a.stats->n, b.stats->n);
+    assert_true(fabs(a.stats->max - b.stats->max) <= 1e-12);
+    assert_true(fabs(a.stats->min - b.stats->min) <= 1e-12);
+    assert_true(fabs(cf_stats_rms(a.stats) - cf_stats_rms(b.stats)) <= 1e-12 * b.rms);
+    cf_fitjob_result_free(&a);
+    cf_fitjob_result_free(&b);
+    remove(bumpy);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -420,6 +492,7 @@ int main(void)
         cmocka_unit_test(test_export),
         cmocka_unit_test(test_fitjob_loop),
         cmocka_unit_test(test_fitjob_live),
+        cmocka_unit_test(test_fitjob_held),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

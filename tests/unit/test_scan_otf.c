@@ -43,7 +43,9 @@ typedef struct sink {
     int any;
     long bad; /* points not equal to their number's truth */
     long disorder;
-    int fail_at; /* chunk that returns an error (0 never) */
+    int fail_at;  /* chunk that returns an error (0 never) */
+    uint8_t *gap; /* with a gap callback: the kind recorded per number (0 none) */
+    long ngap, gap_bad, gap_calls;
 } sink_t;
 
 static int on_row(void *ctx, long row, const double *xyz, const uint64_t *trig, long n, int last)
@@ -69,6 +71,31 @@ static int on_row(void *ctx, long row, const double *xyz, const uint64_t *trig, 
     }
     if (s->fail_at && s->chunks == s->fail_at)
         return -999;
+    return 0;
+}
+
+/* The gap callback: each number's kind, once; a position only with a
+ * reading lost, and then its number's true one; in number order with the
+ * points (the row callback's prev). */
+static int on_gap(void *ctx, long row, int kind, uint64_t num, uint64_t count, const double *xy)
+{
+    sink_t *s = ctx;
+    (void)row;
+    s->gap_calls++;
+    if (s->any && num <= s->prev)
+        s->disorder++;
+    if ((kind == JNL_GAP_NO_READING) != (xy != NULL) || count == 0 ||
+        (xy && (count != 1 || xy[0] != enc.org[0] + enc_x(num) * enc.mm_per_count[0] ||
+                xy[1] != enc.org[1] + enc_y(num) * enc.mm_per_count[1])))
+        s->gap_bad++;
+    for (uint64_t k = num; k < num + count; k++) {
+        if (s->gap[k])
+            s->gap_bad++;
+        s->gap[k] = (uint8_t)kind;
+        s->ngap++;
+    }
+    s->prev = num + count - 1;
+    s->any = 1;
     return 0;
 }
 
@@ -373,13 +400,64 @@ static void t_rows_and_errors(void **state)
     plan_free(&p);
 }
 
+/* Issue 19: every loss handed to the gap callback at its own number and of
+ * its kind (a lost reading with its position), in order with the points;
+ * runs lost on both sides joined (one in the middle longer than two
+ * windows, one at the row's end). */
+static void t_gaps(void **state)
+{
+    (void)state;
+    static scan_otf_t o;
+    plan_t p;
+    plan_alloc(&p, 30000);
+    for (long k = 0; k < p.n; k++) {
+        double r = urand();
+        if (r < 0.01)
+            p.drop_r[k] = 1;
+        else if (r < 0.02)
+            p.drop_t[k] = 1;
+        else if (r < 0.025)
+            p.drop_t[k] = p.drop_r[k] = 1;
+    }
+    for (long k = 12000; k < 12700; k++) /* more than two windows: make_room's jump */
+        p.drop_t[k] = p.drop_r[k] = 1;
+    for (long k = p.n - 5; k < p.n; k++) /* the row's last, lost on both sides */
+        p.drop_t[k] = p.drop_r[k] = 1;
+    sink_t s = {0};
+    s.gap = calloc((size_t)p.n, 1);
+    assert_non_null(s.gap);
+    assert_int_equal(scan_otf_init(&o, &kin, &enc, on_row, &s), RIG_OK);
+    scan_otf_set_gap(&o, on_gap);
+    assert_int_equal(scan_otf_row_begin(&o, 2), RIG_OK);
+    deliver(&o, &p, 8);
+    assert_int_equal(scan_otf_row_end(&o, 0, (uint64_t)p.n), RIG_OK);
+    long lost = 0, wrong = 0;
+    for (long k = 0; k < p.n; k++) {
+        int want = p.drop_t[k] && p.drop_r[k] ? JNL_GAP_BOTH
+                   : p.drop_t[k]              ? JNL_GAP_NO_TRIGGER
+                   : p.drop_r[k]              ? JNL_GAP_NO_READING
+                                              : 0;
+        lost += want != 0;
+        wrong += s.gap[k] != want;
+    }
+    assert_int_equal(wrong, 0);
+    assert_int_equal(s.gap_bad, 0);
+    assert_int_equal(s.disorder, 0);
+    assert_int_equal(s.bad, 0);
+    assert_int_equal(s.ngap, lost);
+    assert_int_equal((long)(o.c.trig_no_read + o.c.read_no_trig + o.c.both_lost), lost);
+    assert_int_equal(s.points + lost, p.n);
+    assert_true(s.gap_calls < lost - 700); /* the long run is one call */
+    free(s.gap);
+    plan_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(t_clean_wraps),
-        cmocka_unit_test(t_injected),
-        cmocka_unit_test(t_cut_row),
-        cmocka_unit_test(t_rows_and_errors),
+        cmocka_unit_test(t_clean_wraps), cmocka_unit_test(t_injected),
+        cmocka_unit_test(t_cut_row),     cmocka_unit_test(t_rows_and_errors),
+        cmocka_unit_test(t_gaps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
