@@ -1,0 +1,92 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# tests/cli/trim.sh CELLFIT: trimmed faces in and out, against OpenCASCADE.
+# OCCT makes the nominal (tests/occt/occt_trim make: a bicubic B-spline face
+# cut by a circle, with a quadrilateral hole, written as IGES 144/142/102/
+# 126). Points sampled from it (`cellfit eval` at random u v) with a bump
+# added are fitted to a tolerance (knots inserted) by `cellfit fit --base
+# nominal.igs`, written as IGES and as STEP; OCCT reads each as one valid
+# face whose boundaries in (u, v) equal the nominal's (edge count, length,
+# box and samples to 1e-9) and whose surface equals `cellfit eval` of the
+# fit at 500 random (u, v) to 1e-9 mm (tests/cli/trim_check.py). `cellfit
+# convert` keeps the trim: IGES read and written again is the same file.
+set -u
+. "$(dirname "$0")/lib.sh"
+CF=$(realpath "$1")
+HERE=$(cd "$(dirname "$0")" && pwd)
+T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-trim.XXXXXX")
+trap 'rm -rf "$T"' EXIT
+if ! sh tests/occt/build.sh "$T/occt" >"$T/occt.log" 2>&1; then
+    if [ "${CI:-}" = true ]; then no "OpenCASCADE check could not be built: $(tail -2 "$T/occt.log")"; else
+        echo "skip OpenCASCADE trim check: $(tail -1 "$T/occt.log")"; fi
+    echo "trim: $pass passed, $fail failed"
+    [ "$fail" -eq 0 ]
+    exit
+fi
+OT="$T/occt/occt_trim"
+if "$OT" make "$T/nominal.igs" "$T/nominal.stp" 2>"$T/make.err" && [ -s "$T/nominal.igs" ]; then
+    ok "OCCT writes the trimmed nominal"
+else
+    no "occt_trim make: $(tail -2 "$T/make.err")"
+fi
+# Points: 4000 random (u, v) over the whole domain, a 0.2 mm bump at (50, 40).
+python3 -c "
+import random
+random.seed(17)
+for i in range(4000): print('%.17g %.17g' % (random.random(), random.random()))" >"$T/pts.uv"
+python3 -c "
+import random
+random.seed(71)
+for i in range(500): print('%.17g %.17g' % (random.random(), random.random()))" >"$T/check.uv"
+"$CF" eval "$T/nominal.igs" "$T/pts.uv" >"$T/nom.xyz"
+awk '{ dx = $1 - 50; dy = $2 - 40; printf "%.17g %.17g %.17g\n", $1, $2, $3 + 0.2 * exp(-(dx * dx + dy * dy) / 300) }' \
+    "$T/nom.xyz" >"$T/pts.xyz"
+for ext in igs stp; do
+    if "$CF" fit --base "$T/nominal.igs" --points "$T/pts.xyz" --out "$T/fit.$ext" --tol 0.005 \
+        --within 99 >"$T/fit.$ext.out" 2>&1; then
+        grep -q "trimmed face: 2 boundaries kept" "$T/fit.$ext.out" &&
+            ok "fit -> .$ext: $(grep 'trimmed face' "$T/fit.$ext.out" | sed 's/^ *//')" ||
+            no "fit -> .$ext: no trim said: $(tail -3 "$T/fit.$ext.out")"
+    else
+        no "fit -> .$ext: $(tail -3 "$T/fit.$ext.out")"
+    fi
+done
+# The fit refined the net (so the test is not of the nominal itself) and
+# kept the domain the trim curves live in.
+"$CF" info "$T/nominal.igs" >"$T/nom.info"
+"$CF" info "$T/fit.igs" >"$T/fit.info"
+[ "$(grep '^domain' "$T/nom.info")" = "$(grep '^domain' "$T/fit.info")" ] &&
+    ! grep -q "net 6 x 6" "$T/fit.info" &&
+    ok "the fit: $(grep -o 'net [0-9]* x [0-9]*' "$T/fit.info"), the nominal's domain" ||
+    no "fit info: $(head -2 "$T/fit.info")"
+"$OT" read "$T/nominal.igs" <"$T/check.uv" >"$T/nominal.occt" 2>"$T/read.err" ||
+    no "OCCT cannot read the nominal: $(tail -2 "$T/read.err")"
+for ext in igs stp; do
+    "$OT" read "$T/fit.$ext" <"$T/check.uv" >"$T/fit.$ext.occt" 2>"$T/read.err" ||
+        no "OCCT cannot read fit.$ext: $(tail -2 "$T/read.err")"
+    "$CF" eval "$T/fit.$ext" "$T/check.uv" >"$T/fit.$ext.eval"
+    python3 "$HERE/trim_check.py" "$T/nominal.occt" "$T/fit.$ext.occt" "$T/fit.$ext.eval" \
+        "fit.$ext" >"$T/check.out" 2>&1 || echo "FAIL trim_check.py: $(tail -2 "$T/check.out")" >>"$T/check.out"
+    while read -r st rest; do
+        if [ "$st" = ok ]; then ok "$rest"; else no "$rest"; fi
+    done <"$T/check.out"
+done
+# Our reader keeps the trim bit for bit: OCCT's file converted, then ours
+# converted again, give the same bytes (the 3-D edges are made again from
+# the same curves on the same surface).
+export SOURCE_DATE_EPOCH=1700000000
+mkdir -p "$T/a" "$T/b" # one base name: the file's name is in its header
+if "$CF" convert "$T/nominal.igs" "$T/a/x.igs" 2>"$T/err" && "$CF" convert "$T/a/x.igs" "$T/b/x.igs" 2>>"$T/err"; then
+    cmp -s "$T/a/x.igs" "$T/b/x.igs" && grep -q "^     144 .*D " "$T/b/x.igs" &&
+        ok "convert: IGES 144 read and written again, the same file" || no "convert: a.igs and b.igs differ"
+else
+    no "convert: $(tail -2 "$T/err")"
+fi
+"$OT" read "$T/a/x.igs" <"$T/check.uv" >"$T/a.occt" 2>/dev/null
+"$CF" eval "$T/a/x.igs" "$T/check.uv" >"$T/a.eval"
+python3 "$HERE/trim_check.py" "$T/nominal.occt" "$T/a.occt" "$T/a.eval" "convert nominal.igs" >"$T/check.out" 2>&1
+while read -r st rest; do
+    if [ "$st" = ok ]; then ok "$rest"; else no "$rest"; fi
+done <"$T/check.out"
+echo "trim: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
