@@ -457,7 +457,7 @@ int cf_iges_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim
     for (int k = 0, ic = 0; !rc && k < t->nloops; k++)
         for (int i = 0; !rc && i < t->loop[k].n; i++, ic++) {
             double e;
-            rc = cf_trim_edge3d(s, &t->loop[k].c[i], &e3[ic], &e);
+            rc = cf_trim_edge3d(s, &t->loop[k].c[i], CF_TRIM_EDGE_TOL, &e3[ic], &e);
             emax = fmax(emax, e);
         }
     if (rc) {

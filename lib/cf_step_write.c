@@ -208,7 +208,7 @@ static long sw_trim_curve(sw_t *w, const nf_surf_t *s, long surf, long ctx2, con
     FILE *f = w->f;
     nf_curve_t e;
     double err;
-    int rc = cf_trim_edge3d(s, c, &e, &err);
+    int rc = cf_trim_edge3d(s, c, CF_TRIM_EDGE_TOL, &e, &err);
     int n = c->n > e.n ? c->n : e.n;
     long *ids = rc ? NULL : malloc(sizeof(long) * (size_t)n);
     if (rc || !ids) {

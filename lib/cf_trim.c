@@ -202,49 +202,103 @@ static int solve3(double *A, double *B, int n)
     return CF_OK;
 }
 
-int cf_trim_edge3d(const nf_surf_t *s, const nf_curve_t *c, nf_curve_t *out, double *err)
+/* Cubic interpolation of S(c(t)) at m parameters uniform on [a, b] (A9.1,
+ * knots by averaging, Eq. 9.8): knots into U (m + 4), points into P (3 m). */
+static int span_interp(const nf_surf_t *s, const nf_curve_t *c, double a, double b, int m,
+                       double *A, double *U, double *P)
 {
-    const int n = CF_TRIM_EDGE_SAMPLES, p = 3;
-    double a, b;
+    const int p = 3;
+    double t[CF_TRIM_EDGE_MAXS], N[NF_MAX_DEGREE + 1];
+    for (int k = 0; k < m; k++)
+        t[k] = k == m - 1 ? b : a + (b - a) * k / (m - 1);
+    for (int i = 0; i <= p; i++) {
+        U[i] = a;
+        U[m + i] = b;
+    }
+    for (int j = 1; j <= m - p - 1; j++)
+        U[j + p] = (t[j] + t[j + 1] + t[j + 2]) / 3.0;
+    memset(A, 0, sizeof(double) * (size_t)m * m);
+    for (int k = 0; k < m; k++) {
+        int l = nf_find_span(m - 1, p, t[k], U);
+        nf_basis_funs(l, t[k], p, U, N);
+        for (int i = 0; i <= p; i++)
+            A[(size_t)k * m + (l - p + i)] = N[i];
+        on_surf(s, c, t[k], P + 3 * k);
+    }
+    return solve3(A, P, m);
+}
+
+/* cf_trim_edge3d with m samples per span. */
+static int edge_m(const nf_surf_t *s, const nf_curve_t *c, int m, nf_curve_t *out, double *err)
+{
+    const int p = 3;
+    int spans = 0;
     memset(out, 0, sizeof *out);
-    nf_curve_domain(c, &a, &b);
-    double *A = calloc((size_t)n * n + 4 * (size_t)n, sizeof(double));
+    for (int i = c->p; i < c->n; i++)
+        spans += c->U[i] < c->U[i + 1];
+    if (spans < 1)
+        return CF_EARG;
+    /* One interpolant per knot span of c, joined at knots of multiplicity
+     * 3 (C0 there, where S(c(t)) itself may be only C1): within a span the
+     * composition is smooth, so the cubic converges at its full order. */
+    const int n = 1 + spans * (m - 1);
+    double *A = malloc(sizeof(double) * ((size_t)m * m + 4 * (size_t)m + 4));
     if (!A || cf_curve_alloc(out, p, n)) {
         free(A);
         return CF_ENOMEM;
     }
-    double *t = A + (size_t)n * n, *B = t + n, N[NF_MAX_DEGREE + 1];
-    for (int k = 0; k < n; k++)
-        t[k] = k == n - 1 ? b : a + (b - a) * k / (n - 1);
-    double *U = out->U; /* Eq. 9.8: knots by averaging the parameters */
-    for (int i = 0; i <= p; i++) {
-        U[i] = a;
-        U[n + i] = b;
+    double *Us = A + (size_t)m * m, *Ps = malloc(sizeof(double) * 3 * (size_t)m);
+    int rc = Ps ? CF_OK : CF_ENOMEM, at = 0, ku = 0;
+    double e = 0.0;
+    for (int i = c->p; i < c->n && !rc; i++) {
+        if (!(c->U[i] < c->U[i + 1]))
+            continue;
+        if ((rc = span_interp(s, c, c->U[i], c->U[i + 1], m, A, Us, Ps)))
+            break;
+        /* Knots: the first span's clamped start, then each span's interior
+         * knots and its end three times (four at the very end). */
+        if (at == 0)
+            for (int k = 0; k <= p; k++)
+                out->U[ku++] = Us[0];
+        for (int k = p + 1; k < m; k++)
+            out->U[ku++] = Us[k];
+        for (int k = 0; k < p; k++)
+            out->U[ku++] = Us[m];
+        memcpy(out->cp + 3 * (size_t)at, Ps + (at ? 3 : 0), sizeof(double) * 3 * (at ? m - 1 : m));
+        at += at ? m - 1 : m;
     }
-    for (int j = 1; j <= n - p - 1; j++)
-        U[j + p] = (t[j] + t[j + 1] + t[j + 2]) / 3.0;
-    for (int k = 0; k < n; k++) {
-        int l = nf_find_span(n - 1, p, t[k], U);
-        nf_basis_funs(l, t[k], p, U, N);
-        for (int i = 0; i <= p; i++)
-            A[(size_t)k * n + (l - p + i)] = N[i];
-        on_surf(s, c, t[k], B + 3 * k);
-    }
-    int rc = solve3(A, B, n);
     if (!rc) {
-        memcpy(out->cp, B, sizeof(double) * 3 * (size_t)n);
-        double e = 0.0;
-        for (int k = 0; k + 1 < n; k++) {
-            double tm = 0.5 * (t[k] + t[k + 1]), P[3], Q[3];
-            on_surf(s, c, tm, P);
-            nf_curve_eval(out, tm, Q);
-            e = fmax(e, sqrt((P[0] - Q[0]) * (P[0] - Q[0]) + (P[1] - Q[1]) * (P[1] - Q[1]) +
-                             (P[2] - Q[2]) * (P[2] - Q[2])));
+        out->U[ku] = out->U[ku - 1]; /* the end clamped p + 1 times */
+        for (int i = c->p; i < c->n; i++) {
+            if (!(c->U[i] < c->U[i + 1]))
+                continue;
+            double h = (c->U[i + 1] - c->U[i]) / (m - 1);
+            for (int k = 0; k + 1 < m; k++) {
+                double tm = c->U[i] + (k + 0.5) * h, P[3], Q[3];
+                on_surf(s, c, tm, P);
+                nf_curve_eval(out, tm, Q);
+                e = fmax(e, sqrt((P[0] - Q[0]) * (P[0] - Q[0]) + (P[1] - Q[1]) * (P[1] - Q[1]) +
+                                 (P[2] - Q[2]) * (P[2] - Q[2])));
+            }
         }
         *err = e;
     } else {
         cf_curve_free(out);
     }
+    free(Ps);
     free(A);
+    return rc;
+}
+
+int cf_trim_edge3d(const nf_surf_t *s, const nf_curve_t *c, double tol, nf_curve_t *out,
+                   double *err)
+{
+    int rc = CF_EARG;
+    memset(out, 0, sizeof *out);
+    for (int m = 9; m <= CF_TRIM_EDGE_MAXS; m = 2 * m - 1) {
+        cf_curve_free(out);
+        if ((rc = edge_m(s, c, m, out, err)) || *err <= tol)
+            break;
+    }
     return rc;
 }

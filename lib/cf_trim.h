@@ -13,9 +13,12 @@
 #include "nf_surf.h"
 #include <stddef.h>
 
-#define CF_TRIM_MAX_LOOPS 1024   /* outer and holes */
-#define CF_TRIM_MAX_CURVES 4096  /* per loop */
-#define CF_TRIM_EDGE_SAMPLES 129 /* points a 3-D edge interpolates (cf_trim_edge3d) */
+#define CF_TRIM_MAX_LOOPS 1024  /* outer and holes */
+#define CF_TRIM_MAX_CURVES 4096 /* per loop */
+#define CF_TRIM_EDGE_MAXS 257   /* points a 3-D edge interpolates per knot span, at most */
+/* The 3-D edges' target, mm: half the 1e-7 mm distance accuracy the STEP
+ * writer declares, so a CAD reader finds edge and surface in agreement. */
+#define CF_TRIM_EDGE_TOL 5e-8
 
 typedef struct cf_trim_loop {
     int n;         /* curves */
@@ -44,12 +47,15 @@ int cf_trim_equal(const cf_trim_t *a, const cf_trim_t *b);
  * tol of the next one's start); CF_EARG with msg otherwise. */
 int cf_trim_check(const cf_trim_t *t, const nf_surf_t *s, double tol, char *msg, size_t ml);
 
-/* The 3-D edge over a 2-D trim curve c on s: the cubic B-spline that
- * interpolates S(c(t)) at CF_TRIM_EDGE_SAMPLES parameters t uniform over
- * c's domain, with those t as its parameters (NURBS Book A9.1, knots by
- * averaging, Eq. 9.8), so edge(t) ~ S(c(t)). *err: the largest distance
- * |edge(t) - S(c(t))| at the midpoints between samples (mm). out is
- * allocated (cf_curve_free). CF_ENOMEM, CF_EARG (singular system). */
-int cf_trim_edge3d(const nf_surf_t *s, const nf_curve_t *c, nf_curve_t *out, double *err);
+/* The 3-D edge over a 2-D trim curve c on s: per knot span of c, the cubic
+ * B-spline that interpolates S(c(t)) at m parameters t uniform over the
+ * span, with those t as its parameters (NURBS Book A9.1, knots by
+ * averaging, Eq. 9.8), the spans joined at triple knots (C0), so edge(t) ~
+ * S(c(t)) on c's whole domain; m = 9, 17, 33, ... doubled until the error
+ * is within tol (or m reaches CF_TRIM_EDGE_MAXS). *err: the largest
+ * distance |edge(t) - S(c(t))| at the midpoints between samples (mm). out
+ * is allocated (cf_curve_free). CF_ENOMEM, CF_EARG (no span, singular). */
+int cf_trim_edge3d(const nf_surf_t *s, const nf_curve_t *c, double tol, nf_curve_t *out,
+                   double *err);
 
 #endif
