@@ -57,4 +57,14 @@ int cf_step_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim
 
 int cf_step_read(const char *path, long id, nf_surf_t *out, char *msg, size_t msglen);
 
+/* The trim of the surface cf_step_read(path, id) reads: the bounds of the
+ * first ADVANCED_FACE over it, the FACE_OUTER_BOUND first (else the order
+ * of the file), each EDGE_LOOP's edges as their PCURVEs on that surface
+ * (2-D B-splines, plain or rational), turned to run as the face does
+ * (bound, oriented edge and edge senses). out->nloops = 0 when no face
+ * uses the surface, or when an edge has no B-spline PCURVE on it (3-D
+ * curves only, as cellfit's untrimmed faces; LINE or other PCURVEs): the
+ * surface is then taken whole. Errors as cf_step_read. */
+int cf_step_read_trim(const char *path, long id, cf_trim_t *out, char *msg, size_t msglen);
+
 #endif

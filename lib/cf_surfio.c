@@ -87,6 +87,8 @@ int cf_surfio_read_trim(const char *path, long which, cf_trim_t *t, char *msg, s
     memset(t, 0, sizeof *t);
     if (fmt == CF_SURFIO_UNKNOWN && path)
         fmt = sniff(path);
+    if (fmt == CF_SURFIO_STEP)
+        return cf_step_read_trim(path, which, t, msg, msglen);
     if (fmt != CF_SURFIO_IGES)
         return CF_OK;
     if (which < 0 || which > 9999999)

@@ -35,9 +35,9 @@ int cf_surfio_write(const char *path, const nf_surf_t *s, const char *name, cons
                     char *msg, size_t msglen);
 
 /* The trim of the surface cf_surfio_read(path, which) reads, when it is a
- * trimmed face (IGES: a 144 over it, cf_iges_read_trim); t->nloops = 0
- * when it is not, and always for STEP (its face's bounds are not read
- * yet). Errors as cf_iges_read_trim. */
+ * trimmed face (IGES: a 144 over it, cf_iges_read_trim; STEP: the bounds
+ * of its ADVANCED_FACE, cf_step_read_trim); t->nloops = 0 when it is not.
+ * Errors as those. */
 int cf_surfio_read_trim(const char *path, long which, cf_trim_t *t, char *msg, size_t msglen);
 
 /* cf_surfio_write of s as the face t trims (t may be NULL or empty: the

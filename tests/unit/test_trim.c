@@ -6,8 +6,9 @@
  * exactly; a circle maps to an ellipse, on which every point of the edge
  * must lie within its stated error. IGES written trimmed reads back to the
  * same trim bit for bit (one-curve and many-curve loops, a rational curve);
- * STEP written trimmed holds its bounds and the same surface; open loops and
- * curves off the domain are refused. OpenCASCADE's view of these files is
+ * STEP written trimmed holds its bounds and the same surface, and reads back
+ * to the same trim bit for bit; open loops and curves off the domain are
+ * refused. OpenCASCADE's view of these files is
  * tests/cli/trim.sh's. */
 
 #include "cf_err.h"
@@ -218,6 +219,16 @@ static void test_step_bounds(void **state)
     assert_int_equal(cf_step_read(path, 0, &r, msg, sizeof msg), CF_OK);
     assert_memory_equal(r.cp, s.cp, sizeof(double) * 12);
     cf_surf_free(&r);
+    /* Read back: the same loops, curves in the same order and direction. */
+    cf_trim_t back;
+    assert_int_equal(cf_step_read_trim(path, 0, &back, msg, sizeof msg), CF_OK);
+    assert_int_equal(back.nloops, 3);
+    assert_true(cf_trim_equal(&t, &back));
+    cf_trim_free(&back);
+    /* An untrimmed STEP face (3-D edges only): the whole surface. */
+    assert_int_equal(cf_step_write(path, &s, "plain", "v", msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_surfio_read_trim(path, 0, &back, msg, sizeof msg), CF_OK);
+    assert_int_equal(back.nloops, 0);
     remove(path);
     cf_trim_free(&t);
     cf_surf_free(&s);
