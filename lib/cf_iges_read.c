@@ -1377,16 +1377,14 @@ int cf_iges_read_trim(const char *path, int entity_de, cf_trim_t *out, char *msg
         memset(out, 0, sizeof *out);
     if (!path || !out || entity_de < 0)
         return cf_fail(msg, msglen, CF_EARG, "cf_iges_read_trim: bad arguments");
-    nf_surf_t s;
     long surf_de = 0;
     {
+        /* Which 128 (its DE): the records scanned, its numbers not parsed. */
         ig_rd_t c;
         double m[IG_MAX_CHAIN][12];
         int nm = 0;
         int rc = ig_load(&c, path, 128, entity_de, 0, msg, msglen, m, &nm);
-        if (!rc)
-            rc = ig_surface(&c, &c.want[0], (const double(*)[12])m, nm, &s);
-        surf_de = c.want[0].de;
+        surf_de = c.nwant ? c.want[0].de : 0;
         ig_rd_free(&c);
         if (rc)
             return rc;
@@ -1406,16 +1404,19 @@ int cf_iges_read_trim(const char *path, int entity_de, cf_trim_t *out, char *msg
         if (n2 < 0 || n2 >= CF_TRIM_MAX_LOOPS || nv < 5 + n2)
             rc = cf_fail(msg, msglen, CF_EPARSE, "%s: DE %ld (144): %ld inner boundaries", path,
                          got, n2);
-        else if (n1 == 0)
-            rc = cf_trim_add_domain(out, &s);
-        else
+        else if (n1 == 0) { /* the outer boundary is the domain's */
+            nf_surf_t s;
+            if (!(rc = cf_iges_read(path, (int)surf_de, &s, msg, msglen))) {
+                rc = cf_trim_add_domain(out, &s);
+                cf_surf_free(&s);
+            }
+        } else
             rc = ig_loop(path, v[4], out, msg, msglen);
         for (long k = 0; !rc && k < n2; k++)
             rc = ig_loop(path, v[5 + k], out, msg, msglen);
         free(v);
         break;
     }
-    cf_surf_free(&s);
     if (rc)
         cf_trim_free(out);
     return rc;
