@@ -174,6 +174,25 @@ static void test_iges_roundtrip(void **state)
     assert_memory_equal(r.cp, s.cp, sizeof(double) * 12);
     cf_surf_free(&r);
     cf_trim_free(&back);
+    /* N1 = 0 in the 144: the outer boundary is the domain's four sides. */
+    FILE *f = fopen(path, "r+b");
+    assert_non_null(f);
+    static char text[1 << 20];
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    text[n] = '\0';
+    char *at = strstr(text, "\n144,1,1,2,");
+    assert_non_null(at);
+    at[7] = '0'; /* same length: the fixed columns stay */
+    rewind(f);
+    assert_int_equal(fwrite(text, 1, n, f), n);
+    fclose(f);
+    assert_int_equal(cf_iges_read_trim(path, 0, &back, msg, sizeof msg), CF_OK);
+    assert_int_equal(back.nloops, 3);
+    assert_int_equal(back.loop[0].n, 4);
+    assert_near(back.loop[0].c[1].cp[0], 1.0, 0); /* (u1, v0) to (u1, v1) */
+    assert_near(back.loop[0].c[1].cp[4], 1.0, 0);
+    assert_true(cf_trim_equal(&(cf_trim_t){2, t.loop + 1}, &(cf_trim_t){2, back.loop + 1}));
+    cf_trim_free(&back);
     /* Not trimmed: no loops. */
     assert_int_equal(cf_iges_write(path, &s, "plain", msg, sizeof msg), CF_OK);
     assert_int_equal(cf_surfio_read_trim(path, 0, &back, msg, sizeof msg), CF_OK);
