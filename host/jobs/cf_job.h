@@ -57,7 +57,8 @@ void cf_job_folder_name(unsigned long part, long long utc, char *buf, size_t n);
 int cf_job_unique_name(unsigned long part, long long utc, unsigned seq, char *buf, size_t n);
 
 /* Write dir/fitted.igs, dir/report.json and cf_jobfiles' fitted.stp,
- * deviations.csv and report.dfq as one: both into a hidden
+ * deviations.csv and report.dfq as one (the surfaces as the trimmed face
+ * meta->nominal is, when it is one): both into a hidden
  * temporary sibling ".DIR.tmp.PID" (dir's parent must exist), then renamed
  * to dir, which must not exist: an export never overwrites one, and a
  * reader never sees a folder half written. CF_EIO with msg on failure

@@ -8,6 +8,7 @@
 #include "cf_seedgrid.h"
 #include "cf_step.h"
 #include "cf_store_file.h"
+#include "cf_surfio.h"
 #include "cf_version.h"
 #include "rig_err.h"
 #include <math.h>
@@ -104,15 +105,34 @@ static int deviations(const cf_job_result_t *r, const cf_job_meta_t *meta, const
     return rc;
 }
 
-int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *dir,
-                      char *msg, size_t ml)
+int cf_jobfiles_trim(const cf_job_result_t *r, const cf_job_meta_t *meta, cf_trim_t *trim,
+                     char *msg, size_t ml)
+{
+    double u0, u1, v0, v1;
+    memset(trim, 0, sizeof *trim);
+    if (!meta->nominal || !*meta->nominal)
+        return CF_OK;
+    int rc = cf_surfio_read_trim(meta->nominal, 0, trim, msg, ml);
+    if (rc || !trim->nloops)
+        return rc;
+    nf_surf_domain(&r->surf, &u0, &u1, &v0, &v1);
+    if ((rc = cf_trim_check(trim, &r->surf, 1e-9 * fmax(u1 - u0, v1 - v0), msg, ml)))
+        cf_trim_free(trim);
+    return rc;
+}
+
+int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const cf_trim_t *trim,
+                      const char *dir, char *msg, size_t ml)
 {
     char path[4200];
     if (!r->stats)
         return cf_fail(msg, ml, CF_EARG, "export: the result has no deviations");
     snprintf(path, sizeof path, "%s/fitted.stp", dir);
-    int rc =
-        cf_step_write_at(path, &r->surf, "cellfit serve", cf_version_string(), meta->utc, msg, ml);
+    int rc = trim && trim->nloops
+                 ? cf_step_write_trimmed_at(path, &r->surf, trim, "cellfit serve",
+                                            cf_version_string(), meta->utc, NULL, msg, ml)
+                 : cf_step_write_at(path, &r->surf, "cellfit serve", cf_version_string(), meta->utc,
+                                    msg, ml);
     if (!rc) {
         snprintf(path, sizeof path, "%s/deviations.csv", dir);
         rc = deviations(r, meta, path, msg, ml);

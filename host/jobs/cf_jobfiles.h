@@ -11,18 +11,26 @@
 
 #include "cf_dfq.h"
 #include "cf_job.h"
+#include "cf_trim.h"
 #include <stddef.h>
 
 /* The names written into a folder, NULL-terminated (for clean-up). */
 extern const char *const cf_jobfiles_names[];
 
-/* Write dir/fitted.stp, dir/deviations.csv and dir/report.dfq for result r
- * (r->stats must be there). The points come from meta->points, or from
+/* Write dir/fitted.stp (trimmed by trim when it has loops),
+ * dir/deviations.csv and dir/report.dfq for result r (r->stats must be
+ * there). The points come from meta->points, or from
  * meta->journal when there is no points file; with neither, no CSV is
  * written. CF_OK, or a CF_E* code with msg (files written so far are left
  * for the caller's clean-up). */
-int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *dir,
-                      char *msg, size_t ml);
+int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const cf_trim_t *trim,
+                      const char *dir, char *msg, size_t ml);
+
+/* The trim of meta->nominal (cf_surfio_read_trim; none without a nominal),
+ * checked to lie in r->surf's domain with closed loops. trim: cf_trim_free
+ * it (empty on failure). CF_OK or the reader's error with msg. */
+int cf_jobfiles_trim(const cf_job_result_t *r, const cf_job_meta_t *meta, cf_trim_t *trim,
+                     char *msg, size_t ml);
 
 /* The DFQ's five characteristics of a deviation summary, as `cellfit
  * report --dfq` writes them (docs/formats.md), with within_pct the lower

@@ -12,12 +12,25 @@
 # convert` keeps the trim: IGES read and written again is the same file, and
 # our STEP reads back to the same trim as our IGES. OCCT's STEP of the
 # nominal (ADVANCED_FACE bounds with PCURVEs) as the base keeps its bounds.
+# `cellfit serve` (on 127.0.0.1, port 0, stopped by PID) exports the fit of
+# the trimmed nominal as the same trimmed face, IGES and STEP.
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
 HERE=$(cd "$(dirname "$0")" && pwd)
+PY=/usr/bin/python3
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-trim.XXXXXX")
-trap 'rm -rf "$T"' EXIT
+pids=""
+stop_pids() { # the servers we started, by PID: TERM, a short wait, KILL
+    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
+    for p in $pids; do
+        i=0
+        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+        kill -KILL "$p" 2>/dev/null
+    done
+    pids=""
+}
+trap 'stop_pids; rm -rf "$T"' EXIT
 if ! sh tests/occt/build.sh "$T/occt" >"$T/occt.log" 2>&1; then
     if [ "${CI:-}" = true ]; then no "OpenCASCADE check could not be built: $(tail -2 "$T/occt.log")"; else
         echo "skip OpenCASCADE trim check: $(tail -1 "$T/occt.log")"; fi
@@ -142,5 +155,41 @@ if "$CF" convert "$T/fit.stp" "$T/c/x.igs" 2>"$T/err" && "$CF" convert "$T/fit.i
 else
     no "convert fit.stp: $(tail -2 "$T/err")"
 fi
+# The cell: serve with the trimmed nominal, FIT and EXPORT from a Modbus
+# client (pymodbus); the exported fitted.igs and fitted.stp are the same
+# trimmed face for OCCT.
+mkdir -p "$T/results"
+serve_start cell --nominal "$T/nominal.igs" --points "$T/pts.xyz" --results "$T/results"
+"$PY" - "$port" "$T/results" "$HERE" >"$T/cell.out" 2>&1 <<'PYEOF'
+import glob, sys
+sys.path.insert(0, sys.argv[3])
+from plc_cycle import Cell, PART, FIT, EXPORT, ERROR
+c = Cell(int(sys.argv[1]))
+c.write(PART, c.words(17) + [1, 0] + c.fwords(0.01))
+for cmd in (FIT, EXPORT):
+    c.command(cmd)
+    s = c.wait_done(c.seq)
+    if s["status"] & ERROR:
+        sys.exit("FAIL command %d: status 0x%x" % (cmd, s["status"]))
+d = glob.glob(sys.argv[2] + "/17_*")
+print(d[0] if len(d) == 1 else "FAIL %d folders" % len(d))
+PYEOF
+d=$(tail -1 "$T/cell.out")
+if [ -f "$d/fitted.igs" ] && [ -f "$d/fitted.stp" ]; then
+    ok "serve: FIT and EXPORT of the trimmed nominal"
+    for f in fitted.igs fitted.stp; do
+        "$OT" read "$d/$f" <"$T/check.uv" >"$T/cell.occt" 2>/dev/null
+        "$CF" eval "$d/$f" "$T/check.uv" >"$T/cell.eval"
+        python3 "$HERE/trim_check.py" "$T/nominal.occt" "$T/cell.occt" "$T/cell.eval" "serve's $f" >"$T/check.out" 2>&1
+        while read -r st rest; do
+            if [ "$st" = ok ]; then ok "$rest"; else no "$rest"; fi
+        done <"$T/check.out"
+    done
+else
+    no "serve: $(tail -3 "$T/cell.out"; tail -3 "$T/cell.log")"
+fi
+stop_pids
+grep -q "Sanitizer\|runtime error" "$T/cell.log" && no "serve: a sanitizer report: $(grep -m1 "Sanitizer\|runtime error" "$T/cell.log")" ||
+    ok "serve: no sanitizer report in its log"
 echo "trim: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
