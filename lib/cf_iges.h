@@ -4,6 +4,7 @@
 #ifndef CF_IGES_H
 #define CF_IGES_H
 
+#include "cf_trim.h"
 #include "nf_curve.h"
 #include "nf_surf.h"
 #include <stddef.h>
@@ -50,5 +51,22 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
 /* Heap storage for a curve of this shape (weights 1); CF_ENOMEM. */
 int cf_curve_alloc(nf_curve_t *c, int p, int n);
 void cf_curve_free(nf_curve_t *c);
+
+/* The trim of the 128 cf_iges_read(path, entity_de) reads: the loops of the
+ * first 144 (trimmed surface) over it, outer boundary first (the domain's
+ * sides when N1 = 0), each from its 142's parameter-space curve (a 126, or a
+ * 102 of 126s; the model-space curves are not read). out->nloops = 0 when
+ * no 144 trims that surface. Errors as cf_iges_read; a 142 with no
+ * parameter-space curve is CF_EUNSUPPORTED. */
+int cf_iges_read_trim(const char *path, int entity_de, cf_trim_t *out, char *msg, size_t msglen);
+
+/* cf_iges_write_at of s trimmed by t (t->nloops > 0): the 128, each loop's
+ * curves in parameter space (126, form 0, use flag 05) and as 3-D edges on s
+ * (126, cf_trim_edge3d), a 102 per loop side when a loop has more than one
+ * curve, a 142 per loop and one 144 over them; everything but the 144
+ * physically dependent. *edge_err (may be NULL): the largest 3-D edge error. */
+int cf_iges_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim_t *t,
+                             const char *name, long long utc, double *edge_err, char *msg,
+                             size_t msglen);
 
 #endif

@@ -10,6 +10,7 @@
 #include "cf_fmt.h"
 #include "cf_iges.h"
 #include "cf_surf.h"
+#include "cf_trim.h"
 #include "nf_basis.h"
 #include "nf_err.h"
 #include <errno.h>
@@ -373,7 +374,13 @@ static int ig_add_want(ig_rd_t *c, long idx)
 
 static const char *ig_tname(int type)
 {
-    return type == 126 ? "rational B-spline curve" : "rational B-spline surface";
+    switch (type) {
+    case 126: return "rational B-spline curve";
+    case 144: return "trimmed surface";
+    case 142: return "curve on a parametric surface";
+    case 102: return "composite curve";
+    default: return "rational B-spline surface";
+    }
 }
 
 /* At the start of the P section: find the wanted entity and its matrices. */
@@ -1251,5 +1258,166 @@ int cf_iges_read_curve(const char *path, int entity_de, long nth, nf_curve_t *ou
     ig_rd_free(&c);
     if (rc)
         cf_curve_free(out);
+    return rc;
+}
+
+/* ------------------------------------------- entities 144, 142, 102 */
+
+/* Every parameter of entity type at DE de (or the nth of its type when de
+ * is 0) as integers (an empty field is 0, IGES's default): *v allocated,
+ * *nv of them, *gotde its DE number. */
+static int ig_ints(const char *path, int type, int de, long nth, long **v, long *nv, long *gotde,
+                   char *msg, size_t ml)
+{
+    ig_rd_t c;
+    double m[IG_MAX_CHAIN][12];
+    int nm = 0;
+    *v = NULL;
+    int rc = ig_load(&c, path, type, de, nth, msg, ml, m, &nm);
+    long nf = 0;
+    if (!rc)
+        rc = ig_count(&c, &c.want[0], &nf);
+    if (!rc && !(*v = calloc((size_t)nf, sizeof **v)))
+        rc = ig_fail(&c, CF_ENOMEM, "out of memory");
+    size_t pos = 0;
+    for (long i = 0; !rc && i < nf; i++) {
+        ig_fld_t f;
+        ig_next(&c, &c.want[0], &pos, &f); /* counted before: cannot fail */
+        int r = ig_int(&f, &(*v)[i]);
+        if (r == IG_NUM_EMPTY)
+            (*v)[i] = 0;
+        else if (r != IG_NUM_OK)
+            rc =
+                ig_pfail(&c, &c.want[0], f.at, CF_EPARSE, "parameter %ld '%.*s' %s, not an integer",
+                         i, (int)(f.n > 40 ? 40 : f.n), f.s, ig_numwhy(r));
+    }
+    if (!rc && (*v)[0] != type)
+        rc = ig_pfail(&c, &c.want[0], 0, CF_EPARSE, "parameter data of entity %ld, D entry says %d",
+                      (*v)[0], type);
+    *nv = nf;
+    *gotde = rc ? 0 : c.want[0].de;
+    ig_rd_free(&c);
+    if (rc) {
+        free(*v);
+        *v = NULL;
+    }
+    return rc;
+}
+
+/* The 126 at DE de, in parameter space: no unit applied. */
+static int ig_pcurve(const char *path, long de, nf_curve_t *out, char *msg, size_t ml)
+{
+    ig_rd_t c;
+    double m[IG_MAX_CHAIN][12];
+    int nm = 0;
+    memset(out, 0, sizeof *out);
+    int rc = ig_load(&c, path, 126, (int)de, 0, msg, ml, m, &nm);
+    if (!rc)
+        rc = ig_curve(&c, &c.want[0], (const double(*)[12])m, nm, out);
+    ig_rd_free(&c);
+    if (rc)
+        cf_curve_free(out);
+    return rc;
+}
+
+/* The parameter-space curve B of the 142 at DE de: one 126, or a 102 of
+ * 126s, appended to t as a loop. */
+static int ig_loop(const char *path, long de, cf_trim_t *t, char *msg, size_t ml)
+{
+    long *v, nv, got;
+    if (de < 1 || de > IG_MAX_SEQ)
+        return cf_fail(msg, ml, CF_EPARSE, "%s: trimmed surface: boundary pointer %ld", path, de);
+    int rc = ig_ints(path, 142, (int)de, 0, &v, &nv, &got, msg, ml);
+    if (rc)
+        return rc;
+    long bptr = nv > 3 ? v[3] : 0;
+    free(v);
+    if (bptr <= 0)
+        return cf_fail(msg, ml, CF_EUNSUPPORTED,
+                       "%s: DE %ld (142): no curve in parameter space (only model space: not "
+                       "supported)",
+                       path, de);
+    long one[1] = {bptr}, *list = one, n = 1;
+    char m2[8];
+    /* One 126, or a composite curve (102) of them. */
+    nf_curve_t probe;
+    int is126 = ig_pcurve(path, bptr, &probe, m2, sizeof m2) == CF_OK;
+    cf_curve_free(&probe);
+    if (!is126) {
+        if ((rc = ig_ints(path, 102, (int)bptr, 0, &v, &nv, &got, msg, ml)))
+            return rc;
+        n = nv > 1 ? v[1] : 0;
+        if (n < 1 || n > CF_TRIM_MAX_CURVES || nv < 2 + n) {
+            free(v);
+            return cf_fail(msg, ml, CF_EPARSE, "%s: DE %ld (102): %ld curves", path, bptr, n);
+        }
+        list = v + 2;
+    } else {
+        v = NULL;
+    }
+    nf_curve_t *c = calloc((size_t)n, sizeof *c);
+    rc = c ? CF_OK : cf_fail(msg, ml, CF_ENOMEM, "%s: out of memory", path);
+    for (long i = 0; !rc && i < n; i++)
+        rc = ig_pcurve(path, list[i], &c[i], msg, ml);
+    free(v);
+    if (rc) {
+        for (long i = 0; c && i < n; i++)
+            cf_curve_free(&c[i]);
+        free(c);
+        return rc;
+    }
+    if ((rc = cf_trim_add_loop(t, c, (int)n)))
+        return cf_fail(msg, ml, rc, "%s: DE %ld: too many trim loops or curves", path, de);
+    return CF_OK;
+}
+
+int cf_iges_read_trim(const char *path, int entity_de, cf_trim_t *out, char *msg, size_t msglen)
+{
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!path || !out || entity_de < 0)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_read_trim: bad arguments");
+    long surf_de = 0;
+    {
+        /* Which 128 (its DE): the records scanned, its numbers not parsed. */
+        ig_rd_t c;
+        double m[IG_MAX_CHAIN][12];
+        int nm = 0;
+        int rc = ig_load(&c, path, 128, entity_de, 0, msg, msglen, m, &nm);
+        surf_de = c.nwant ? c.want[0].de : 0;
+        ig_rd_free(&c);
+        if (rc)
+            return rc;
+    }
+    int rc = CF_OK;
+    for (long nth = 0;; nth++) {
+        long *v, nv, got;
+        char m2[512];
+        if (ig_ints(path, 144, 0, nth, &v, &nv, &got, m2, sizeof m2) != CF_OK)
+            break; /* no (more) 144: the surface is whole */
+        /* 144: PTS N1 N2 PTO PTI(1..N2) */
+        long n1 = nv > 2 ? v[2] : 0, n2 = nv > 3 ? v[3] : 0;
+        if (nv < 5 || v[1] != surf_de) {
+            free(v);
+            continue;
+        }
+        if (n2 < 0 || n2 >= CF_TRIM_MAX_LOOPS || nv < 5 + n2)
+            rc = cf_fail(msg, msglen, CF_EPARSE, "%s: DE %ld (144): %ld inner boundaries", path,
+                         got, n2);
+        else if (n1 == 0) { /* the outer boundary is the domain's */
+            nf_surf_t s;
+            if (!(rc = cf_iges_read(path, (int)surf_de, &s, msg, msglen))) {
+                rc = cf_trim_add_domain(out, &s);
+                cf_surf_free(&s);
+            }
+        } else
+            rc = ig_loop(path, v[4], out, msg, msglen);
+        for (long k = 0; !rc && k < n2; k++)
+            rc = ig_loop(path, v[5 + k], out, msg, msglen);
+        free(v);
+        break;
+    }
+    if (rc)
+        cf_trim_free(out);
     return rc;
 }

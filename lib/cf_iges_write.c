@@ -357,3 +357,184 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
     fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
     return cf_atomic_commit(&aw, 0, msg, msglen);
 }
+
+/* ------------------------------------------ trimmed surface output */
+
+enum { IGT_SURF, IGT_CURVE, IGT_INTS };
+
+/* One entity of a trimmed-surface file. */
+typedef struct ig_ent {
+    int type, kind;
+    const char *status; /* D field 9 */
+    const char *label;
+    const nf_curve_t *c; /* IGT_CURVE */
+    long *iv;            /* IGT_INTS: the parameters after the type */
+    int niv;
+} ig_ent_t;
+
+static void ig_edata(ig_w_t *w, const ig_ent_t *e, const nf_surf_t *s, int poly)
+{
+    if (e->kind == IGT_SURF) {
+        ig_pdata(w, s, poly);
+    } else if (e->kind == IGT_CURVE) {
+        ig_cdata(w, e->c);
+    } else {
+        ig_int_tok(w, e->type);
+        for (int i = 0; i < e->niv; i++) {
+            char b[24];
+            snprintf(b, sizeof b, "%ld", e->iv[i]);
+            ig_tok(w, b, i + 1 < e->niv ? ',' : ';');
+        }
+        ig_flush(w);
+    }
+}
+
+/* Entities: the 128 (DE 1), per loop its 2-D curves [102], 3-D curves [102],
+ * 142; the 144 last. ents and ints sized by the caller from the counts. */
+static int ig_trim_ents(const cf_trim_t *t, const nf_curve_t *e3, ig_ent_t *ents, long *ints)
+{
+    int ne = 0, ic = 0;
+    long *iv = ints;
+    long bound[CF_TRIM_MAX_LOOPS];
+    ents[ne++] = (ig_ent_t){128, IGT_SURF, "00010000", "BSURF", NULL, NULL, 0};
+    for (int k = 0; k < t->nloops; k++) {
+        const cf_trim_loop_t *l = &t->loop[k];
+        long side[2];
+        for (int d = 0; d < 2; d++) { /* 0: parameter space, 1: model space */
+            long first = 2L * ne + 1;
+            for (int i = 0; i < l->n; i++)
+                ents[ne++] = (ig_ent_t){126,
+                                        IGT_CURVE,
+                                        d ? "00010000" : "00010500",
+                                        d ? "EDGE" : "PCURVE",
+                                        d ? &e3[ic + i] : &l->c[i],
+                                        NULL,
+                                        0};
+            side[d] = first;
+            if (l->n > 1) {
+                iv[0] = l->n;
+                for (int i = 0; i < l->n; i++)
+                    iv[1 + i] = first + 2L * i;
+                ents[ne++] = (ig_ent_t){102, IGT_INTS, d ? "00010000" : "00010500", "CCURVE", NULL,
+                                        iv,  l->n + 1};
+                side[d] = 2L * ne - 1;
+                iv += l->n + 1;
+            }
+        }
+        ic += l->n;
+        /* 142: CRTN 0 (unspecified), SPTR, BPTR, CPTR, PREF 1 (S(B) preferred) */
+        iv[0] = 0, iv[1] = 1, iv[2] = side[0], iv[3] = side[1], iv[4] = 1;
+        ents[ne++] = (ig_ent_t){142, IGT_INTS, "00010000", "BOUNDARY", NULL, iv, 5};
+        iv += 5;
+        bound[k] = 2L * ne - 1;
+    }
+    iv[0] = 1, iv[1] = 1, iv[2] = t->nloops - 1; /* 144: PTS N1 N2 PTO PTI... */
+    for (int k = 0; k < t->nloops; k++)
+        iv[3 + k] = bound[k];
+    ents[ne++] = (ig_ent_t){144, IGT_INTS, "00000000", "TRIMSURF", NULL, iv, 3 + t->nloops};
+    return ne;
+}
+
+int cf_iges_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim_t *t,
+                             const char *name, long long utc, double *edge_err, char *msg,
+                             size_t msglen)
+{
+    if (!path || !*path || !s || !t || t->nloops < 1 || t->nloops > CF_TRIM_MAX_LOOPS)
+        return cf_fail(msg, msglen, CF_EARG, "cf_iges_write_trimmed: bad arguments");
+    int rc = nf_surf_check(s);
+    if (rc)
+        return cf_fail(msg, msglen, rc, "%s: not written: invalid surface: %s", path,
+                       nf_strerror(rc));
+    long ncurves = 0;
+    for (int k = 0; k < t->nloops; k++)
+        ncurves += t->loop[k].n;
+    long nents = 2 + 2 * ncurves + 3L * t->nloops, nints = 4 + 2 * ncurves + 9L * t->nloops;
+    nf_curve_t *e3 = calloc((size_t)ncurves, sizeof *e3);
+    ig_ent_t *ents = calloc((size_t)nents, sizeof *ents);
+    long *ints = calloc((size_t)nints, sizeof *ints), *dpl = calloc((size_t)nents, sizeof *dpl);
+    double emax = 0.0;
+    rc = e3 && ents && ints && dpl ? CF_OK : CF_ENOMEM;
+    for (int k = 0, ic = 0; !rc && k < t->nloops; k++)
+        for (int i = 0; !rc && i < t->loop[k].n; i++, ic++) {
+            double e;
+            rc = cf_trim_edge3d(s, &t->loop[k].c[i], CF_TRIM_EDGE_TOL, &e3[ic], &e);
+            emax = fmax(emax, e);
+        }
+    if (rc) {
+        rc = cf_fail(msg, msglen, rc, "%s: not written: %s", path,
+                     rc == CF_ENOMEM ? "out of memory" : "a 3-D edge cannot be interpolated");
+        goto out;
+    }
+    if (edge_err)
+        *edge_err = emax;
+    int ne = ig_trim_ents(t, e3, ents, ints);
+    int poly = 1;
+    for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
+        poly &= s->w[i] == s->w[0];
+    long ptot = 0;
+    for (int i = 0; i < ne; i++) { /* dry runs: each entity's P line count */
+        ig_w_t dry = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
+        ig_edata(&dry, &ents[i], s, poly);
+        dpl[i] = dry.seq;
+        ptot += dry.seq;
+    }
+    if (ptot > IG_MAX_SEQ) {
+        rc = cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                     "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence numbers",
+                     path, ptot);
+        goto out;
+    }
+    char nm[65], fname[65], date[72], text[200];
+    const char *base = strrchr(path, '/');
+    ig_clean(nm, name, 64, "surface");
+    ig_clean(fname, base ? base + 1 : path, 64, "surface.igs");
+    time_t tt = (time_t)utc;
+    struct tm tm;
+    if (!gmtime_r(&tt, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
+        tt = 0;
+        gmtime_r(&tt, &tm);
+    }
+    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
+             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    cf_atomic_t aw;
+    if ((rc = cf_atomic_open(&aw, path, msg, msglen)))
+        goto out;
+    FILE *f = aw.f;
+    long cnt[4];
+    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    int tl = snprintf(text, sizeof text,
+                      "cellfit: trimmed rational B-spline surface %s (IGES 5.3, entity 144 over "
+                      "128, %d boundaries)",
+                      nm, t->nloops);
+    for (int at = 0; at < tl; at += IG_GCOLS)
+        ig_wline(&ws, text + at, (size_t)(tl - at));
+    cnt[0] = ws.seq;
+    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), nm, fname, date);
+    cnt[1] = wg.seq;
+    long pstart = 1;
+    for (int i = 0; i < ne; i++) {
+        fprintf(f, "%8d%8ld%8d%8d%8d%8d%8d%8d%8s%c%7d\n", ents[i].type, pstart, 0, 0, 0, 0, 0, 0,
+                ents[i].status, 'D', 2 * i + 1);
+        fprintf(f, "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", ents[i].type, 0, 0, dpl[i], 0, "", "",
+                ents[i].label, 0, 'D', 2 * i + 2);
+        pstart += dpl[i];
+    }
+    cnt[2] = 2L * ne;
+    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    for (int i = 0; i < ne; i++) {
+        wp.de = 2L * i + 1;
+        ig_edata(&wp, &ents[i], s, poly);
+    }
+    cnt[3] = wp.seq;
+    fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
+    rc = cf_atomic_commit(&aw, 0, msg, msglen);
+out:
+    for (long i = 0; e3 && i < ncurves; i++)
+        cf_curve_free(&e3[i]);
+    free(e3);
+    free(ents);
+    free(ints);
+    free(dpl);
+    return rc;
+}

@@ -22,6 +22,7 @@
 #ifndef CF_STEP_H
 #define CF_STEP_H
 
+#include "cf_trim.h"
 #include "nf_surf.h"
 #include <stddef.h>
 
@@ -44,6 +45,26 @@ int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, con
  * CF_EUNSUPPORTED (a surface type or unit we do not take), CF_ENOMEM, or
  * the nf_err_t of nf_surf_check. On failure out is zeroed and owns
  * nothing. */
+/* cf_step_write_at of s trimmed by t (t->nloops > 0): the ADVANCED_FACE's
+ * bounds are t's loops (FACE_OUTER_BOUND first, then FACE_BOUNDs), each an
+ * EDGE_LOOP of ORIENTED_EDGEs of EDGE_CURVEs between VERTEX_POINTs; an edge
+ * is a SURFACE_CURVE: the 3-D B-spline cf_trim_edge3d makes on s, with the
+ * trim curve as its PCURVE (2-D B-spline in a parametric context).
+ * *edge_err (may be NULL): the largest 3-D edge error, mm. */
+int cf_step_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim_t *t,
+                             const char *name, const char *version, long long utc, double *edge_err,
+                             char *msg, size_t msglen);
+
 int cf_step_read(const char *path, long id, nf_surf_t *out, char *msg, size_t msglen);
+
+/* The trim of the surface cf_step_read(path, id) reads: the bounds of the
+ * first ADVANCED_FACE over it, the FACE_OUTER_BOUND first (else the order
+ * of the file), each EDGE_LOOP's edges as their PCURVEs on that surface
+ * (2-D B-splines, plain or rational), turned to run as the face does
+ * (bound, oriented edge and edge senses). out->nloops = 0 when no face
+ * uses the surface, or when an edge has no B-spline PCURVE on it (3-D
+ * curves only, as cellfit's untrimmed faces; LINE or other PCURVEs): the
+ * surface is then taken whole. Errors as cf_step_read. */
+int cf_step_read_trim(const char *path, long id, cf_trim_t *out, char *msg, size_t msglen);
 
 #endif

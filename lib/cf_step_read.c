@@ -5,6 +5,7 @@
  * its CARTESIAN_POINTs, knot multiplicities expanded, the file's length unit
  * applied. The whole file is held in memory while reading. */
 #include "cf_err.h"
+#include "cf_iges.h"
 #include "cf_step.h"
 #include "cf_surf.h"
 #include "nf_err.h"
@@ -660,72 +661,383 @@ out:
     return rc;
 }
 
+/* The file into r->buf and its instances indexed; r->ix and r->buf are the
+ * caller's to free, also on failure. */
+static int sr_load(sr_t *r)
+{
+    const char *path = r->path;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return cf_fail(r->msg, r->msglen, CF_EIO, "%s: cannot open: %s", path, strerror(errno));
+    long len = -1;
+    if (fseek(f, 0, SEEK_END) == 0)
+        len = ftell(f);
+    if (len < 0 || fseek(f, 0, SEEK_SET)) {
+        fclose(f);
+        return cf_fail(r->msg, r->msglen, CF_EIO, "%s: cannot read: %s", path, strerror(errno));
+    }
+    r->buf = malloc((size_t)len + 1);
+    if (!r->buf) {
+        fclose(f);
+        return cf_fail(r->msg, r->msglen, CF_ENOMEM, "%s: out of memory for %ld bytes", path, len);
+    }
+    r->len = fread(r->buf, 1, (size_t)len, f);
+    int bad = ferror(f);
+    fclose(f);
+    r->buf[r->len] = '\0';
+    if (bad || r->len != (size_t)len)
+        return cf_fail(r->msg, r->msglen, CF_EIO, "%s: read error", path);
+    if (memchr(r->buf, '\0', r->len))
+        return cf_fail(r->msg, r->msglen, CF_EPARSE, "%s: binary data (a NUL byte) in a STEP file",
+                       path);
+    return sr_index(r);
+}
+
+/* The surface instance: #id, or the first B_SPLINE_SURFACE_WITH_KNOTS in the file. */
+static int sr_pick(sr_t *r, long id, const sr_rec_t **out)
+{
+    const sr_rec_t *rec = NULL;
+    sc_t c;
+    if (id) {
+        rec = sr_find(r, id);
+        if (!rec)
+            return cf_fail(r->msg, r->msglen, CF_ENOTFOUND, "%s: no instance #%ld", r->path, id);
+        if (sc_part(r, rec, "B_SPLINE_SURFACE_WITH_KNOTS", &c) != CF_OK) {
+            char kw[64];
+            rec_type(r, rec, kw, sizeof kw);
+            return sr_fail(r, rec->at, CF_EUNSUPPORTED,
+                           "#%ld is %s, not a B_SPLINE_SURFACE_WITH_KNOTS", id, kw);
+        }
+    } else {
+        /* The first in the file, not the lowest number. */
+        for (size_t i = 0; i < r->nix; i++)
+            if (sc_part(r, &r->ix[i], "B_SPLINE_SURFACE_WITH_KNOTS", &c) == CF_OK &&
+                (!rec || r->ix[i].at < rec->at))
+                rec = &r->ix[i];
+        if (!rec)
+            return cf_fail(r->msg, r->msglen, CF_ENOTFOUND,
+                           "%s: no B_SPLINE_SURFACE_WITH_KNOTS in the file", r->path);
+    }
+    *out = rec;
+    return CF_OK;
+}
+
 int cf_step_read(const char *path, long id, nf_surf_t *out, char *msg, size_t msglen)
 {
     if (!path || !out || id < 0)
         return cf_fail(msg, msglen, CF_EARG, "cf_step_read: bad arguments");
     memset(out, 0, sizeof *out);
     sr_t r = {path, NULL, 0, NULL, 0, msg, msglen};
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return cf_fail(msg, msglen, CF_EIO, "%s: cannot open: %s", path, strerror(errno));
-    int rc = CF_OK;
-    long len = -1;
-    if (fseek(f, 0, SEEK_END) == 0)
-        len = ftell(f);
-    if (len < 0 || fseek(f, 0, SEEK_SET)) {
-        fclose(f);
-        return cf_fail(msg, msglen, CF_EIO, "%s: cannot read: %s", path, strerror(errno));
-    }
-    r.buf = malloc((size_t)len + 1);
-    if (!r.buf) {
-        fclose(f);
-        return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory for %ld bytes", path, len);
-    }
-    r.len = fread(r.buf, 1, (size_t)len, f);
-    int bad = ferror(f);
-    fclose(f);
-    r.buf[r.len] = '\0';
-    if (bad || r.len != (size_t)len) {
-        rc = cf_fail(msg, msglen, CF_EIO, "%s: read error", path);
-        goto out;
-    }
-    if (memchr(r.buf, '\0', r.len)) {
-        rc = cf_fail(msg, msglen, CF_EPARSE, "%s: binary data (a NUL byte) in a STEP file", path);
-        goto out;
-    }
-    if ((rc = sr_index(&r)))
-        goto out;
     const sr_rec_t *rec = NULL;
-    sc_t c;
-    if (id) {
-        rec = sr_find(&r, id);
-        if (!rec) {
-            rc = cf_fail(msg, msglen, CF_ENOTFOUND, "%s: no instance #%ld", path, id);
-            goto out;
-        }
-        if (sc_part(&r, rec, "B_SPLINE_SURFACE_WITH_KNOTS", &c) != CF_OK) {
-            char kw[64];
-            rec_type(&r, rec, kw, sizeof kw);
-            rc = sr_fail(&r, rec->at, CF_EUNSUPPORTED,
-                         "#%ld is %s, not a B_SPLINE_SURFACE_WITH_KNOTS", id, kw);
-            goto out;
-        }
-    } else {
-        /* The first in the file, not the lowest number. */
-        for (size_t i = 0; i < r.nix; i++)
-            if (sc_part(&r, &r.ix[i], "B_SPLINE_SURFACE_WITH_KNOTS", &c) == CF_OK &&
-                (!rec || r.ix[i].at < rec->at))
-                rec = &r.ix[i];
-        if (!rec) {
-            rc = cf_fail(msg, msglen, CF_ENOTFOUND,
-                         "%s: no B_SPLINE_SURFACE_WITH_KNOTS in the file", path);
-            goto out;
-        }
-    }
-    rc = sr_surface(&r, rec, out);
-out:
+    int rc = sr_load(&r);
+    if (!rc)
+        rc = sr_pick(&r, id, &rec);
+    if (!rc)
+        rc = sr_surface(&r, rec, out);
     free(r.ix);
     free(r.buf);
     return rc;
+}
+
+/* ---- the face's bounds (trim) --------------------------------------------------- */
+
+/* An enumeration ".X." into kw. */
+static int sc_enum(sc_t *c, char *kw, size_t kl)
+{
+    if (sc_peek(c) != '.')
+        return sr_fail(c->r, c->p, CF_EPARSE, "expected an enumeration");
+    size_t q = keyword(c->r, c->p + 1, kw, kl);
+    if (q >= c->end || c->r->buf[q] != '.')
+        return sr_fail(c->r, c->p, CF_EPARSE, "bad enumeration");
+    c->p = q + 1;
+    return CF_OK;
+}
+
+/* The cursor just inside instance id's NAME( , past its first k parameters. */
+static int sr_args(const sr_t *r, long id, const char *name, int k, sc_t *c)
+{
+    const sr_rec_t *rec = sr_find(r, id);
+    if (!rec)
+        return cf_fail(r->msg, r->msglen, CF_EPARSE, "%s: #%ld is not in the file", r->path, id);
+    int rc = sc_part(r, rec, name, c);
+    if (rc == CF_ENOTFOUND) {
+        char kw[64];
+        rec_type(r, rec, kw, sizeof kw);
+        return sr_fail(r, rec->at, CF_EUNSUPPORTED, "#%ld is %s, not %s (in a face's bounds)", id,
+                       kw, name);
+    }
+    if (rc)
+        return rc;
+    c->p++;
+    int more;
+    for (int i = 0; i < k && !rc; i++)
+        if (!(rc = sc_skip(c)))
+            rc = sc_sep(c, &more);
+    return rc;
+}
+
+/* A list "(#a, #b, ...)" of references appended to v. */
+static int sc_refs(sc_t *c, sr_vec_t *v)
+{
+    int rc = sc_expect(c, '(');
+    for (int more = 1; !rc && more;) {
+        long id;
+        if ((rc = sc_ref(c, &id)) || (rc = vec_push(v, (double)id)))
+            break;
+        rc = sc_sep(c, &more);
+    }
+    if (rc == CF_ENOMEM)
+        return cf_fail(c->r->msg, c->r->msglen, rc, "%s: out of memory", c->r->path);
+    return rc;
+}
+
+/* A 2-D B-spline curve (B_SPLINE_CURVE_WITH_KNOTS, or the rational complex
+ * instance) into out as (u, v, 0) points. */
+static int sr_curve2d(const sr_t *r, long id, nf_curve_t *out)
+{
+    const sr_rec_t *rec = sr_find(r, id);
+    sr_vec_t pts = {0}, mult = {0}, kn = {0}, wts = {0}, tmp = {0};
+    sc_t c;
+    long p = 0;
+    size_t nm, nk, nw;
+    int rc, more;
+    if (!rec)
+        return cf_fail(r->msg, r->msglen, CF_EPARSE, "%s: #%ld is not in the file", r->path, id);
+    int complex = sc_peek(&(sc_t){r, rec->at, rec->end}) == '(';
+    rc = sc_part(r, rec, complex ? "B_SPLINE_CURVE" : "B_SPLINE_CURVE_WITH_KNOTS", &c);
+    if (rc == CF_ENOTFOUND) {
+        char kw[64];
+        rec_type(r, rec, kw, sizeof kw);
+        return sr_fail(r, rec->at, CF_ENOTFOUND,
+                       "#%ld: a parameter-space curve of type %s (only B-splines are read)", id,
+                       kw);
+    }
+    if (rc)
+        return rc;
+    c.p++;
+    if (!complex && ((rc = sc_skip(&c)) || (rc = sc_sep(&c, &more))))
+        goto out;
+    if ((rc = sc_int(&c, &p)) || (rc = sc_sep(&c, &more)) || (rc = sc_refs(&c, &pts)))
+        goto out;
+    for (int k = 0; k < 3; k++) /* form, closed, self_intersect */
+        if ((rc = sc_sep(&c, &more)) || (rc = sc_skip(&c)))
+            goto out;
+    if (complex) {
+        if ((rc = sc_part(r, rec, "B_SPLINE_CURVE_WITH_KNOTS", &c)))
+            goto out;
+        c.p++;
+    } else if ((rc = sc_sep(&c, &more)))
+        goto out;
+    if ((rc = sc_reals(&c, &mult, &nm)) || (rc = sc_sep(&c, &more)) ||
+        (rc = sc_reals(&c, &kn, &nk)))
+        goto out;
+    if (complex && (rc = sc_part(r, rec, "RATIONAL_B_SPLINE_CURVE", &c)) == CF_OK) {
+        c.p++;
+        if ((rc = sc_reals(&c, &wts, &nw)))
+            goto out;
+    } else if (rc == CF_ENOTFOUND)
+        rc = CF_OK;
+    if (rc)
+        goto out;
+    const int n = (int)pts.n;
+    if (p < 1 || p > NF_MAX_DEGREE || n < p + 1 || n > NF_MAX_CP || nm != nk ||
+        (wts.n && (int)wts.n != n)) {
+        rc = sr_fail(r, rec->at, CF_EPARSE, "#%ld: a degree %ld curve of %d points, %zu weights",
+                     id, p, n, wts.n);
+        goto out;
+    }
+    if ((rc = cf_curve_alloc(out, (int)p, n))) {
+        rc = cf_fail(r->msg, r->msglen, rc, "%s: out of memory", r->path);
+        goto out;
+    }
+    if ((rc = expand(r, rec->at, "curve", &mult, 0, &kn, 0, nm, out->U, (long)n + p + 1)))
+        goto out;
+    for (int i = 0; i < n && !rc; i++) {
+        sc_t pc;
+        size_t got;
+        int m2;
+        tmp.n = 0;
+        if ((rc = sr_args(r, (long)pts.d[i], "CARTESIAN_POINT", 1, &pc)) ||
+            (rc = sc_reals(&pc, &tmp, &got)))
+            break;
+        (void)m2;
+        if (got != 2) {
+            rc = sr_fail(r, rec->at, CF_EPARSE,
+                         "#%ld: a parameter-space point with %zu coordinates", id, got);
+            break;
+        }
+        out->cp[3 * i] = tmp.d[0];
+        out->cp[3 * i + 1] = tmp.d[1];
+        out->cp[3 * i + 2] = 0.0;
+        out->w[i] = wts.n ? wts.d[i] : 1.0;
+    }
+    if (!rc && (rc = nf_curve_check(out)))
+        rc = sr_fail(r, rec->at, rc, "#%ld: invalid curve: %s", id, nf_strerror(rc));
+out:
+    free(pts.d);
+    free(mult.d);
+    free(kn.d);
+    free(wts.d);
+    free(tmp.d);
+    if (rc)
+        cf_curve_free(out);
+    return rc;
+}
+
+/* The parameter-space curve of EDGE_CURVE ec on surface surf: the PCURVE
+ * (of a SURFACE_CURVE or SEAM_CURVE) over surf; *same its same_sense. */
+static int sr_edge_pcurve(const sr_t *r, long ec, long surf, nf_curve_t *out, int *same)
+{
+    sc_t c;
+    long v0, v1, geom;
+    char kw[16];
+    int more;
+    int rc = sr_args(r, ec, "EDGE_CURVE", 1, &c);
+    if (rc || (rc = sc_ref(&c, &v0)) || (rc = sc_sep(&c, &more)) || (rc = sc_ref(&c, &v1)) ||
+        (rc = sc_sep(&c, &more)) || (rc = sc_ref(&c, &geom)) || (rc = sc_sep(&c, &more)) ||
+        (rc = sc_enum(&c, kw, sizeof kw)))
+        return rc;
+    *same = !strcmp(kw, "T");
+    const sr_rec_t *g = sr_find(r, geom);
+    sc_t gc;
+    if (!g)
+        return cf_fail(r->msg, r->msglen, CF_EPARSE, "%s: #%ld is not in the file", r->path, geom);
+    const char *kind = sc_part(r, g, "SURFACE_CURVE", &gc) == CF_OK ? "SURFACE_CURVE"
+                       : sc_part(r, g, "SEAM_CURVE", &gc) == CF_OK  ? "SEAM_CURVE"
+                                                                    : NULL;
+    if (!kind)
+        return sr_fail(r, g->at, CF_ENOTFOUND,
+                       "#%ld: edge #%ld has no curve in parameter space (a 3-D curve only)", geom,
+                       ec);
+    sr_vec_t pcs = {0};
+    if ((rc = sr_args(r, geom, kind, 2, &gc)) || (rc = sc_refs(&gc, &pcs))) {
+        free(pcs.d);
+        return rc;
+    }
+    rc = sr_fail(r, g->at, CF_ENOTFOUND, "#%ld: no PCURVE on surface #%ld", geom, surf);
+    for (size_t i = 0; i < pcs.n; i++) {
+        sc_t pc;
+        long basis, defrep, item;
+        sr_vec_t items = {0};
+        if (sr_args(r, (long)pcs.d[i], "PCURVE", 1, &pc) || sc_ref(&pc, &basis) || basis != surf)
+            continue;
+        if ((rc = sc_sep(&pc, &more)) || (rc = sc_ref(&pc, &defrep)) ||
+            (rc = sr_args(r, defrep, "DEFINITIONAL_REPRESENTATION", 1, &pc)) ||
+            (rc = sc_refs(&pc, &items))) {
+            free(items.d);
+            break;
+        }
+        item = items.n ? (long)items.d[0] : 0;
+        free(items.d);
+        rc = sr_curve2d(r, item, out);
+        break;
+    }
+    free(pcs.d);
+    return rc;
+}
+
+/* One bound (FACE_OUTER_BOUND or FACE_BOUND) as a loop of curves in the
+ * order and direction the face runs them. */
+static int sr_bound(const sr_t *r, long b, long surf, cf_trim_t *t, int *outer)
+{
+    sc_t c;
+    long loop;
+    char kw[16];
+    int more, rc;
+    const sr_rec_t *rec = sr_find(r, b);
+    *outer = rec && sc_part(r, rec, "FACE_OUTER_BOUND", &c) == CF_OK;
+    rc = sr_args(r, b, *outer ? "FACE_OUTER_BOUND" : "FACE_BOUND", 1, &c);
+    if (rc || (rc = sc_ref(&c, &loop)) || (rc = sc_sep(&c, &more)) ||
+        (rc = sc_enum(&c, kw, sizeof kw)))
+        return rc;
+    int bsense = !strcmp(kw, "T");
+    sr_vec_t oes = {0};
+    if ((rc = sr_args(r, loop, "EDGE_LOOP", 1, &c)) || (rc = sc_refs(&c, &oes))) {
+        free(oes.d);
+        return rc;
+    }
+    const int n = (int)oes.n;
+    nf_curve_t *cv = n > 0 && n <= CF_TRIM_MAX_CURVES ? calloc((size_t)n, sizeof *cv) : NULL;
+    if (!cv) {
+        free(oes.d);
+        return sr_fail(r, rec ? rec->at : 0, n ? CF_ENOMEM : CF_EPARSE, "#%ld: %d edges", loop, n);
+    }
+    for (int i = 0; i < n && !rc; i++) {
+        long ec;
+        int same;
+        if ((rc = sr_args(r, (long)oes.d[i], "ORIENTED_EDGE", 3, &c)) || (rc = sc_ref(&c, &ec)) ||
+            (rc = sc_sep(&c, &more)) || (rc = sc_enum(&c, kw, sizeof kw)))
+            break;
+        int osense = !strcmp(kw, "T");
+        /* The bound's sense, the oriented edge's and the edge's own: their
+         * parity says whether the curve runs the way the face goes. */
+        int k = bsense ? i : n - 1 - i;
+        if ((rc = sr_edge_pcurve(r, ec, surf, &cv[k], &same)))
+            break;
+        if ((osense == same) != bsense)
+            nf_curve_reverse(&cv[k]);
+    }
+    free(oes.d);
+    if (rc) {
+        for (int i = 0; i < n; i++)
+            cf_curve_free(&cv[i]);
+        free(cv);
+        return rc;
+    }
+    if ((rc = cf_trim_add_loop(t, cv, n)))
+        return cf_fail(r->msg, r->msglen, rc, "%s: too many bounds", r->path);
+    return CF_OK;
+}
+
+int cf_step_read_trim(const char *path, long id, cf_trim_t *out, char *msg, size_t msglen)
+{
+    if (!path || !out || id < 0)
+        return cf_fail(msg, msglen, CF_EARG, "cf_step_read_trim: bad arguments");
+    memset(out, 0, sizeof *out);
+    sr_t r = {path, NULL, 0, NULL, 0, msg, msglen};
+    const sr_rec_t *srec = NULL;
+    int rc = sr_load(&r);
+    if (!rc)
+        rc = sr_pick(&r, id, &srec);
+    for (size_t i = 0; !rc && i < r.nix; i++) {
+        sc_t c;
+        long surf;
+        int more;
+        sr_vec_t bounds = {0};
+        if (sc_part(&r, &r.ix[i], "ADVANCED_FACE", &c) != CF_OK)
+            continue;
+        c.p++;
+        if ((rc = sc_skip(&c)) || (rc = sc_sep(&c, &more)) || (rc = sc_refs(&c, &bounds)) ||
+            (rc = sc_sep(&c, &more)) || (rc = sc_ref(&c, &surf))) {
+            free(bounds.d);
+            break;
+        }
+        if (surf != srec->id) {
+            free(bounds.d);
+            continue;
+        }
+        int outer_at = -1;
+        for (size_t k = 0; k < bounds.n && !rc; k++) {
+            int outer;
+            rc = sr_bound(&r, (long)bounds.d[k], surf, out, &outer);
+            if (!rc && outer && outer_at < 0)
+                outer_at = (int)k;
+        }
+        free(bounds.d);
+        if (!rc && outer_at > 0) { /* the outer bound first */
+            cf_trim_loop_t o = out->loop[outer_at];
+            memmove(out->loop + 1, out->loop, sizeof o * (size_t)outer_at);
+            out->loop[0] = o;
+        }
+        break;
+    }
+    free(r.ix);
+    free(r.buf);
+    if (rc)
+        cf_trim_free(out);
+    /* Edges with 3-D curves only (cellfit's own untrimmed faces: the four
+     * sides of the net) or with PCURVEs other than B-splines (OCCT writes a
+     * face's straight sides as LINEs, whose extent only the vertices give):
+     * the face is taken whole, as before trims were read. */
+    return rc == CF_ENOTFOUND ? CF_OK : rc;
 }

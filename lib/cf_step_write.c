@@ -4,9 +4,12 @@
  * the millimetre unit context CAD systems look for (see cf_step.h). */
 #include "cf_err.h"
 #include "cf_fmt.h"
+#include "cf_iges.h"
 #include "cf_step.h"
+#include "cf_trim.h"
 #include "nf_err.h"
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,9 +18,12 @@
 
 typedef struct sw {
     FILE *f;
-    long id;    /* last instance number given out */
-    long *pid;  /* nu nv + max(nu, nv): control point instances, then a boundary row */
-    double *wt; /* max(nu, nv): a boundary row's weights */
+    long id;               /* last instance number given out */
+    long *pid;             /* nu nv + max(nu, nv): control point instances, then a boundary row */
+    double *wt;            /* max(nu, nv): a boundary row's weights */
+    const cf_trim_t *trim; /* NULL or no loops: the whole surface */
+    double edge_err;       /* the trim's 3-D edges: largest error (cf_trim_edge3d) */
+    int rc;                /* a failure in the trim's bounds */
 } sw_t;
 
 /* A real as Part 21 wants it (a decimal point always, capital E), with the
@@ -193,6 +199,90 @@ static long sw_surface(sw_t *w, const nf_surf_t *s, const long *pid, int rationa
     return w->id;
 }
 
+/* One trim curve: 3-D edge on s (cf_trim_edge3d) as the SURFACE_CURVE's
+ * curve, the 2-D curve as its PCURVE in a 2-D parametric context; returns
+ * the SURFACE_CURVE's id, its 3-D start point's id in *p0. */
+static long sw_trim_curve(sw_t *w, const nf_surf_t *s, long surf, long ctx2, const nf_curve_t *c,
+                          long *p0)
+{
+    FILE *f = w->f;
+    nf_curve_t e;
+    double err;
+    int rc = cf_trim_edge3d(s, c, CF_TRIM_EDGE_TOL, &e, &err);
+    int n = c->n > e.n ? c->n : e.n;
+    long *ids = rc ? NULL : malloc(sizeof(long) * (size_t)n);
+    if (rc || !ids) {
+        w->rc = rc ? rc : CF_ENOMEM;
+        cf_curve_free(&e);
+        return 0;
+    }
+    w->edge_err = fmax(w->edge_err, err);
+    for (int k = 0; k < e.n; k++)
+        ids[k] = sw_point(w, e.cp + 3 * k);
+    *p0 = ids[0]; /* the edge interpolates S(c(t0)): its first control point */
+    long c3 = sw_curve(w, ids, NULL, e.n, e.p, e.U);
+    int rational = 0;
+    for (int k = 0; k < c->n; k++)
+        rational |= c->w[k] != 1.0;
+    for (int k = 0; k < c->n; k++) {
+        char x[2][40];
+        sw_real(x[0], sizeof x[0], c->cp[3 * k]);
+        sw_real(x[1], sizeof x[1], c->cp[3 * k + 1]);
+        fprintf(f, "#%ld=CARTESIAN_POINT('',(%s,%s));\n", ids[k] = ++w->id, x[0], x[1]);
+    }
+    long c2 = sw_curve(w, ids, rational ? c->w : NULL, c->n, c->p, c->U);
+    fprintf(f, "#%ld=DEFINITIONAL_REPRESENTATION('',(#%ld),#%ld);\n", w->id + 1, c2, ctx2);
+    fprintf(f, "#%ld=PCURVE('',#%ld,#%ld);\n", w->id + 2, surf, w->id + 1);
+    fprintf(f, "#%ld=SURFACE_CURVE('',#%ld,(#%ld),.PCURVE_S1.);\n", w->id + 3, c3, w->id + 2);
+    w->id += 3;
+    free(ids);
+    cf_curve_free(&e);
+    return w->id;
+}
+
+/* The face's bounds from the trim: per loop an EDGE_LOOP of ORIENTED_EDGEs
+ * of EDGE_CURVEs between VERTEX_POINTs (a curve's start is the previous
+ * one's end), the first a FACE_OUTER_BOUND; the bound ids into bounds. */
+static void sw_trim_bounds(sw_t *w, const nf_surf_t *s, long surf, long *bounds)
+{
+    FILE *f = w->f;
+    const cf_trim_t *t = w->trim;
+    long ctx2 = ++w->id;
+    fprintf(f,
+            "#%ld=(GEOMETRIC_REPRESENTATION_CONTEXT(2)PARAMETRIC_REPRESENTATION_CONTEXT()"
+            "REPRESENTATION_CONTEXT('2D SPACE',''));\n",
+            ctx2);
+    for (int k = 0; k < t->nloops && !w->rc; k++) {
+        const cf_trim_loop_t *l = &t->loop[k];
+        long *sc = malloc(sizeof(long) * 3 * (size_t)l->n);
+        if (!sc) {
+            w->rc = CF_ENOMEM;
+            return;
+        }
+        long *vx = sc + l->n, *oe = vx + l->n;
+        for (int i = 0; i < l->n && !w->rc; i++) {
+            long p0 = 0;
+            sc[i] = sw_trim_curve(w, s, surf, ctx2, &l->c[i], &p0);
+            fprintf(f, "#%ld=VERTEX_POINT('',#%ld);\n", vx[i] = ++w->id, p0);
+        }
+        for (int i = 0; i < l->n && !w->rc; i++) {
+            fprintf(f, "#%ld=EDGE_CURVE('',#%ld,#%ld,#%ld,.T.);\n", ++w->id, vx[i],
+                    vx[(i + 1) % l->n], sc[i]);
+            fprintf(f, "#%ld=ORIENTED_EDGE('',*,*,#%ld,.T.);\n", oe[i] = w->id + 1, w->id);
+            w->id++;
+        }
+        if (!w->rc) {
+            fprintf(f, "#%ld=EDGE_LOOP('',", ++w->id);
+            sw_refs(f, oe, l->n);
+            fputs(");\n", f);
+            fprintf(f, "#%ld=%s('',#%ld,.T.);\n", bounds[k] = w->id + 1,
+                    k ? "FACE_BOUND" : "FACE_OUTER_BOUND", w->id);
+            w->id++;
+        }
+        free(sc);
+    }
+}
+
 /* The DATA section's instances. */
 static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
 {
@@ -241,6 +331,21 @@ static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
     for (long k = 0; k < n; k++)
         pid[k] = sw_point(w, s->cp + 3 * k);
     long surf = sw_surface(w, s, pid, rational);
+    if (w->trim && w->trim->nloops > 0) { /* the face bounded by the trim instead */
+        long *b = malloc(sizeof(long) * (size_t)w->trim->nloops);
+        if (!b) {
+            w->rc = CF_ENOMEM;
+            return;
+        }
+        sw_trim_bounds(w, s, surf, b);
+        if (!w->rc) {
+            fprintf(f, "#%ld=ADVANCED_FACE('',", face);
+            sw_refs(f, b, w->trim->nloops);
+            fprintf(f, ",#%ld,.T.);\n", surf);
+        }
+        free(b);
+        return;
+    }
     /* Boundary curves, counter-clockwise in (u, v): v = v0 (u up), u = u1
      * (v up), v = v1 (u up, used reversed), u = u0 (v up, used reversed). */
     long *row = pid + n;
@@ -274,8 +379,8 @@ static void sw_data(sw_t *w, const nf_surf_t *s, const char *pname)
     fprintf(f, "#%ld=ADVANCED_FACE('',(#%ld),#%ld,.T.);\n", face, bound, surf);
 }
 
-int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, const char *version,
-                     long long utc, char *msg, size_t msglen)
+static int sw_write(const char *path, const nf_surf_t *s, const cf_trim_t *trim, const char *name,
+                    const char *version, long long utc, double *edge_err, char *msg, size_t msglen)
 {
     if (!path || !*path || !s)
         return cf_fail(msg, msglen, CF_EARG, "cf_step_write: bad arguments");
@@ -299,8 +404,13 @@ int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, con
 
     size_t pl = strlen(path), side = (size_t)(s->nu > s->nv ? s->nu : s->nv);
     char *tmp = malloc(pl + 5);
-    sw_t w = {NULL, 0, malloc(sizeof(long) * ((size_t)s->nu * (size_t)s->nv + side)),
-              malloc(sizeof(double) * side)};
+    sw_t w = {NULL,
+              0,
+              malloc(sizeof(long) * ((size_t)s->nu * (size_t)s->nv + side)),
+              malloc(sizeof(double) * side),
+              trim,
+              0.0,
+              CF_OK};
     if (!tmp || !w.pid || !w.wt) {
         free(tmp);
         free(w.pid);
@@ -328,6 +438,17 @@ int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, con
     sw_data(&w, s, pname);
     fputs("ENDSEC;\nEND-ISO-10303-21;\n", f);
     int werr = ferror(f) ? (errno ? errno : EIO) : 0;
+    if (w.rc && !werr) { /* a trim curve's edge: nothing written */
+        fclose(f);
+        remove(tmp);
+        free(tmp);
+        free(w.pid);
+        free(w.wt);
+        return cf_fail(msg, msglen, w.rc, "%s: not written: %s", path,
+                       w.rc == CF_ENOMEM ? "out of memory" : "a trim edge cannot be interpolated");
+    }
+    if (edge_err)
+        *edge_err = w.edge_err;
     if (!werr && (fflush(f) || fsync(fileno(f))))
         werr = errno ? errno : EIO;
     if (fclose(f) && !werr)
@@ -342,6 +463,21 @@ int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, con
     free(w.pid);
     free(w.wt);
     return rc;
+}
+
+int cf_step_write_at(const char *path, const nf_surf_t *s, const char *name, const char *version,
+                     long long utc, char *msg, size_t msglen)
+{
+    return sw_write(path, s, NULL, name, version, utc, NULL, msg, msglen);
+}
+
+int cf_step_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim_t *t,
+                             const char *name, const char *version, long long utc, double *edge_err,
+                             char *msg, size_t msglen)
+{
+    if (!t || t->nloops < 1)
+        return cf_fail(msg, msglen, CF_EARG, "cf_step_write_trimmed: no trim");
+    return sw_write(path, s, t, name, version, utc, edge_err, msg, msglen);
 }
 
 int cf_step_write(const char *path, const nf_surf_t *s, const char *name, const char *version,

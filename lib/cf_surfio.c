@@ -4,9 +4,13 @@
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_step.h"
+#include "nf_err.h"
 #include <ctype.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static int ext_is(const char *ext, const char *want)
 {
@@ -75,4 +79,52 @@ int cf_surfio_write(const char *path, const nf_surf_t *s, const char *name, cons
                        "%s: unknown surface format (use .igs, .iges, .stp or .step)",
                        path ? path : "(null)");
     }
+}
+
+int cf_surfio_read_trim(const char *path, long which, cf_trim_t *t, char *msg, size_t msglen)
+{
+    cf_surfio_fmt_t fmt = cf_surfio_format(path);
+    memset(t, 0, sizeof *t);
+    if (fmt == CF_SURFIO_UNKNOWN && path)
+        fmt = sniff(path);
+    if (fmt == CF_SURFIO_STEP)
+        return cf_step_read_trim(path, which, t, msg, msglen);
+    if (fmt != CF_SURFIO_IGES)
+        return CF_OK;
+    if (which < 0 || which > 9999999)
+        return cf_fail(msg, msglen, CF_EARG, "%s: IGES DE number %ld", path, which);
+    return cf_iges_read_trim(path, (int)which, t, msg, msglen);
+}
+
+static long long write_time(void)
+{
+    /* SOURCE_DATE_EPOCH: the reproducible-builds convention, as the writers. */
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long t = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || t < 0)
+        t = (long long)time(NULL);
+    return t;
+}
+
+int cf_surfio_write_trimmed(const char *path, const nf_surf_t *s, const cf_trim_t *t,
+                            const char *name, const char *version, double *edge_err, char *msg,
+                            size_t msglen)
+{
+    if (edge_err)
+        *edge_err = 0.0;
+    if (!t || t->nloops == 0)
+        return cf_surfio_write(path, s, name, version, msg, msglen);
+    if (!s || nf_surf_check(s))
+        return cf_surfio_write(path, s, name, version, msg, msglen); /* its error */
+    double u0, u1, v0, v1;
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    char why[400];
+    if (cf_trim_check(t, s, 1e-9 * fmax(u1 - u0, v1 - v0), why, sizeof why))
+        return cf_fail(msg, msglen, CF_EARG, "%s: not written: %s", path, why);
+    cf_surfio_fmt_t fmt = cf_surfio_format(path);
+    if (fmt == CF_SURFIO_STEP)
+        return cf_step_write_trimmed_at(path, s, t, name, version, write_time(), edge_err, msg,
+                                        msglen);
+    return cf_iges_write_trimmed_at(path, s, t, name, write_time(), edge_err, msg, msglen);
 }

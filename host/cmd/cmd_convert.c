@@ -50,7 +50,14 @@ int cmd_convert(int argc, char **argv)
     nf_surf_t s;
     if ((rc = cf_surfio_read(pos[0], entity, &s, msg, sizeof msg)))
         return cli_error("convert", CLI_USAGE, "%s", msg);
-    rc = cf_surfio_write(pos[1], &s, name, cf_version_string(), msg, sizeof msg);
+    cf_trim_t trim; /* a trimmed face stays one */
+    if ((rc = cf_surfio_read_trim(pos[0], entity, &trim, msg, sizeof msg))) {
+        cf_surf_free(&s);
+        return cli_error("convert", CLI_USAGE, "%s", msg);
+    }
+    rc = cf_surfio_write_trimmed(pos[1], &s, &trim, name, cf_version_string(), NULL, msg,
+                                 sizeof msg);
+    cf_trim_free(&trim);
     cf_surf_free(&s);
     if (rc)
         return cli_error("convert", CLI_FAIL, "%s", msg);

@@ -280,14 +280,24 @@ int cmd_fit(int argc, char **argv)
     nf_surf_t base;
     if (cf_surfio_read(a.base, (int)a.entity, &base, msg, sizeof msg))
         return cli_error("fit", CLI_USAGE, "%s", msg);
+    /* A trimmed nominal's trim goes to the output as it is: the fit keeps
+     * the knot range, so the parameter-space curves stay valid. */
+    cf_trim_t trim;
+    if (cf_surfio_read_trim(a.base, a.entity, &trim, msg, sizeof msg)) {
+        cf_surf_free(&base);
+        return cli_error("fit", CLI_USAGE, "%s", msg);
+    }
     cf_fitjob_t *j = NULL;
     rc = cf_fitjob_open(&j, &base, &a.o, msg, sizeof msg);
     cf_surf_free(&base);
-    if (rc)
+    if (rc) {
+        cf_trim_free(&trim);
         return cli_error("fit", rc == CF_ENOMEM ? CLI_FAIL : CLI_USAGE, "%s: %s", a.base, msg);
+    }
     cf_points_t *pr = NULL;
     if (cf_points_open(&pr, a.points, a.uv ? 5 : 3, msg, sizeof msg)) {
         cf_fitjob_close(j);
+        cf_trim_free(&trim);
         return cli_error("fit", CLI_USAGE, "%s", msg);
     }
     cf_fitsrc_t src;
@@ -297,14 +307,20 @@ int cmd_fit(int argc, char **argv)
     rc = cf_fitjob_run(j, &src, NULL, 0, 100, &r, msg, sizeof msg);
     cf_points_close(pr);
     cf_fitjob_close(j);
-    if (rc)
+    if (rc) {
+        cf_trim_free(&trim);
         return cli_error("fit", cf_fitjob_input_error(rc) ? CLI_USAGE : CLI_FAIL, "%s", msg);
-    double t2 = cli_now();
+    }
+    double t2 = cli_now(), edge_err = 0.0;
     int ec = CLI_OK;
-    if (cf_surfio_write(a.out, &r.surf, "cellfit fit", cf_version_string(), msg, sizeof msg)) {
+    if (cf_surfio_write_trimmed(a.out, &r.surf, &trim, "cellfit fit", cf_version_string(),
+                                &edge_err, msg, sizeof msg)) {
         ec = cli_error("fit", CLI_FAIL, "%s", msg);
         goto done;
     }
+    if (trim.nloops && !a.json)
+        printf("  trimmed face: %d boundaries kept from %s; 3-D edges within %.3g mm\n",
+               trim.nloops, a.base, edge_err);
     double t3 = cli_now();
     if (a.json)
         print_json(&a, &r, t3 - t0);
@@ -317,6 +333,7 @@ int cmd_fit(int argc, char **argv)
     if ((ec = cmd_record("fit", &a.rec, &rj)) == CLI_OK)
         ec = cmd_fitopts_verdict("fit", &a.o, &r, a.out);
 done:
+    cf_trim_free(&trim);
     cf_fitjob_result_free(&r);
     return ec;
 }

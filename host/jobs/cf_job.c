@@ -5,6 +5,7 @@
 #include "cf_job.h"
 #include "cf_err.h"
 #include "cf_iges.h"
+#include "cf_jobfiles.h"
 #include "cf_json.h"
 #include "cf_points.h"
 #include "cf_surf.h"
@@ -154,6 +155,10 @@ static void remove_tmp(const char *tmp)
     remove(path);
     snprintf(path, sizeof path, "%s/report.json", tmp);
     remove(path);
+    for (int i = 0; cf_jobfiles_names[i]; i++) {
+        snprintf(path, sizeof path, "%s/%s", tmp, cf_jobfiles_names[i]);
+        remove(path);
+    }
     rmdir(tmp);
 }
 
@@ -169,12 +174,21 @@ int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const cha
     remove_tmp(tmp); /* a leftover of a crashed export of ours */
     if (mkdir(tmp, 0775))
         return cf_fail(msg, ml, CF_EIO, "%s: cannot create (as %s): %s", dir, tmp, strerror(errno));
+    /* A trimmed nominal's trim goes with the fit (the knot range is kept). */
+    cf_trim_t trim;
+    int rc = cf_jobfiles_trim(r, meta, &trim, msg, ml);
     snprintf(path, sizeof path, "%s/fitted.igs", tmp);
-    int rc = cf_iges_write_at(path, &r->surf, "cellfit serve", meta->utc, msg, ml);
+    if (!rc)
+        rc = trim.nloops ? cf_iges_write_trimmed_at(path, &r->surf, &trim, "cellfit serve",
+                                                    meta->utc, NULL, msg, ml)
+                         : cf_iges_write_at(path, &r->surf, "cellfit serve", meta->utc, msg, ml);
     if (!rc) {
         snprintf(path, sizeof path, "%s/report.json", tmp);
         rc = write_report(r, meta, path, msg, ml);
     }
+    if (!rc) /* what `make demo` writes besides: STEP, per-point CSV, DFQ */
+        rc = cf_jobfiles_write(r, meta, &trim, tmp, msg, ml);
+    cf_trim_free(&trim);
     /* No replacing: rename would put an empty dir's name to ours. */
     if (!rc && renameat2(AT_FDCWD, tmp, AT_FDCWD, dir, RENAME_NOREPLACE))
         rc = cf_fail(msg, ml, CF_EIO, "%s: cannot create: %s", dir, strerror(errno));

@@ -4,7 +4,7 @@
  * u v x y z) through the fit job (cf_fitjob: plain, robust, reprojected or
  * to a tolerance, as configured), with the signed normal deviations of
  * every point to the fit (cf_stats); and the export of a result into a
- * folder (fitted IGES + report JSON). Memory: the fit job's; never a
+ * folder (fitted IGES and STEP, report JSON, per-point CSV, Q-DAS DFQ). Memory: the fit job's; never a
  * function of the number of points. */
 #ifndef CF_JOB_H
 #define CF_JOB_H
@@ -56,7 +56,9 @@ void cf_job_folder_name(unsigned long part, long long utc, char *buf, size_t n);
  * (UUID: cf_uuid_new). CF_OK, or CF_EIO when no random UUID is to be had. */
 int cf_job_unique_name(unsigned long part, long long utc, unsigned seq, char *buf, size_t n);
 
-/* Write dir/fitted.igs and dir/report.json as one: both into a hidden
+/* Write dir/fitted.igs, dir/report.json and cf_jobfiles' fitted.stp,
+ * deviations.csv and report.dfq as one (the surfaces as the trimmed face
+ * meta->nominal is, when it is one): both into a hidden
  * temporary sibling ".DIR.tmp.PID" (dir's parent must exist), then renamed
  * to dir, which must not exist: an export never overwrites one, and a
  * reader never sees a folder half written. CF_EIO with msg on failure

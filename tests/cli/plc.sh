@@ -105,6 +105,38 @@ PYEOF
 else
     no "cellfit report on the exported fitted.igs"
 fi
+# Beside them, what `make demo` writes: the STEP (the IGES's surface to the
+# last bit), the per-point CSV and the DFQ (read here with Python's csv and
+# plain text, not our code, against report.json's figures).
+grep -v '^#' "$T/points.uvxyz" | head -300 | cut -d' ' -f1-2 >"$T/check.uv"
+if [ -n "$d" ] && "$CF" eval "$d/fitted.igs" "$T/check.uv" >"$T/e1" && "$CF" eval "$d/fitted.stp" "$T/check.uv" >"$T/e2" &&
+    cmp -s "$T/e1" "$T/e2"; then
+    ok "export: fitted.stp is fitted.igs's surface to the last bit"
+else
+    no "export: fitted.stp missing or not fitted.igs's surface"
+fi
+[ -n "$d" ] && "$PY" - "$d/report.json" "$d/deviations.csv" "$d/report.dfq" <<'PYEOF' >"$T/files.out" 2>&1 &&
+import csv, json, math, sys
+rep = json.load(open(sys.argv[1]))
+rows = list(csv.reader(open(sys.argv[2], newline="")))
+bad = []
+if rows[0] != ["x", "y", "z", "u", "v", "deviation", "in_tolerance"]: bad.append("csv header")
+if len(rows) - 1 != rep["points"]: bad.append("csv rows %d for %d points" % (len(rows) - 1, rep["points"]))
+dev = [float(r[5]) for r in rows[1:]]
+rms = math.sqrt(sum(x * x for x in dev) / max(1, len(dev)))
+if abs(rms - rep["rms"]) > 1e-12 * rep["rms"]: bad.append("csv rms %.17g, report %.17g" % (rms, rep["rms"]))
+if sum(r[6] == "1" for r in rows[1:]) != rep["within_tol"]: bad.append("csv in_tolerance count")
+k = dict(l.rstrip("\n").split(" ", 1) for l in open(sys.argv[3]) if l.strip())
+want = {"K0100": "5", "K1001/1": str(rep["part"]), "K2002/1": "RMS deviation", "K2002/5": "Points within tolerance"}
+bad += ["dfq %s=%r" % (f, k.get(f)) for f, v in want.items() if k.get(f) != v]
+for c, key in ((1, "rms"), (2, "max"), (3, "min")):
+    if float(k.get("K0001/%d" % c, "nan")) != rep[key]: bad.append("dfq K0001/%d vs %s" % (c, key))
+if rep.get("part_id") and k.get("K0014/1") != rep["part_id"]: bad.append("dfq K0014/1")
+print("\n".join(bad))
+sys.exit(1 if bad else 0)
+PYEOF
+    ok "export: deviations.csv (a row per point, report.json's RMS) and report.dfq (its figures)" ||
+    no "export: deviations.csv / report.dfq: $(cat "$T/files.out" 2>/dev/null | head -3)"
 py abort "$port"
 # The watchdog trips mid-job on a cell of its own (the long job above).
 a_port=$port

@@ -1,7 +1,7 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
-# tests/occt/build.sh OUTDIR: build OUTDIR/occt_eval (IGES) and
-# OUTDIR/occt_step (STEP) against Debian's OpenCASCADE packages. Exits 3 with "occt: not available" when the headers
+# tests/occt/build.sh OUTDIR: build OUTDIR/occt_eval (IGES),
+# OUTDIR/occt_step (STEP) and OUTDIR/occt_trim (trimmed faces) against Debian's OpenCASCADE packages. Exits 3 with "occt: not available" when the headers
 # or libraries are missing, so callers can skip the check.
 set -u
 out="${1:?usage: build.sh OUTDIR}"
@@ -26,6 +26,15 @@ fi
 # The STEP reader: same package (libocct-data-exchange-dev), more libraries.
 slibs="-lTKSTEP -lTKSTEPAttr -lTKSTEP209 -lTKSTEPBase $libs"
 if ! g++ -std=c++11 -O2 -w -I"$inc" "$here/occt_step.cpp" -o "$out/occt_step" $slibs 2>"$out/occt_build.log"; then
+    if grep -q "cannot find -lTK\|No such file" "$out/occt_build.log"; then
+        echo "occt: not available"
+        exit 3
+    fi
+    cat "$out/occt_build.log" >&2
+    exit 1
+fi
+# Trimmed faces, made and read (IGES and STEP): the same libraries.
+if ! g++ -std=c++11 -O1 -w -I"$inc" "$here/occt_trim.cpp" -o "$out/occt_trim" $slibs 2>"$out/occt_build.log"; then
     if grep -q "cannot find -lTK\|No such file" "$out/occt_build.log"; then
         echo "occt: not available"
         exit 3
