@@ -135,6 +135,16 @@ static int write_report(const cf_job_result_t *r, const cf_job_meta_t *meta, con
     cf_json_str(&j, "fit_status", cf_fitjob_status_name(r->status));
     if (r->status != CF_FITJOB_PLAIN)
         cf_json_int(&j, "rounds", r->nrounds);
+    /* Honest edges (issue 14): how much of the net the data determines. */
+    cf_json_int(&j, "pinned_cp", r->pinned);
+    if (r->fp_cells > 0) { /* as cellfit fit --json's */
+        cf_json_obj(&j, "footprint");
+        cf_json_int(&j, "cells", r->fp_cells);
+        cf_json_int(&j, "filled", r->fp_filled);
+        cf_json_int(&j, "empty", r->fp_empty);
+        cf_json_int(&j, "outline", r->fp_outline);
+        cf_json_close(&j);
+    }
     cf_json_num(&j, "seconds", r->seconds);
     cf_stats_json_fields(st, &j);
     cf_json_end(&j);
