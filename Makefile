@@ -185,14 +185,17 @@ fwcheck: $(FW_OBJ) $(BUILD)/cellsim
 	echo "fwcheck: cellsim holds no cellfit command, job or PLC server"
 
 # Each stage prints its wall time, so a slow CI run says where it went.
+# The builds use every core (TEST_JOBS); the tests themselves run one at a
+# time (each stage's run is one recipe), as their timing checks assume.
 STAGE = sh scripts/stage.sh
+TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 test: deps
 	@rm -f build/stages.txt
-	@$(STAGE) all $(MAKE) all
+	@$(STAGE) all $(MAKE) -j$(TEST_JOBS) all
 	@$(STAGE) fwcheck $(MAKE) fwcheck
-	@$(STAGE) unit-sim $(MAKE) BOARD=sim BUILD=build/t-sim unit-run
-	@$(STAGE) unit-asan $(MAKE) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
-	@$(STAGE) unit-clang $(MAKE) BOARD=sim BUILD=build/t-clang CC=clang unit-run
+	@$(STAGE) unit-sim $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-sim unit-run
+	@$(STAGE) unit-asan $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
+	@$(STAGE) unit-clang $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-clang CC=clang unit-run
 	@$(STAGE) test-cli $(MAKE) test-cli
 	@$(STAGE) test-extra $(MAKE) test-extra
 	@$(STAGE) boards $(MAKE) boards
