@@ -27,7 +27,7 @@ rows() {
 }
 # dstats FIT POINTS: "n rms p99 max" of |normal distance| (exact nearest-rank p99)
 dstats() {
-    "$CF" project "$1" "$2" | awk '!/^#/ { d = $3; if (d < 0) d = -d; print d }' | sort -g |
+    "$CF" project "$1" "$2" | awk '!/^#/ { d = $3; if (d < 0) d = -d; printf "%.17g\n", d }' | sort -g |
         awk '{ d[NR] = $1; s += $1 * $1 } END { i = int(0.99 * NR); if (i < 0.99 * NR) i++;
              printf "%d %.9g %.9g %.9g", NR, sqrt(s / NR), d[i], d[NR] }'
 }
