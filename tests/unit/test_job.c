@@ -209,8 +209,8 @@ static void test_export(void **state)
     cf_job_result_t res;
     assert_int_equal(cf_job_fit(&o, NULL, &res, msg, sizeof msg), CF_OK);
     tmp_path(dir, sizeof dir, name);
-    cf_job_meta_t meta = {4711,         12,   5,         nominal, uvfile,      "sim",
-                          1700000000LL, NULL, "SN 42/A", 9,       1700000003LL};
+    cf_job_meta_t meta = {4711,         12,   5,         nominal, uvfile,       "sim",
+                          1700000000LL, NULL, "SN 42/A", 9,       1700000003LL, NULL};
     assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_OK);
     /* Never over an existing folder: refused. */
     assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_EIO);
