@@ -12,13 +12,13 @@ static int parse_line(char *line, cf_check_t *c)
     char *hash = strchr(line, '#');
     if (hash)
         *hash = '\0';
-    char *save = NULL, *tok[6];
+    char *save = NULL, *tok[5];
     int n = 0;
-    for (char *t = strtok_r(line, " \t\r\n", &save); t; t = strtok_r(NULL, " \t\r\n", &save))
-        if (n < 6)
-            tok[n++] = t;
-        else
+    for (char *t = strtok_r(line, " \t\r\n", &save); t; t = strtok_r(NULL, " \t\r\n", &save)) {
+        if (n == 5) /* NAME X Y Z RADIUS at most */
             return -1;
+        tok[n++] = t;
+    }
     if (n == 0)
         return 0;
     if (n < 4 || strlen(tok[0]) > CF_CHECKS_NAME)
