@@ -131,10 +131,10 @@ int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const
             cf_checks_reset(cs);
         rc = deviations(r, meta, cs, path, msg, ml);
     }
+    char why[256];
     for (int i = 0; !rc && cs && i < cs->n; i++)
-        if (!cs->c[i].points)
-            cf_log(CF_LOG_WARN, "export: check %s: no point within %g mm of (%g, %g, %g): no value",
-                   cs->c[i].name, cs->c[i].radius, cs->c[i].p[0], cs->c[i].p[1], cs->c[i].p[2]);
+        if (cf_checks_missing(cs, i, why, sizeof why))
+            cf_log(CF_LOG_WARN, "export: %s", why);
     if (!rc) {
         char number[32];
         const char *nom = meta->nominal ? meta->nominal : "";

@@ -124,14 +124,26 @@ double cf_checks_value(const cf_checks_t *cs, int i)
     return isnan(c->radius) ? c->best : c->sum / (double)c->points;
 }
 
+const char *cf_checks_missing(const cf_checks_t *cs, int i, char *buf, size_t n)
+{
+    const cf_check_t *c = &cs->c[i];
+    if (c->points)
+        return NULL;
+    if (isnan(c->radius)) /* only when there were no points at all */
+        snprintf(buf, n, "check %s: no points measured: no value", c->name);
+    else
+        snprintf(buf, n, "check %s: no point within %g mm of (%g, %g, %g): no value", c->name,
+                 c->radius, c->p[0], c->p[1], c->p[2]);
+    return buf;
+}
+
 int cf_checks_warn(const cf_checks_t *cs, FILE *f, const char *who)
 {
+    char why[256];
     int n = 0;
     for (int i = 0; i < cs->n; i++)
-        if (!cs->c[i].points) {
-            const cf_check_t *c = &cs->c[i];
-            fprintf(f, "%s: warning: check %s: no point within %g mm of (%g, %g, %g): no value\n",
-                    who, c->name, c->radius, c->p[0], c->p[1], c->p[2]);
+        if (cf_checks_missing(cs, i, why, sizeof why)) {
+            fprintf(f, "%s: warning: %s\n", who, why);
             n++;
         }
     return n;

@@ -44,8 +44,12 @@ void cf_checks_add(cf_checks_t *cs, const double Q[3], double dev);
 /* Check i's deviation: NaN when it has no point (a zone with none inside). */
 double cf_checks_value(const cf_checks_t *cs, int i);
 
-/* One warning line on f per check without a value, each naming who; the
- * number of such checks. */
+/* Why check i has no value, into buf ("check NAME: no point within R mm
+ * of (X, Y, Z): no value"); NULL when it has one. */
+const char *cf_checks_missing(const cf_checks_t *cs, int i, char *buf, size_t n);
+
+/* One warning line on f per check without a value (cf_checks_missing),
+ * each naming who; the number of such checks. */
 int cf_checks_warn(const cf_checks_t *cs, FILE *f, const char *who);
 
 /* The array "checks" into j: name, x, y, z, radius (null: nearest point),

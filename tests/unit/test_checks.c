@@ -68,6 +68,14 @@ static void test_values(void **state)
     assert_non_null(fgets(line, sizeof line, f));
     assert_non_null(strstr(line, "check empty"));
     fclose(f);
+    /* No points at all: not even a nearest point has a value. */
+    cf_checks_reset(&cs);
+    char why[256];
+    assert_true(isnan(cf_checks_value(&cs, 0)));
+    assert_non_null(cf_checks_missing(&cs, 0, why, sizeof why));
+    assert_string_equal(why, "check near: no points measured: no value");
+    assert_non_null(cf_checks_missing(&cs, 2, why, sizeof why));
+    assert_string_equal(why, "check empty: no point within 0.5 mm of (2.5, 2.5, 0): no value");
     cf_checks_free(&cs);
     assert_int_equal(cs.n, 0);
     remove(path);
