@@ -154,7 +154,7 @@ PYEOF
 if [ -n "$d" ] && "$PY" "$HERE/checks_check.py" "$T/checks.txt" "$d/deviations.csv" "$d/report.dfq" \
     "$d/report.json" >"$T/checks.out" 2>&1 && ! grep -q '^FAIL' "$T/checks.out" &&
     grep -q '^ok .*Z1: dfq' "$T/checks.out"; then
-    ok "export: report.dfq and report.json's checks = brute force over deviations.csv ($(grep -c '^ok' "$T/checks.out") checks)"
+    ok "export: report.dfq and report.json's checks = brute force over deviations.csv ($(grep -c '^ok' "$T/checks.out") items of checks_check.py)"
 else
     no "export: checks: $(grep -v '^ok' "$T/checks.out" 2>/dev/null | head -3)"
 fi
