@@ -433,7 +433,8 @@ static int run_export(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
                           rr->last_scan ? rr->last_journal : NULL,
                           rr->last_part_id,
                           p->seq,
-                          (long long)time(NULL)};
+                          (long long)time(NULL),
+                          rr->checks};
     if (cf_job_export(&rr->last, &meta, rr->last_export, msg, sizeof msg)) {
         cf_log(CF_LOG_ERROR, "export: %s", msg);
         return PLC_E_EXPORT;

@@ -42,6 +42,7 @@
 
 typedef struct cf_plcrun {
     const char *nominal, *points;             /* fit inputs (config) */
+    const char *checks;                       /* check points/zones for EXPORT's DFQ (config) */
     const char *recipe[CF_PLCRUN_RECIPES];    /* nominal.N (config); [0] unused: nominal */
     cf_fitjob_opts_t fit;                     /* fit settings (config; PLC params override) */
     const char *results_dir[PLC_MAX_FOLDERS]; /* RESULTS_FOLDER choices */

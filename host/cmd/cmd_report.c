@@ -1,19 +1,21 @@
 /* SPDX-License-Identifier: MIT */
 /* cmd_report.c: `cellfit report SURF POINTS --tol T [--png MAP.png]
- * [--csv FILE] [--ply FILE] [--dfq FILE] [--json]`: signed normal distances
+ * [--csv FILE] [--ply FILE] [--dfq FILE] [--checks FILE] [--json]`: signed normal distances
  * of measured points to a surface (projection, positive along Su x Sv),
  * their statistics and histogram, a colour deviation map viewed on the
  * points' best-fit plane, the per-point deviations for a spreadsheet (CSV)
  * and for CloudCompare (PLY coloured on the map's scale), and the figures
- * for an SPC system (Q-DAS DFQ). The points are streamed (three passes with
+ * for an SPC system (Q-DAS DFQ), with the deviation at named check points
+ * or zones (--checks, cf_checks.h) after the five figures. The points are streamed (three passes with
  * --png: plane, extent, deviations; one more for the PLY, whose colours
  * need the scale); memory is fixed by the surface, the map raster and the
  * histogram. The data footprint (cf_fpmap: the feet per cell of the
  * surface's knot spans) is counted (no_data_cells, footprint_share) and
  * marked on the map: "no data" cells hatched, the outline drawn. */
+#include "cf_checks.h"
 #include "cf_cli.h"
 #include "cf_devmap.h"
-#include "cf_dfq.h"
+#include "cf_dfqset.h"
 #include "cf_fpmap.h"
 #include "cf_iges.h"
 #include "cf_json.h"
@@ -33,7 +35,7 @@
 #define RBATCH 4096
 
 typedef struct report_opts {
-    const char *surf, *points, *png, *csv, *ply, *dfq;
+    const char *surf, *points, *png, *csv, *ply, *dfq, *checks;
     const char *part_number, *part_name, *part_id;
     double tol, scale, within;
     int json;
@@ -96,6 +98,12 @@ static int parse(int argc, char **argv, report_opts_t *o)
          .arg = "FILE",
          .help = "the figures as a Q-DAS DFQ file (RMS, max, min, max |d|, share within "
                  "tolerance, with limits: docs/formats.md)"},
+        {.name = "checks",
+         .kind = CF_OPT_STR,
+         .dst = &o->checks,
+         .arg = "FILE",
+         .help = "named check points and zones, NAME X Y Z [RADIUS] a line: their deviations "
+                 "in the DFQ after the five and in --json (docs/formats.md)"},
         {.name = "within",
          .kind = CF_OPT_DOUBLE,
          .dst = &o->within,
@@ -198,22 +206,21 @@ static int write_ply(const report_opts_t *o, cf_devmap_t *map, const cf_stats_t 
     return CLI_OK;
 }
 
-/* The DFQ's characteristics: the report's figures with their limits. */
-static int write_dfq(const report_opts_t *o, const cf_stats_t *st)
+/* The DFQ's characteristics: the report's figures with their limits, then
+ * the checks (cf_dfqset, as serve's EXPORT writes them). */
+static int write_dfq(const report_opts_t *o, const cf_stats_t *st, const cf_checks_t *cs)
 {
     char msg[512];
-    const double t = o->tol;
-    const cf_dfq_char_t c[5] = {
-        {"RMS deviation", 0, NAN, t, "mm", cf_stats_rms(st), 4},
-        {"Max deviation", 0, -t, t, "mm", st->max, 4},
-        {"Min deviation", 0, -t, t, "mm", st->min, 4},
-        {"Max absolute deviation", 0, NAN, t, "mm", st->max_abs, 4},
-        {"Points within tolerance", 100, o->within, NAN, "%", cf_stats_within_pct(st), 2},
-    };
+    cf_dfq_char_t *c = malloc(sizeof *c * (size_t)(CF_DFQSET_FIGURES + cs->n));
+    if (!c)
+        return cli_error("report", CLI_FAIL, "out of memory");
+    int n = cf_dfqset_chars(st, o->within, cs, c);
     cf_dfq_part_t part = {o->part_number, o->part_name, o->part_id, (long long)time(NULL)};
     if (!part.name[0])
         part.name = o->surf;
-    if (cf_dfq_write(o->dfq, &part, c, 5, msg, sizeof msg))
+    int rc = cf_dfq_write(o->dfq, &part, c, n, msg, sizeof msg);
+    free(c);
+    if (rc)
         return cli_error("report", CLI_FAIL, "%s", msg);
     return CLI_OK;
 }
@@ -238,6 +245,8 @@ int cmd_report(int argc, char **argv)
     cf_fpmap_t fpm;
     memset(&fpm, 0, sizeof fpm);
     nf_footprint_stats_t fs;
+    cf_checks_t cs;
+    memset(&cs, 0, sizeof cs);
     cf_stats_t *st = malloc(sizeof *st);
     double *buf = malloc(sizeof(double) * 5 * RBATCH);
     int ec = CLI_OK;
@@ -247,6 +256,10 @@ int cmd_report(int argc, char **argv)
         goto done;
     }
     cf_stats_init(st, o.tol);
+    if (o.checks && cf_checks_read(&cs, o.checks, msg, sizeof msg)) {
+        ec = cli_error("report", CLI_USAGE, "%s", msg);
+        goto done;
+    }
     if (cf_points_open(&pr, o.points, 0, msg, sizeof msg)) {
         ec = cli_error("report", CLI_USAGE, "%s", msg);
         goto done;
@@ -302,6 +315,7 @@ int cmd_report(int argc, char **argv)
             clamped += pj.clamped;
             cf_fpmap_add(&fpm, pj.u, pj.v, pj.clamped);
             cf_stats_add(st, pj.dist);
+            cf_checks_add(&cs, Q, pj.dist);
             if (map)
                 cf_devmap_add(map, Q, pj.dist);
             if (o.csv) {
@@ -331,7 +345,8 @@ int cmd_report(int argc, char **argv)
     }
     if (o.ply && (ec = write_ply(&o, map, st, pr, &sg, buf)) != CLI_OK)
         goto done;
-    if (o.dfq && (ec = write_dfq(&o, st)) != CLI_OK)
+    cf_checks_warn(&cs, stderr, "cellfit report");
+    if (o.dfq && (ec = write_dfq(&o, st, &cs)) != CLI_OK)
         goto done;
     if (o.json) {
         cf_json_t j;
@@ -355,6 +370,8 @@ int cmd_report(int argc, char **argv)
             cf_json_str(&j, "ply", o.ply);
         if (o.dfq)
             cf_json_str(&j, "dfq", o.dfq);
+        if (o.checks)
+            cf_checks_json(&cs, &j);
         cf_json_num(&j, "seconds", cli_now() - t0);
         cf_json_end(&j);
     } else {
@@ -376,10 +393,22 @@ int cmd_report(int argc, char **argv)
                    o.ply);
         if (o.dfq)
             printf("  Q-DAS DFQ: %s\n", o.dfq);
+        for (int i = 0; i < cs.n; i++) {
+            const cf_check_t *c = &cs.c[i];
+            if (isnan(c->radius))
+                printf("  check %s: %.6g mm at the nearest point\n", c->name,
+                       cf_checks_value(&cs, i));
+            else if (c->points)
+                printf("  check %s: %.6g mm, the mean of %ld points within %g mm\n", c->name,
+                       cf_checks_value(&cs, i), c->points, c->radius);
+            else
+                printf("  check %s: no value (no point within %g mm)\n", c->name, c->radius);
+        }
     }
 done:
     if (ec != CLI_OK && o.csv)
         cf_ptsout_abort(&csv);
+    cf_checks_free(&cs);
     cf_devmap_free(map);
     cf_fpmap_free(&fpm);
     cf_points_close(pr);

@@ -218,6 +218,8 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         r->nominal = keep(c, v);
     else if (!strcmp(k, "points"))
         r->points = keep(c, v);
+    else if (!strcmp(k, "checks"))
+        r->checks = keep(c, v);
     else if (!strcmp(k, "port_file"))
         c->port_file = keep(c, v);
     else if (!strcmp(k, "stage"))
@@ -318,6 +320,10 @@ static const serve_key_t keys[] = {
      "60000"},
     {"nominal", "FILE", "the nominal surface (FIT, SCAN_FIT), IGES entity 128", NULL},
     {"points", "FILE", "the points file FIT fits: x y z or u v x y z", NULL},
+    {"checks", "FILE",
+     "check points and zones (NAME X Y Z [RADIUS] a line): EXPORT's report.dfq and report.json "
+     "carry their deviations",
+     NULL},
     {"results_dir", "DIR", "results folder 0 (config: results_dir.N for choice N)", NULL},
     {"tol", "MM", "TOLERANCE at start: the deviation tolerance", "0.05"},
     {"alpha", "A", "ALPHA at start (Eq. 7)", "0.1"},

@@ -97,8 +97,8 @@ static void iso_utc(long long utc, char *buf, size_t n)
         strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &tm);
 }
 
-static int write_report(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *path,
-                        char *msg, size_t ml)
+static int write_report(const cf_job_result_t *r, const cf_job_meta_t *meta, const cf_checks_t *cs,
+                        const char *path, char *msg, size_t ml)
 {
     FILE *f = fopen(path, "w");
     if (!f)
@@ -147,6 +147,8 @@ static int write_report(const cf_job_result_t *r, const cf_job_meta_t *meta, con
     }
     cf_json_num(&j, "seconds", r->seconds);
     cf_stats_json_fields(st, &j);
+    if (cs->n) /* as cellfit report --checks --json's */
+        cf_checks_json(cs, &j);
     cf_json_end(&j);
     if (fflush(f) || fsync(fileno(f)) || ferror(f)) {
         fclose(f);
@@ -186,18 +188,25 @@ int cf_job_export(const cf_job_result_t *r, const cf_job_meta_t *meta, const cha
         return cf_fail(msg, ml, CF_EIO, "%s: cannot create (as %s): %s", dir, tmp, strerror(errno));
     /* A trimmed nominal's trim goes with the fit (the knot range is kept). */
     cf_trim_t trim;
+    cf_checks_t cs;
+    memset(&cs, 0, sizeof cs);
     int rc = cf_jobfiles_trim(r, meta, &trim, msg, ml);
+    if (!rc && meta->checks && *meta->checks)
+        rc = cf_checks_read(&cs, meta->checks, msg, ml);
     snprintf(path, sizeof path, "%s/fitted.igs", tmp);
     if (!rc)
         rc = trim.nloops ? cf_iges_write_trimmed_at(path, &r->surf, &trim, "cellfit serve",
                                                     meta->utc, NULL, msg, ml)
                          : cf_iges_write_at(path, &r->surf, "cellfit serve", meta->utc, msg, ml);
+    /* What `make demo` writes besides: STEP, per-point CSV, DFQ; then the
+     * report, which carries the checks the CSV's pass measured. */
+    if (!rc)
+        rc = cf_jobfiles_write(r, meta, &trim, &cs, tmp, msg, ml);
     if (!rc) {
         snprintf(path, sizeof path, "%s/report.json", tmp);
-        rc = write_report(r, meta, path, msg, ml);
+        rc = write_report(r, meta, &cs, path, msg, ml);
     }
-    if (!rc) /* what `make demo` writes besides: STEP, per-point CSV, DFQ */
-        rc = cf_jobfiles_write(r, meta, &trim, tmp, msg, ml);
+    cf_checks_free(&cs);
     cf_trim_free(&trim);
     /* No replacing: rename would put an empty dir's name to ours. */
     if (!rc && renameat2(AT_FDCWD, tmp, AT_FDCWD, dir, RENAME_NOREPLACE))

@@ -47,6 +47,7 @@ typedef struct cf_job_meta {
     const char *part_id;  /* PART_ID, or NULL */
     unsigned export_seq;  /* the EXPORT command's sequence (0: none) */
     long long export_utc; /* when it was exported (0: none) */
+    const char *checks;   /* check points and zones (config `checks`, cf_checks.h), or NULL */
 } cf_job_meta_t;
 
 /* Folder name for a result: "<part>_<YYYYMMDDTHHMMSSZ>" into buf. */

@@ -1,8 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 /* cf_jobfiles.c: an export's STEP, per-point CSV and DFQ files (cf_jobfiles.h). */
 #include "cf_jobfiles.h"
+#include "cf_dfqset.h"
 #include "cf_err.h"
 #include "cf_fitsrc.h"
+#include "cf_log.h"
 #include "cf_points.h"
 #include "cf_ptsout.h"
 #include "cf_seedgrid.h"
@@ -20,22 +22,10 @@
 
 const char *const cf_jobfiles_names[] = {"fitted.stp", "deviations.csv", "report.dfq", NULL};
 
-void cf_jobfiles_dfq_chars(const cf_stats_t *st, double within_pct, cf_dfq_char_t c[5])
-{
-    const double t = st->tol;
-    const cf_dfq_char_t v[5] = {
-        {"RMS deviation", 0, NAN, t, "mm", cf_stats_rms(st), 4},
-        {"Max deviation", 0, -t, t, "mm", st->max, 4},
-        {"Min deviation", 0, -t, t, "mm", st->min, 4},
-        {"Max absolute deviation", 0, NAN, t, "mm", st->max_abs, 4},
-        {"Points within tolerance", 100, within_pct, NAN, "%", cf_stats_within_pct(st), 2},
-    };
-    memcpy(c, v, sizeof v);
-}
-
-/* Every point of src projected on s into the CSV at path. */
-static int write_csv(const nf_surf_t *s, double tol, cf_fitsrc_t *src, const char *path, char *msg,
-                     size_t ml)
+/* Every point of src projected on s into the CSV at path, and into the
+ * checks cs (NULL: none). */
+static int write_csv(const nf_surf_t *s, double tol, cf_fitsrc_t *src, cf_checks_t *cs,
+                     const char *path, char *msg, size_t ml)
 {
     cf_seedgrid_t sg;
     memset(&sg, 0, sizeof sg);
@@ -56,6 +46,8 @@ static int write_csv(const nf_surf_t *s, double tol, cf_fitsrc_t *src, const cha
                 cf_seedgrid_project(&sg, Q, 1e-9, &pj); /* best point kept on ENOCONV */
                 cf_ptsout_pt_t p = {Q[0], Q[1], Q[2], pj.u, pj.v, pj.dist, NAN};
                 cf_ptsout_add(&o, &p);
+                if (cs)
+                    cf_checks_add(cs, Q, pj.dist);
             }
         rc = got < 0 ? (int)got : cf_ptsout_close(&o, msg, ml);
         if (got < 0)
@@ -69,8 +61,8 @@ static int write_csv(const nf_surf_t *s, double tol, cf_fitsrc_t *src, const cha
 }
 
 /* The job's points (its points file, else its journal) into the CSV. */
-static int deviations(const cf_job_result_t *r, const cf_job_meta_t *meta, const char *path,
-                      char *msg, size_t ml)
+static int deviations(const cf_job_result_t *r, const cf_job_meta_t *meta, cf_checks_t *cs,
+                      const char *path, char *msg, size_t ml)
 {
     cf_fitsrc_t src;
     int rc;
@@ -79,7 +71,7 @@ static int deviations(const cf_job_result_t *r, const cf_job_meta_t *meta, const
         cf_fitsrc_points_t pc;
         if (!(rc = cf_points_open(&pr, meta->points, 0, msg, ml))) {
             cf_fitsrc_points(&src, &pc, pr, meta->points);
-            rc = write_csv(&r->surf, r->stats->tol, &src, path, msg, ml);
+            rc = write_csv(&r->surf, r->stats->tol, &src, cs, path, msg, ml);
         }
         cf_points_close(pr);
         return rc;
@@ -99,7 +91,7 @@ static int deviations(const cf_job_result_t *r, const cf_job_meta_t *meta, const
     } else {
         cf_fitsrc_jnl_t jc;
         cf_fitsrc_journal(&src, &jc, &rd, meta->journal, (long)in.points);
-        rc = write_csv(&r->surf, r->stats->tol, &src, path, msg, ml);
+        rc = write_csv(&r->surf, r->stats->tol, &src, cs, path, msg, ml);
     }
     cf_store_file_close(&fl);
     return rc;
@@ -122,7 +114,7 @@ int cf_jobfiles_trim(const cf_job_result_t *r, const cf_job_meta_t *meta, cf_tri
 }
 
 int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const cf_trim_t *trim,
-                      const char *dir, char *msg, size_t ml)
+                      cf_checks_t *cs, const char *dir, char *msg, size_t ml)
 {
     char path[4200];
     if (!r->stats)
@@ -135,18 +127,27 @@ int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const
                                     msg, ml);
     if (!rc) {
         snprintf(path, sizeof path, "%s/deviations.csv", dir);
-        rc = deviations(r, meta, path, msg, ml);
+        if (cs)
+            cf_checks_reset(cs);
+        rc = deviations(r, meta, cs, path, msg, ml);
     }
+    char why[256];
+    for (int i = 0; !rc && cs && i < cs->n; i++)
+        if (cf_checks_missing(cs, i, why, sizeof why))
+            cf_log(CF_LOG_WARN, "export: %s", why);
     if (!rc) {
         char number[32];
         const char *nom = meta->nominal ? meta->nominal : "";
         const char *base = strrchr(nom, '/');
-        cf_dfq_char_t c[5];
+        cf_dfq_char_t *c = malloc(sizeof *c * (size_t)(CF_DFQSET_FIGURES + (cs ? cs->n : 0)));
+        if (!c)
+            return cf_fail(msg, ml, CF_ENOMEM, "export: out of memory");
         snprintf(number, sizeof number, "%lu", meta->part);
         cf_dfq_part_t part = {number, base ? base + 1 : nom, meta->part_id, meta->utc};
-        cf_jobfiles_dfq_chars(r->stats, 99, c);
+        int n = cf_dfqset_chars(r->stats, 99, cs, c);
         snprintf(path, sizeof path, "%s/report.dfq", dir);
-        rc = cf_dfq_write(path, &part, c, 5, msg, ml);
+        rc = cf_dfq_write(path, &part, c, n, msg, ml);
+        free(c);
     }
     return rc;
 }

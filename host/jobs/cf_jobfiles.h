@@ -9,6 +9,7 @@
 #ifndef CF_JOBFILES_H
 #define CF_JOBFILES_H
 
+#include "cf_checks.h"
 #include "cf_dfq.h"
 #include "cf_job.h"
 #include "cf_trim.h"
@@ -21,20 +22,18 @@ extern const char *const cf_jobfiles_names[];
  * dir/deviations.csv and dir/report.dfq for result r (r->stats must be
  * there). The points come from meta->points, or from
  * meta->journal when there is no points file; with neither, no CSV is
- * written. CF_OK, or a CF_E* code with msg (files written so far are left
+ * written. cs (NULL: none): the check points and zones, their deviations
+ * gathered from the same points (reset first; without points, none has a
+ * value: each logged as a warning) and written into the DFQ after the five
+ * figures (cf_dfqset). CF_OK, or a CF_E* code with msg (files written so far are left
  * for the caller's clean-up). */
 int cf_jobfiles_write(const cf_job_result_t *r, const cf_job_meta_t *meta, const cf_trim_t *trim,
-                      const char *dir, char *msg, size_t ml);
+                      cf_checks_t *cs, const char *dir, char *msg, size_t ml);
 
 /* The trim of meta->nominal (cf_surfio_read_trim; none without a nominal),
  * checked to lie in r->surf's domain with closed loops. trim: cf_trim_free
  * it (empty on failure). CF_OK or the reader's error with msg. */
 int cf_jobfiles_trim(const cf_job_result_t *r, const cf_job_meta_t *meta, cf_trim_t *trim,
                      char *msg, size_t ml);
-
-/* The DFQ's five characteristics of a deviation summary, as `cellfit
- * report --dfq` writes them (docs/formats.md), with within_pct the lower
- * limit of the within-tolerance share. */
-void cf_jobfiles_dfq_chars(const cf_stats_t *st, double within_pct, cf_dfq_char_t c[5]);
 
 #endif

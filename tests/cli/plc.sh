@@ -34,6 +34,11 @@ mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
 grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
 "$CF" gen --dir "$T/big" --nu 16 --nv 12 --count 1000000 --noise 0.002 >/dev/null
 grep -v '^#' "$T/big/points.uvxyz" | cut -d' ' -f3- >"$T/big/points.xyz"
+# EXPORT's check points and zones (config checks): a point near row 5000, a
+# zone around row 120000 and one far from every point (no value).
+awk 'NR == 5000 { printf "P1 %.6f %.6f %.6f\n", $1 + 0.05, $2 - 0.03, $3 + 0.1 }
+     NR == 120000 { printf "Z1 %.6f %.6f %.6f 2.3\nfar 5000 5000 0 1\n", $1, $2, $3 }' \
+    "$T/points.xyz" >"$T/checks.txt"
 mkdir -p "$T/results"
 
 # Usage errors: exit 2, one line naming what.
@@ -72,6 +77,7 @@ nominal = $T/nominal.igs
 points = $T/points.xyz
 results_dir = $T/results
 results_dir.1 = $T/points.xyz/results
+checks = $T/checks.txt
 word_order = lo-hi
 watchdog_ms = 0
 log_level = info
@@ -133,7 +139,7 @@ rms = math.sqrt(sum(x * x for x in dev) / max(1, len(dev)))
 if abs(rms - rep["rms"]) > 1e-12 * rep["rms"]: bad.append("csv rms %.17g, report %.17g" % (rms, rep["rms"]))
 if sum(r[6] == "1" for r in rows[1:]) != rep["within_tol"]: bad.append("csv in_tolerance count")
 k = dict(l.rstrip("\n").split(" ", 1) for l in open(sys.argv[3]) if l.strip())
-want = {"K0100": "5", "K1001/1": str(rep["part"]), "K2002/1": "RMS deviation", "K2002/5": "Points within tolerance"}
+want = {"K0100": "8", "K1001/1": str(rep["part"]), "K2002/1": "RMS deviation", "K2002/5": "Points within tolerance"}
 bad += ["dfq %s=%r" % (f, k.get(f)) for f, v in want.items() if k.get(f) != v]
 for c, key in ((1, "rms"), (2, "max"), (3, "min")):
     if float(k.get("K0001/%d" % c, "nan")) != rep[key]: bad.append("dfq K0001/%d vs %s" % (c, key))
@@ -143,6 +149,17 @@ sys.exit(1 if bad else 0)
 PYEOF
     ok "export: deviations.csv (a row per point, report.json's RMS) and report.dfq (its figures)" ||
     no "export: deviations.csv / report.dfq: $(cat "$T/files.out" 2>/dev/null | head -3)"
+# The checks (config checks) in report.dfq and report.json: brute force in
+# Python over the export's deviations.csv (checks_check.py).
+if [ -n "$d" ] && "$PY" "$HERE/checks_check.py" "$T/checks.txt" "$d/deviations.csv" "$d/report.dfq" \
+    "$d/report.json" >"$T/checks.out" 2>&1 && ! grep -q '^FAIL' "$T/checks.out" &&
+    grep -q '^ok .*Z1: dfq' "$T/checks.out"; then
+    ok "export: report.dfq and report.json's checks = brute force over deviations.csv ($(grep -c '^ok' "$T/checks.out") items of checks_check.py)"
+else
+    no "export: checks: $(grep -v '^ok' "$T/checks.out" 2>/dev/null | head -3)"
+fi
+grep -q "check far: no point within 1 mm" "$T/a.log" && ok "export: the empty zone logged" ||
+    no "export: no log line for the empty zone"
 py abort "$port"
 # The watchdog trips mid-job on a cell of its own (the long job above).
 a_port=$port

@@ -209,8 +209,8 @@ static void test_export(void **state)
     cf_job_result_t res;
     assert_int_equal(cf_job_fit(&o, NULL, &res, msg, sizeof msg), CF_OK);
     tmp_path(dir, sizeof dir, name);
-    cf_job_meta_t meta = {4711,         12,   5,         nominal, uvfile,      "sim",
-                          1700000000LL, NULL, "SN 42/A", 9,       1700000003LL};
+    cf_job_meta_t meta = {4711,         12,   5,         nominal, uvfile,       "sim",
+                          1700000000LL, NULL, "SN 42/A", 9,       1700000003LL, NULL};
     assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_OK);
     /* Never over an existing folder: refused. */
     assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_EIO);
@@ -252,6 +252,69 @@ static void test_export(void **state)
     snprintf(path, sizeof path, "%s/no/such", dir);
     assert_int_equal(cf_job_export(&res, &meta, path, msg, sizeof msg), CF_EIO);
     assert_non_null(strstr(msg, "no/such"));
+    cf_job_result_free(&res);
+}
+
+/* Whole file at path into buf (NUL-terminated). */
+static void slurp(const char *path, char *buf, size_t n)
+{
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    size_t got = fread(buf, 1, n - 1, f);
+    fclose(f);
+    buf[got] = 0;
+}
+
+/* The config's checks (meta->checks) in the export: one characteristic
+ * each after the five in report.dfq, a zone without a point as a value not
+ * measured (K0002 255), the array in report.json; a malformed file fails
+ * the export and leaves no folder. The values themselves are checked by
+ * brute force in tests/cli/checks.sh and plc.sh. */
+static void test_export_checks(void **state)
+{
+    (void)state;
+    char dir[700], path[800], checks[600];
+    static char text[65536];
+    cf_job_fit_opts_t o = opts(uvfile, 0, 0);
+    cf_job_result_t res;
+    assert_int_equal(cf_job_fit(&o, NULL, &res, msg, sizeof msg), CF_OK);
+    tmp_path(checks, sizeof checks, "checks.txt");
+    FILE *f = fopen(checks, "w");
+    assert_non_null(f);
+    fputs("# two checks\nnear 0 0 0\nfar 1e6 1e6 0 1\n", f);
+    fclose(f);
+    tmp_path(dir, sizeof dir, "with_checks");
+    cf_job_meta_t meta = {4712,         12,   6,    nominal, uvfile, "sim",
+                          1700000000LL, NULL, NULL, 0,       0,      checks};
+    assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_OK);
+    snprintf(path, sizeof path, "%s/report.dfq", dir);
+    slurp(path, text, sizeof text);
+    assert_non_null(strstr(text, "K0100 7\n"));
+    assert_non_null(strstr(text, "K2002/6 near\n"));
+    assert_non_null(strstr(text, "K2002/7 far\n"));
+    assert_null(strstr(text, "K0002/6 "));
+    assert_non_null(strstr(text, "K0002/7 255\n"));
+    snprintf(path, sizeof path, "%s/report.json", dir);
+    slurp(path, text, sizeof text);
+    assert_non_null(strstr(text, "\"checks\": [{\"name\": \"near\""));
+    assert_non_null(strstr(text, "\"radius\": 1, \"points\": 0, \"deviation\": null}]"));
+    static const char *const files[] = {"fitted.igs", "fitted.stp", "report.json", "report.dfq",
+                                        "deviations.csv"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[i]);
+        assert_int_equal(remove(path), 0);
+    }
+    assert_int_equal(rmdir(dir), 0);
+    f = fopen(checks, "w");
+    assert_non_null(f);
+    fputs("near 0 0\n", f);
+    fclose(f);
+    tmp_path(dir, sizeof dir, "bad_checks");
+    assert_int_equal(cf_job_export(&res, &meta, dir, msg, sizeof msg), CF_EPARSE);
+    assert_non_null(strstr(msg, "checks.txt:1:"));
+    struct stat sb;
+    assert_int_not_equal(stat(dir, &sb), 0);
+    remove(checks);
     cf_job_result_free(&res);
 }
 
@@ -490,6 +553,7 @@ int main(void)
         cmocka_unit_test(test_refined_net),
         cmocka_unit_test(test_stop_and_bad_files),
         cmocka_unit_test(test_export),
+        cmocka_unit_test(test_export_checks),
         cmocka_unit_test(test_fitjob_loop),
         cmocka_unit_test(test_fitjob_live),
         cmocka_unit_test(test_fitjob_held),
