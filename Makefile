@@ -167,7 +167,7 @@ $(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(A_HOST) $(A_LIB)
 
 # Unit tests of one build tree, each binary in turn; cmocka prints its summary.
 unit-run: $(TEST_BIN)
-	@set -e; for t in $(TEST_BIN); do echo "== $$t"; CF_TEST_TMP=$(BUILD)/tmp $$t; done
+	@set -e; mkdir -p $(BUILD)/tmp; for t in $(TEST_BIN); do echo "== $$t"; CF_TEST_TMP=$(BUILD)/tmp $$t; done
 
 deps:
 	@sh scripts/deps.sh test
