@@ -33,8 +33,19 @@ stop_all() { # reverse order: TERM, wait a little, KILL
     done
     PIDS=""
 }
-# The PLC scripts (plc.sh, plc_rig.sh) keep their servers' PIDs in $pids and
-# stop them with a longer wait of their own (serve stops its cellsim child).
+# The servers' scripts (plc*.sh, plant*.sh, trim.sh) keep their servers' PIDs
+# in $pids and stop them with a longer wait (serve stops its cellsim child).
+# stop_servers [TENTHS]: TERM to each, then up to TENTHS x 0.1 s (50) before
+# KILL; by PID only.
+stop_servers() {
+    for p in ${pids:-}; do kill -TERM "$p" 2>/dev/null; done
+    for p in ${pids:-}; do
+        i=0
+        while kill -0 "$p" 2>/dev/null && [ $i -lt "${1:-50}" ]; do sleep 0.1; i=$((i + 1)); done
+        kill -KILL "$p" 2>/dev/null
+    done
+    pids=""
+}
 # serve_start NAME ARGS...: `$CF serve` on 127.0.0.1, port 0, in the
 # background, stderr in $T/NAME.log; sets $port and $pid, adds $pid to $pids.
 serve_start() {

@@ -25,15 +25,7 @@ chmod 755 "$T"
 . "$HERE/engines.sh" # pg_init, pg_start, pg_stop, psql_admin, mq_start, mq_stop, freeport
 [ -x "$PGBIN/pg_ctl" ] || { echo "plant: no PostgreSQL server (scripts/deps.sh test)"; rm -rf "$T"; exit 1; }
 pids=""
-stop_serve() {
-    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
-    for p in $pids; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-    done
-    pids=""
-}
+stop_serve() { stop_servers 100; }
 cleanup() {
     stop_serve
     [ -n "${SUBPID:-}" ] && kill -TERM "$SUBPID" 2>/dev/null

@@ -23,15 +23,7 @@ if [ ! -x "$(dirname "$CF")/cellsim" ]; then
 fi
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plcrig.XXXXXX")
 pids=""
-stop_all() { # TERM, wait, then KILL
-    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
-    for p in $pids; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-    done
-    pids=""
-}
+stop_all() { stop_servers; }
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
 PYS=plc_rig.py

@@ -17,15 +17,7 @@ HERE=$(cd "$(dirname "$0")" && pwd)
 PY=/usr/bin/python3
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-slots.XXXXXX")
 pids=""
-stop_all() { # TERM, wait, then KILL, each by its PID
-    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
-    for p in $pids; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-    done
-    pids=""
-}
+stop_all() { stop_servers; }
 trap 'stop_all; rm -rf "$T"' EXIT
 py() { py_step plc_slots.py 120 "$@"; } # py STEP ARGS...
 

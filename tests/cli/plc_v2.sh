@@ -16,15 +16,7 @@ HERE=$(cd "$(dirname "$0")" && pwd)
 PY=/usr/bin/python3
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plcv2.XXXXXX")
 pids=""
-stop_all() { # TERM, wait, then KILL
-    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
-    for p in $pids; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-    done
-    pids=""
-}
+stop_all() { stop_servers; }
 trap 'stop_all; rm -rf "$T"' EXIT
 trap 'exit 1' INT TERM
 py() { py_step plc_v2.py 120 "$@"; }  # py STEP PORT ARGS...

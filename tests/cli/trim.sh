@@ -21,15 +21,7 @@ HERE=$(cd "$(dirname "$0")" && pwd)
 PY=/usr/bin/python3
 T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-trim.XXXXXX")
 pids=""
-stop_pids() { # the servers we started, by PID: TERM, a short wait, KILL
-    for p in $pids; do kill -TERM "$p" 2>/dev/null; done
-    for p in $pids; do
-        i=0
-        while kill -0 "$p" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-        kill -KILL "$p" 2>/dev/null
-    done
-    pids=""
-}
+stop_pids() { stop_servers; }
 trap 'stop_pids; rm -rf "$T"' EXIT
 if ! sh tests/occt/build.sh "$T/occt" >"$T/occt.log" 2>&1; then
     if [ "${CI:-}" = true ]; then no "OpenCASCADE check could not be built: $(tail -2 "$T/occt.log")"; else
