@@ -74,6 +74,11 @@ typedef struct cf_plcrun {
     /* Bytes a job's folder must keep free beyond what the job writes
      * (config min_free_mb; 0: CF_PLCRUN_MIN_FREE, 1 MiB). */
     double min_free;
+    /* SCAN_FIT streamed (issue 19): the fit job opened before the scan,
+     * fed each point as it arrives, run and closed by the fit phase (NULL
+     * otherwise); the clock time the scan's last row ended. */
+    cf_fitjob_t *live;
+    double t_last_row;
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 # tests/cli/plc_rig.sh CELLFIT: `cellfit serve --sim` (cellsim started as
 # its child, beside CELLFIT) driven through its registers only by pymodbus
-# and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig,
+# and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig
+# (its points streamed into the fit, read from memory after the scan),
 # results, EXPORT, ACK_RESULTS; a SCAN_FIT to a tolerance, robustly (the
 # cell's fit_to_tol, within, robust), equal to the shell's fit; the journal checked by `cellfit journal`;
 # invalid commands while scanning; an abort and a watchdog trip mid-scan
@@ -65,6 +66,12 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
 else
     no "no journal from the cycle ($jnl)"
 fi
+# SCAN_FIT streamed (issue 19): the points went into the fit as they
+# arrived and the passes after the scan read them from memory (the fit equal
+# to the journal's replay above); the time from the last row to the fit.
+r=$(sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$T/a.log" | head -1)
+[ -n "$r" ] && ok "log: SCAN_FIT's points from memory, fit ready $r s after the last row" ||
+    no "log lacks the streamed fit's source and time"
 # SCAN_FIT to a tolerance, robustly, on a cell configured so (fit_to_tol,
 # with tol 0.01: FIT_TOL's default; within, robust): a coarse nominal (8 x 6) under cellsim's dented part, so
 # the loop must insert knots. The cell's fit = the shell's `cellfit fit
@@ -90,6 +97,8 @@ else
 fi
 grep -q "fit: 861 points, [0-9]* x [0-9]* net, [0-9]* rounds, fit_status met" "$T/t.log" &&
     ok "log: the fit's rounds and fit_status" || no "log lacks the fit's rounds"
+grep -q "fit: points from memory, ready [0-9.]* s after the last row" "$T/t.log" &&
+    ok "log: the tolerance SCAN_FIT streamed, its points from memory" || no "log: tolerance SCAN_FIT not streamed"
 kill -TERM "$pid"; wait "$pid"
 pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 port=$a_port; pid=$a_pid; simport=$a_simport; simpid=$a_simpid
