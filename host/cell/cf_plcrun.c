@@ -83,6 +83,8 @@ static void scan_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_scanjob_o
     o->method = rr->scan_method;
     o->rig = rr->rig;
     o->period_us = rr->scan_period_us;
+    o->gev_uri = rr->gev_uri;
+    o->gev_geom = &rr->gev_geom;
 }
 
 /* A folder a job will write into: there, writable, and with min_bytes

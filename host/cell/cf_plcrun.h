@@ -32,6 +32,7 @@
 #define CF_PLCRUN_H
 
 #include "cf_plcsrv.h"
+#include "cf_scanfast.h"
 #include "cf_simchild.h"
 #include "hal_rig.h"
 #include <pthread.h>
@@ -79,6 +80,10 @@ typedef struct cf_plcrun {
      * otherwise); the clock time the scan's last row ended. */
     cf_fitjob_t *live;
     double t_last_row;
+    /* scan_method profiler (issue 19): the line profiler's URI
+     * (gev:ADDRESS[:SERIAL]) and its scan geometry (cf_scanfast.h). */
+    const char *gev_uri;
+    cf_scanfast_geom_t gev_geom;
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

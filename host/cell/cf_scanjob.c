@@ -124,6 +124,33 @@ static int run_otf(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, 
     return rc;
 }
 
+/* The profiler (cf_scanfast.h): one pass of the geometry's profiles,
+ * each a row; the result in the stop-and-go terms (fail_index the row's
+ * first point). */
+static int run_prof(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
+                    scan_result_t *res, char *msg, size_t ml)
+{
+    cf_scanfast_cb_t cb = {o->fit ? fast_point : NULL, fast_progress, fast_stop, sc};
+    cf_scanfast_res_t fr;
+    int rc = cf_scanfast_profiler(o->gev_uri, o->gev_geom, 0, 0, j, &cb, &fr, msg, ml);
+    if (o->fast_out)
+        *o->fast_out = fr;
+    if (o->t_last_row && fr.t_last_row > 0)
+        *o->t_last_row = fr.t_last_row;
+    res->points = fr.points;
+    res->flagged = fr.flagged;
+    res->done = fr.points + fr.flagged;
+    res->fail_index = fr.fail_row >= 0 ? fr.fail_row * job->plan.ny : -1;
+    res->code = rc;
+    res->where = fr.where;
+    cf_log(rc ? CF_LOG_WARN : CF_LOG_INFO,
+           "scan by the profiler: %ld profiles, %ld points, %.0f points/s; lost: %ld profiles "
+           "(%ld frames), %ld bad frames, %ld dropouts",
+           fr.rows_done, fr.points, fr.seconds > 0 ? (double)fr.points / fr.seconds : 0,
+           fr.profiles_lost, fr.frames_lost, fr.frames_bad, fr.dropouts);
+    return rc;
+}
+
 int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_result_t *res,
                    char *msg, size_t ml)
 {
@@ -131,7 +158,13 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     res->fail_index = -1;
     scan_job_t job;
     memset(&job, 0, sizeof job);
-    if (cf_scanjob_plan(o, &job.plan))
+    int prof = o->method == CF_SCAN_PROFILER;
+    if (prof && (!o->gev_uri || !o->gev_geom))
+        return cf_fail(msg, ml, RIG_EARG, "scan_method profiler: no profiler (gev: URI, geometry)");
+    if (prof) /* the profiler's plan: profiles along x, points along y (as cmd_scan.c) */
+        job.plan = (scan_plan_t){o->gev_geom->x0, o->gev_geom->y0,       o->gev_geom->dx,
+                                 o->gev_geom->dy, o->gev_geom->profiles, o->gev_geom->width};
+    else if (cf_scanjob_plan(o, &job.plan))
         return cf_fail(msg, ml, RIG_EARG, "scan region (%g, %g)-(%g, %g) step %g: no plan", o->x0,
                        o->y0, o->x1, o->y1, o->step);
     job.stage = o->stage;
@@ -147,7 +180,7 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     int rc = cf_store_file_open(&f, o->journal, CF_STORE_CREATE, &st, msg, ml);
     if (rc)
         return rc;
-    if (o->method == CF_SCAN_OTF)
+    if (o->method != CF_SCAN_STOP)
         (void)cf_store_file_buffer(&f, 65536); /* one sync a row: records gathered (cmd_scan.c) */
     h.sync_every = JNL_SYNC_EVERY_DEFAULT;
     h.job_id = (uint64_t)o->job_id;
@@ -156,6 +189,9 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     scan_header(&job, &h);
     if (o->method == CF_SCAN_OTF)
         cf_scanfast_header(&job.kin, scan_plan_count(&job.plan), &h);
+    else if (prof)
+        cf_scanfast_header(&(scan_kin_t){o->gev_geom->z0, {0, 0, 0}}, scan_plan_count(&job.plan),
+                           &h);
     jnl_t j;
     if ((rc = jnl_create(&j, st, &h)) != RIG_OK) {
         rc = cf_fail(msg, ml, rc, "%s: %s (%s)", o->journal, rig_strerror(rc), f.err);
@@ -176,6 +212,8 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     progress(ctl, o->pct0);
     if (o->method == CF_SCAN_OTF)
         rc = run_otf(o, &job, &j, &sc, res, msg, ml);
+    else if (prof)
+        rc = run_prof(o, &job, &j, &sc, res, msg, ml);
     else {
         rc = scan_run(&job, &j, res);
         if (o->t_last_row)

@@ -9,6 +9,7 @@
 #define CF_SCANJOB_H
 
 #include "cf_job.h"
+#include "cf_scanfast.h"
 #include "hal_rig.h"
 #include "rig.h"
 #include "scan.h"
@@ -41,6 +42,11 @@ typedef struct cf_scanjob_opts {
      * row ended (the scan's end when stop-and-go), when not NULL. */
     cf_fitjob_t *fit;
     double *t_last_row;
+    /* Appended (issue 19): method CF_SCAN_PROFILER: the line profiler's URI
+     * (gev:ADDRESS[:SERIAL]) and geometry; one pass of its profiles (the
+     * region and step are not its plan: the geometry is). */
+    const char *gev_uri;
+    const cf_scanfast_geom_t *gev_geom;
 } cf_scanjob_opts_t;
 
 /* The plan of the region (RIG_EARG when it has no point or too many). */
