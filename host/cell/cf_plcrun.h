@@ -6,7 +6,10 @@
  *              the results folder RESULTS_FOLDER chooses) (cf_scanjob.h);
  *   fit      = FIT: the configured points file against the nominal RECIPE
  *              chooses (0: `nominal`, N: `nominal.N`)
- *              (cf_job); SCAN_FIT: the journal just measured (cf_scanjob);
+ *              (cf_job); SCAN_FIT: the points just measured, streamed
+ *              into a fit job opened before the scan (rr->live) and read
+ *              from its memory after the last row, else from the journal
+ *              (cf_scanjob_fit_live);
  *              both through the fit job with the PLC's weights, net,
  *              tolerance and fit settings (FIT_TOL > 0: the tolerance
  *              loop to FIT_WITHIN %, FIT_MAX_CP, FIT_REFINE; FIT_ROBUST,
@@ -64,7 +67,8 @@ typedef struct cf_plcrun {
     char journal[4096];                     /* the last scan's journal */
     char last_journal[4096];                /* the journal of the latched fit ("" for FIT) */
     char last_export[4096];                 /* folder of the last export */
-    /* issue 19: SCAN's method (cf_scanfast.h: 0 stop-and-go, 1 on the fly)
+    /* issue 19: SCAN's method (cf_scanfast.h: 0 stop-and-go, 1 on the fly,
+     * 2 the profiler)
      * and trigger period (config scan_method, scan_period_us) */
     int scan_method;
     double scan_period_us;

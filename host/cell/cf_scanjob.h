@@ -4,7 +4,8 @@
  * (cf_store_file.h), with progress and a stop check; and the fit of such a
  * journal onto the nominal through the fit job (cf_fitjob, as cf_job: the
  * configured loop, robust passes and reprojection, the signed normal
- * deviations read back from the journal). Nothing is kept per point. */
+ * deviations read back from the journal). The scan keeps nothing per
+ * point; a SCAN_FIT's live fit job (opts.fit) holds them (cf_fitjob.h). */
 #ifndef CF_SCANJOB_H
 #define CF_SCANJOB_H
 
