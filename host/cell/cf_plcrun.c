@@ -83,6 +83,8 @@ static void scan_opts(const cf_plcrun_t *rr, const plc_params_t *p, cf_scanjob_o
     o->method = rr->scan_method;
     o->rig = rr->rig;
     o->period_us = rr->scan_period_us;
+    o->gev_uri = rr->gev_uri;
+    o->gev_geom = &rr->gev_geom;
 }
 
 /* A folder a job will write into: there, writable, and with min_bytes
@@ -272,27 +274,43 @@ static int journal_name(const char *dir, unsigned long part, char *buf, size_t n
     return -1;
 }
 
+/* The live fit job of a SCAN_FIT that will not be run (an earlier job's
+ * left by an abort between the phases, or this scan's failure). */
+static void live_close(cf_plcrun_t *rr)
+{
+    cf_fitjob_close(rr->live);
+    rr->live = NULL;
+}
+
 static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
 {
     cf_plcrun_t *rr = ctx;
     char msg[512];
+    live_close(rr);
     if (!rr->rig || !rr->rig->stage.ops || !rr->rig->probe.ops)
         return PLC_E_NO_RIG;
     rr->job_t0 = cli_now();
+    rr->t_last_row = 0;
     if (p->cmd == PLC_C_SCAN_FIT) {
-        /* The nominal read before any motion: a bad one is 301 now, not
-         * after the whole scan. */
+        /* The nominal read and the fit job opened before any motion: a bad
+         * nominal is 301 now, not after the whole scan; the points go into
+         * the job as they arrive (as the shell's `scan --fit`), so the
+         * first pass is done with the last row. */
         cf_job_fit_opts_t fo;
         fit_opts(rr, p, &fo);
-        int rc = cf_job_check(&fo, msg, sizeof msg);
+        int rc = cf_job_open(&fo, &rr->live, msg, sizeof msg);
         if (rc) {
+            rr->live = NULL;
             cf_log(CF_LOG_ERROR, "scan: %s", msg);
-            return rc == NF_EBUDGET ? PLC_E_TOO_BIG : PLC_E_NOMINAL;
+            return rc == NF_EBUDGET  ? PLC_E_TOO_BIG
+                   : rc == CF_ENOMEM ? PLC_E_MEMORY
+                                     : PLC_E_NOMINAL;
         }
     }
     const char *dir = journal_dir(rr, p);
     if (!dir || journal_name(dir, p->part, rr->journal, sizeof rr->journal)) {
         cf_log(CF_LOG_ERROR, "scan: no journal name free in %s", dir ? dir : "(none)");
+        live_close(rr);
         return PLC_E_RIG;
     }
     cf_scanjob_opts_t o;
@@ -302,9 +320,13 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
     memset(&fr, 0, sizeof fr);
     o.fast_out = &fr;
     o.part_id = p->part_id;
+    o.fit = rr->live;
+    o.t_last_row = &rr->t_last_row;
     scan_result_t res;
     rig_take(rr, ctl);
     int rc = cf_scanjob_run(&o, ctl, &res, msg, sizeof msg);
+    if (rc)
+        live_close(rr);
     /* SCAN_TRIGGERS .. SCAN_OVERRUNS: this scan's (0 when stop-and-go). */
     const long counts[CF_PLC_SCAN_COUNTS] = {
         fr.triggers, fr.dropped_by_probe, fr.lost_readings, fr.lost_triggers, fr.both_lost,
@@ -323,6 +345,11 @@ static int run_scan(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl)
         cf_log(CF_LOG_WARN, "scan: stopped at grid point %ld%s; journal %s consistent",
                res.fail_index, rc == RIG_ELOST ? " (the rig was lost)" : "", rr->journal);
         return CF_PLC_ABORTED;
+    }
+    if (rc && res.where == SCAN_AT_CALLER) {
+        /* The live fit refused a point (its message logged) */
+        cf_log(CF_LOG_ERROR, "scan: %s", msg);
+        return rc == NF_EDOMAIN || rc == NF_ENONFINITE ? PLC_E_POINTS : PLC_E_FIT;
     }
     if (rc) {
         cf_log(CF_LOG_ERROR, "scan: %s%s%s", msg, *det ? ": " : "", det);
@@ -372,13 +399,21 @@ static int run_fit(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, pl
         rr->have_last = 0;
     }
     int scan = p->cmd == PLC_C_SCAN_FIT;
-    int rc = cf_job_check(&o, msg, sizeof msg);
+    /* A live job was opened on these settings before the scan: no second
+     * read of the nominal after the last row. */
+    int rc = scan && rr->live ? 0 : cf_job_check(&o, msg, sizeof msg);
     if (rc) {
         cf_log(CF_LOG_ERROR, "fit: %s", msg);
         return rc == NF_EBUDGET ? PLC_E_TOO_BIG : PLC_E_NOMINAL;
     }
-    rc = scan ? cf_scanjob_fit(rr->journal, &o, ctl, 70, 100, &rr->last, msg, sizeof msg)
-              : cf_job_fit(&o, ctl, &rr->last, msg, sizeof msg);
+    const char *from = "journal";
+    if (scan && rr->live) {
+        rc = cf_scanjob_fit_live(rr->live, rr->journal, ctl, 70, 100, &rr->last, &from, msg,
+                                 sizeof msg);
+        live_close(rr);
+    } else
+        rc = scan ? cf_scanjob_fit(rr->journal, &o, ctl, 70, 100, &rr->last, msg, sizeof msg)
+                  : cf_job_fit(&o, ctl, &rr->last, msg, sizeof msg);
     if (rc == RIG_EABORTED)
         return CF_PLC_ABORTED;
     if (rc) {
@@ -401,6 +436,9 @@ static int run_fit(void *ctx, const plc_params_t *p, const cf_job_ctl_t *ctl, pl
            rr->last.why[0] ? ": " : "", rr->last.why);
     for (int i = 0; i < rr->last.nwarn; i++)
         cf_log(CF_LOG_WARN, "fit: %s", rr->last.warn[i]);
+    if (scan && rr->t_last_row > 0)
+        cf_log(CF_LOG_INFO, "fit: points from %s, ready %.3f s after the last row (%.3f s solving)",
+               from, cli_now() - rr->t_last_row, rr->last.t_solve);
     rr->last_scan = scan;
     snprintf(rr->last_journal, sizeof rr->last_journal, "%s", scan ? rr->journal : "");
     fill_results(rr, p, scan ? cli_now() - rr->job_t0 : rr->last.seconds, res);
@@ -499,6 +537,7 @@ void cf_plcrun_init(cf_plcrun_t *rr, cf_runner_t *out)
 
 void cf_plcrun_free(cf_plcrun_t *rr)
 {
+    live_close(rr);
     if (rr->have_last)
         cf_job_result_free(&rr->last);
     rr->have_last = 0;

@@ -6,7 +6,10 @@
  *              the results folder RESULTS_FOLDER chooses) (cf_scanjob.h);
  *   fit      = FIT: the configured points file against the nominal RECIPE
  *              chooses (0: `nominal`, N: `nominal.N`)
- *              (cf_job); SCAN_FIT: the journal just measured (cf_scanjob);
+ *              (cf_job); SCAN_FIT: the points just measured, streamed
+ *              into a fit job opened before the scan (rr->live) and read
+ *              from its memory after the last row, else from the journal
+ *              (cf_scanjob_fit_live);
  *              both through the fit job with the PLC's weights, net,
  *              tolerance and fit settings (FIT_TOL > 0: the tolerance
  *              loop to FIT_WITHIN %, FIT_MAX_CP, FIT_REFINE; FIT_ROBUST,
@@ -32,6 +35,7 @@
 #define CF_PLCRUN_H
 
 #include "cf_plcsrv.h"
+#include "cf_scanfast.h"
 #include "cf_simchild.h"
 #include "hal_rig.h"
 #include <pthread.h>
@@ -63,7 +67,8 @@ typedef struct cf_plcrun {
     char journal[4096];                     /* the last scan's journal */
     char last_journal[4096];                /* the journal of the latched fit ("" for FIT) */
     char last_export[4096];                 /* folder of the last export */
-    /* issue 19: SCAN's method (cf_scanfast.h: 0 stop-and-go, 1 on the fly)
+    /* issue 19: SCAN's method (cf_scanfast.h: 0 stop-and-go, 1 on the fly,
+     * 2 the profiler)
      * and trigger period (config scan_method, scan_period_us) */
     int scan_method;
     double scan_period_us;
@@ -74,6 +79,15 @@ typedef struct cf_plcrun {
     /* Bytes a job's folder must keep free beyond what the job writes
      * (config min_free_mb; 0: CF_PLCRUN_MIN_FREE, 1 MiB). */
     double min_free;
+    /* SCAN_FIT streamed (issue 19): the fit job opened before the scan,
+     * fed each point as it arrives, run and closed by the fit phase (NULL
+     * otherwise); the clock time the scan's last row ended. */
+    cf_fitjob_t *live;
+    double t_last_row;
+    /* scan_method profiler (issue 19): the line profiler's URI
+     * (gev:ADDRESS[:SERIAL]) and its scan geometry (cf_scanfast.h). */
+    const char *gev_uri;
+    cf_scanfast_geom_t gev_geom;
 } cf_plcrun_t;
 
 /* The runner table over rr. rr->rig (and rr->sim) set before, or NULL. */

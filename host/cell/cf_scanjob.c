@@ -38,6 +38,22 @@ typedef struct sj_ctx {
     int last;
 } sj_ctx_t;
 
+/* A point into the live fit (o->fit), after it is journalled: the fit's
+ * nf_err_t ends the scan (where SCAN_AT_CALLER), its message logged. */
+static int live_add(const sj_ctx_t *c, const double xyz[3])
+{
+    char msg[256];
+    int rc = cf_fitjob_add(c->o->fit, xyz, msg, sizeof msg);
+    if (rc)
+        cf_log(CF_LOG_ERROR, "scan: the live fit: %s", msg);
+    return rc;
+}
+
+static int on_point(void *ctx, const jnl_rec_t *r)
+{
+    return live_add(ctx, r->xyz);
+}
+
 static double clk_now(void *ctx)
 {
     (void)ctx;
@@ -65,8 +81,12 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
 
 /* On the fly (cf_scanfast.h): rows instead of grid points for progress
  * and the stop check; the result in the stop-and-go terms (fail_index the
- * row's first grid point). The points are not fitted live here: SCAN_FIT
- * fits the journal after the scan (cf_scanjob_fit). */
+ * row's first grid point); each point into the live fit (o->fit). */
+static int fast_point(void *ctx, const double xyz[3])
+{
+    return live_add(ctx, xyz);
+}
+
 static int fast_stop(void *ctx)
 {
     return stop(((const sj_ctx_t *)ctx)->ctl);
@@ -81,12 +101,14 @@ static void fast_progress(void *ctx, long rows_done, long rows, long points)
 static int run_otf(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
                    scan_result_t *res, char *msg, size_t ml)
 {
-    cf_scanfast_cb_t cb = {NULL, fast_progress, fast_stop, sc};
+    cf_scanfast_cb_t cb = {o->fit ? fast_point : NULL, fast_progress, fast_stop, sc};
     cf_scanfast_res_t fr;
     int rc = cf_scanfast_otf(o->rig, &job->plan, &job->kin, o->period_us > 0 ? o->period_us : 50, j,
                              &cb, &fr, msg, ml);
     if (o->fast_out)
         *o->fast_out = fr;
+    if (o->t_last_row && fr.t_last_row > 0)
+        *o->t_last_row = fr.t_last_row;
     res->points = fr.points;
     res->flagged = fr.flagged;
     res->done = fr.points + fr.flagged;
@@ -102,6 +124,33 @@ static int run_otf(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, 
     return rc;
 }
 
+/* The profiler (cf_scanfast.h): one pass of the geometry's profiles,
+ * each a row; the result in the stop-and-go terms (fail_index the row's
+ * first point). */
+static int run_prof(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
+                    scan_result_t *res, char *msg, size_t ml)
+{
+    cf_scanfast_cb_t cb = {o->fit ? fast_point : NULL, fast_progress, fast_stop, sc};
+    cf_scanfast_res_t fr;
+    int rc = cf_scanfast_profiler(o->gev_uri, o->gev_geom, 0, 0, j, &cb, &fr, msg, ml);
+    if (o->fast_out)
+        *o->fast_out = fr;
+    if (o->t_last_row && fr.t_last_row > 0)
+        *o->t_last_row = fr.t_last_row;
+    res->points = fr.points;
+    res->flagged = fr.flagged;
+    res->done = fr.points + fr.flagged;
+    res->fail_index = fr.fail_row >= 0 ? fr.fail_row * job->plan.ny : -1;
+    res->code = rc;
+    res->where = fr.where;
+    cf_log(rc ? CF_LOG_WARN : CF_LOG_INFO,
+           "scan by the profiler: %ld profiles, %ld points, %.0f points/s; lost: %ld profiles "
+           "(%ld frames), %ld bad frames, %ld dropouts",
+           fr.rows_done, fr.points, fr.seconds > 0 ? (double)fr.points / fr.seconds : 0,
+           fr.profiles_lost, fr.frames_lost, fr.frames_bad, fr.dropouts);
+    return rc;
+}
+
 int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_result_t *res,
                    char *msg, size_t ml)
 {
@@ -109,7 +158,13 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     res->fail_index = -1;
     scan_job_t job;
     memset(&job, 0, sizeof job);
-    if (cf_scanjob_plan(o, &job.plan))
+    int prof = o->method == CF_SCAN_PROFILER;
+    if (prof && (!o->gev_uri || !o->gev_geom))
+        return cf_fail(msg, ml, RIG_EARG, "scan_method profiler: no profiler (gev: URI, geometry)");
+    if (prof) /* the profiler's plan: profiles along x, points along y (as cmd_scan.c) */
+        job.plan = (scan_plan_t){o->gev_geom->x0, o->gev_geom->y0,       o->gev_geom->dx,
+                                 o->gev_geom->dy, o->gev_geom->profiles, o->gev_geom->width};
+    else if (cf_scanjob_plan(o, &job.plan))
         return cf_fail(msg, ml, RIG_EARG, "scan region (%g, %g)-(%g, %g) step %g: no plan", o->x0,
                        o->y0, o->x1, o->y1, o->step);
     job.stage = o->stage;
@@ -125,7 +180,7 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     int rc = cf_store_file_open(&f, o->journal, CF_STORE_CREATE, &st, msg, ml);
     if (rc)
         return rc;
-    if (o->method == CF_SCAN_OTF)
+    if (o->method != CF_SCAN_STOP)
         (void)cf_store_file_buffer(&f, 65536); /* one sync a row: records gathered (cmd_scan.c) */
     h.sync_every = JNL_SYNC_EVERY_DEFAULT;
     h.job_id = (uint64_t)o->job_id;
@@ -134,6 +189,9 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     scan_header(&job, &h);
     if (o->method == CF_SCAN_OTF)
         cf_scanfast_header(&job.kin, scan_plan_count(&job.plan), &h);
+    else if (prof)
+        cf_scanfast_header(&(scan_kin_t){o->gev_geom->z0, {0, 0, 0}}, scan_plan_count(&job.plan),
+                           &h);
     jnl_t j;
     if ((rc = jnl_create(&j, st, &h)) != RIG_OK) {
         rc = cf_fail(msg, ml, rc, "%s: %s (%s)", o->journal, rig_strerror(rc), f.err);
@@ -148,12 +206,19 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     }
     sj_ctx_t sc = {o, ctl, -1};
     job.clock = (rig_clock_t){&sj_clock, &sc};
-    job.cb = (scan_cb_t){NULL, on_progress, &sc};
+    job.cb = (scan_cb_t){o->fit ? on_point : NULL, on_progress, &sc};
+    if (o->t_last_row)
+        *o->t_last_row = 0;
     progress(ctl, o->pct0);
     if (o->method == CF_SCAN_OTF)
         rc = run_otf(o, &job, &j, &sc, res, msg, ml);
-    else
+    else if (prof)
+        rc = run_prof(o, &job, &j, &sc, res, msg, ml);
+    else {
         rc = scan_run(&job, &j, res);
+        if (o->t_last_row)
+            *o->t_last_row = cli_now(); /* the last grid point's reading is the last row's end */
+    }
     if (rc)
         cf_fail(msg, ml, rc, "%s: job ended at grid point %ld: %s (%llu records acknowledged)",
                 o->journal, res->fail_index, rig_strerror(rc), (unsigned long long)jnl_acked(&j));
@@ -161,14 +226,12 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     return rc;
 }
 
-int cf_scanjob_fit(const char *journal, const cf_job_fit_opts_t *fo, const cf_job_ctl_t *ctl,
-                   int pct0, int pct1, cf_job_result_t *out, char *msg, size_t ml)
+/* The job's run over the journal's points (fj's first pass is live when
+ * points were added to it, cf_fitjob.h). */
+static int fit_journal(cf_fitjob_t *fj, const char *journal, const cf_job_ctl_t *ctl, int pct0,
+                       int pct1, cf_job_result_t *out, char *msg, size_t ml)
 {
-    memset(out, 0, sizeof *out);
-    cf_fitjob_t *fj = NULL;
-    int rc = cf_job_open(fo, &fj, msg, ml);
-    if (rc)
-        return rc;
+    int rc;
     cf_store_file_t fl;
     rig_store_t st;
     fl.fd = -1;
@@ -190,7 +253,33 @@ int cf_scanjob_fit(const char *journal, const cf_job_fit_opts_t *fo, const cf_jo
     cf_fitsrc_journal(&src, &jc, &rd, journal, (long)in.points);
     rc = cf_fitjob_run(fj, &src, ctl, pct0, pct1, out, msg, ml);
 out:
-    cf_fitjob_close(fj);
     cf_store_file_close(&fl);
     return rc;
+}
+
+int cf_scanjob_fit(const char *journal, const cf_job_fit_opts_t *fo, const cf_job_ctl_t *ctl,
+                   int pct0, int pct1, cf_job_result_t *out, char *msg, size_t ml)
+{
+    memset(out, 0, sizeof *out);
+    cf_fitjob_t *fj = NULL;
+    int rc = cf_job_open(fo, &fj, msg, ml);
+    if (rc)
+        return rc;
+    rc = fit_journal(fj, journal, ctl, pct0, pct1, out, msg, ml);
+    cf_fitjob_close(fj);
+    return rc;
+}
+
+int cf_scanjob_fit_live(cf_fitjob_t *fj, const char *journal, const cf_job_ctl_t *ctl, int pct0,
+                        int pct1, cf_job_result_t *out, const char **from, char *msg, size_t ml)
+{
+    memset(out, 0, sizeof *out);
+    int held = cf_fitjob_held(fj);
+    if (from)
+        *from = held ? "memory" : "journal";
+    /* Held: the points of the first pass in the order they came, which is
+     * the journal's (the same fit, no pass over the file). */
+    if (held)
+        return cf_fitjob_run(fj, NULL, ctl, pct0, pct1, out, msg, ml);
+    return fit_journal(fj, journal, ctl, pct0, pct1, out, msg, ml);
 }

@@ -4,11 +4,13 @@
  * (cf_store_file.h), with progress and a stop check; and the fit of such a
  * journal onto the nominal through the fit job (cf_fitjob, as cf_job: the
  * configured loop, robust passes and reprojection, the signed normal
- * deviations read back from the journal). Nothing is kept per point. */
+ * deviations read back from the journal). The scan keeps nothing per
+ * point; a SCAN_FIT's live fit job (opts.fit) holds them (cf_fitjob.h). */
 #ifndef CF_SCANJOB_H
 #define CF_SCANJOB_H
 
 #include "cf_job.h"
+#include "cf_scanfast.h"
 #include "hal_rig.h"
 #include "rig.h"
 #include "scan.h"
@@ -34,6 +36,18 @@ typedef struct cf_scanjob_opts {
      * losses) copied here when not NULL (struct cf_scanfast_res, cf_scanfast.h). */
     struct cf_scanfast_res *fast_out;
     const char *part_id; /* the PLC's PART_ID: a meta record in the journal, or NULL */
+    /* Appended (issue 19, SCAN_FIT streamed): every point with a reading
+     * goes into this open fit job (cf_fitjob_add) as it arrives, as the
+     * shell's `scan --fit` does, so the first pass is done with the last
+     * row; NULL: none. t_last_row gets the clock time (cli_now) the last
+     * row ended (the scan's end when stop-and-go), when not NULL. */
+    cf_fitjob_t *fit;
+    double *t_last_row;
+    /* Appended (issue 19): method CF_SCAN_PROFILER: the line profiler's URI
+     * (gev:ADDRESS[:SERIAL]) and geometry; one pass of its profiles (the
+     * region and step are not its plan: the geometry is). */
+    const char *gev_uri;
+    const cf_scanfast_geom_t *gev_geom;
 } cf_scanjob_opts_t;
 
 /* The plan of the region (RIG_EARG when it has no point or too many). */
@@ -52,5 +66,13 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
  * CF_E* / NF_E* / RIG_E* with msg. */
 int cf_scanjob_fit(const char *journal, const cf_job_fit_opts_t *f, const cf_job_ctl_t *ctl,
                    int pct0, int pct1, cf_job_result_t *out, char *msg, size_t ml);
+
+/* The fit of a SCAN_FIT whose points went into fj during the scan
+ * (cf_scanjob_opts_t.fit): the later passes read the points fj holds when
+ * cf_fitjob_held, else the journal (as cf_scanjob_fit). *from gets
+ * "memory" or "journal" when not NULL. Returns as cf_scanjob_fit; fj stays
+ * the caller's (cf_fitjob_close). */
+int cf_scanjob_fit_live(cf_fitjob_t *fj, const char *journal, const cf_job_ctl_t *ctl, int pct0,
+                        int pct1, cf_job_result_t *out, const char **from, char *msg, size_t ml);
 
 #endif

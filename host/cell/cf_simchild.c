@@ -116,6 +116,15 @@ int cf_simchild_start(cf_simchild_t *c, const char *extra, int timeout_ms, char 
         char *t = strstr(buf, "cellsim: tcp 127.0.0.1 ");
         if (t)
             c->port = atoi(t + 23);
+        /* "cellsim: gev 127.0.0.1 SERIAL width W ...": the profiler's line. */
+        const char *g = strstr(buf, "cellsim: gev 127.0.0.1 ");
+        const char *nl = g ? strchr(g, '\n') : NULL;
+        if (nl && !c->gev_uri[0]) {
+            char ser[32] = "";
+            snprintf(c->gev_geom, sizeof c->gev_geom, "%.*s", (int)(nl - g), g);
+            if (sscanf(g + 23, "%31s", ser) == 1)
+                snprintf(c->gev_uri, sizeof c->gev_uri, "gev:127.0.0.1:%s", ser);
+        }
         if (strstr(buf, "cellsim: ready") && c->port > 0) {
             snprintf(c->stage, sizeof c->stage, "tcp:127.0.0.1:%d:1", c->port);
             snprintf(c->probe, sizeof c->probe, "tcp:127.0.0.1:%d:2", c->port);

@@ -19,6 +19,11 @@ typedef struct cf_simchild {
     int ended;      /* 1 once reaped */
     char stage[64]; /* "tcp:127.0.0.1:PORT:1" */
     char probe[64]; /* "tcp:127.0.0.1:PORT:2" */
+    /* Started with --gev SERIAL (issue 19): its profiler's URI
+     * "gev:127.0.0.1:SERIAL" and geometry line (cf_scanfast_geom_parse);
+     * "" otherwise. */
+    char gev_uri[64];
+    char gev_geom[512];
 } cf_simchild_t;
 
 /* Start it and wait (up to timeout_ms) for "cellsim: ready". extra: a

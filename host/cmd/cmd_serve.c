@@ -230,8 +230,8 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         c->sim_args = keep(c, v);
     else if (!strcmp(k, "scan_method")) { /* issue 19: cf_scanfast.h */
         r->scan_method = cf_scanfast_method(v);
-        if (r->scan_method != CF_SCAN_STOP && r->scan_method != CF_SCAN_OTF)
-            return cf_fail(msg, ml, CF_EARG, "scan_method '%s': stop or otf", v);
+        if (r->scan_method < 0)
+            return cf_fail(msg, ml, CF_EARG, "scan_method '%s': stop, otf or profiler", v);
     } else if (!strcmp(k, "scan_period_us")) {
         if (cli_double(v, &r->scan_period_us) || !(r->scan_period_us >= 20) ||
             r->scan_period_us > 1e6)
@@ -343,7 +343,10 @@ static const serve_key_t keys[] = {
     {"probe", "URI", "the rig's probe", NULL},
     {"sim_args", "ARGS", "extra cellsim arguments, space-separated",
      "--speed 5000 --seed 1 --part NOMINAL"},
-    {"scan_method", "M", "SCAN's method: stop (stop-and-go) or otf (on the fly)", "stop"},
+    {"scan_method", "M",
+     "SCAN's method: stop (stop-and-go), otf (on the fly) or profiler (--sim: cellsim's GigE "
+     "Vision line profiler)",
+     "stop"},
     {"scan_period_us", "US",
      "scan_method otf: the trigger period; the stage runs at SCAN_STEP / it", "50"},
     {"journal_dir", "DIR", "folder of the scans' journals", "the results folder"},
@@ -471,6 +474,11 @@ int cmd_serve(int argc, char **argv)
                        c.board, BOARD_NAME);
         goto done;
     }
+    if (c.run.scan_method == CF_SCAN_PROFILER && !c.sim) {
+        /* No configured gev: probe yet: the simulated profiler only. */
+        ec = cli_error("serve", CLI_USAGE, "scan_method profiler needs --sim (cellsim --gev)");
+        goto done;
+    }
     if (c.sim && (c.stage || c.probe)) {
         ec = cli_error("serve", CLI_USAGE, "--sim or --stage/--probe, not both");
         goto done;
@@ -512,9 +520,23 @@ int cmd_serve(int argc, char **argv)
             c.sim_args = simdef;
             cf_log(CF_LOG_INFO, "rig: cellsim with the default sim_args \"%s\"", simdef);
         }
+        /* The profiler: cellsim's fake GigE Vision camera (port 3956). */
+        char simgev[4300];
+        if (c.run.scan_method == CF_SCAN_PROFILER) {
+            snprintf(simgev, sizeof simgev, "%s --gev cfserve", c.sim_args);
+            c.sim_args = simgev;
+        }
         if (cf_simchild_start(&sim, c.sim_args, 10000, msg, sizeof msg)) {
             ec = cli_error("serve", CLI_FAIL, "%s", msg);
             goto done_log;
+        }
+        if (c.run.scan_method == CF_SCAN_PROFILER) {
+            if (!sim.gev_uri[0] || cf_scanfast_geom_parse(sim.gev_geom, &c.run.gev_geom)) {
+                ec = cli_error("serve", CLI_FAIL, "--sim: cellsim gave no profiler line");
+                goto done_sim;
+            }
+            c.run.gev_uri = sim.gev_uri;
+            cf_log(CF_LOG_INFO, "rig: profiler %s, %s", sim.gev_uri, sim.gev_geom);
         }
         c.stage = sim.stage;
         c.probe = sim.probe;

@@ -6,6 +6,7 @@
 # registers (stage unit 1, docs/rig-devices.md) are read to see the stage
 # really stopped. Prints "ok ..." / "FAIL ..." lines; tests/cli/plc_rig.sh
 # counts them. Steps: cycle RESDIR MBPOLL OUT; tolfit RESDIR NCP OUT;
+# otffit RESDIR OUT [WHAT];
 # abort RESDIR OUT; watchdog;
 # fault CONTROL_FILE KIND CODE; gone; garbage; rate; allow WANT; soak TX.
 import glob
@@ -171,6 +172,34 @@ def tolfit(port, simport, resdir, ncp, out):
           (rep.get("fit_status"), rep.get("control_points")))
     s = c.command(ACK_RESULTS)
     open(out, "w").write("%s\n%s\n" % (dirs[0] if dirs else "", rep.get("journal", "")))
+
+
+def otffit(port, simport, resdir, out, what="otffit"):
+    """SCAN_FIT on a cell scanning on the fly (scan_method otf; WHAT names
+    the step, "profiler" on a profiler cell): its points streamed into the
+    fit (issue 19). OUT gets the export folder, the journal and the POINTS
+    register."""
+    c = Cell(port)
+    home(c, what)
+    check(c.write(pc.PART, c.words(4713) + [5, 0] + c.fwords(0.05)) == 0,
+          what + ": part 4713, program 5, folder 0, tolerance 0.05 mm")
+    check(region(c, 100, 50, 0, 0, 1) == 0, what + ": region (100, 50)-(0, 0), step 1 mm")
+    s = c.command(SCAN_FIT)
+    seq = c.seq
+    check(s["result"] == 0, what + ": SCAN_FIT seq %d accepted" % seq)
+    s = c.wait_done(seq, 120)
+    check(s["status"] & pc.RESULTS and not s["status"] & pc.ERROR,
+          what + ": done with RESULTS, no error (0x%x)" % s["status"])
+    res = pc.results(c)
+    check(res["points"] > 0, what + ": %d points fitted" % res["points"])
+    s = c.command(EXPORT)
+    s = c.wait_done(c.seq, 30)
+    check(not s["status"] & pc.ERROR, what + ": EXPORT done")
+    dirs = [d for d in glob.glob(os.path.join(resdir, "4713_*")) if os.path.isdir(d)]
+    rep = pc.json.load(open(os.path.join(dirs[0], "report.json"))) if dirs else {}
+    c.command(ACK_RESULTS)
+    open(out, "w").write("%s\n%s\n%d\n" % (dirs[0] if dirs else "", rep.get("journal", ""),
+                                            res["points"]))
 
 
 def abort(port, simport, resdir, out):
@@ -377,6 +406,8 @@ if __name__ == "__main__":
             cycle(port, simport, a[0], a[1], a[2])
         elif step == "tolfit":
             tolfit(port, simport, a[0], int(a[1]), a[2])
+        elif step == "otffit":
+            otffit(port, simport, a[0], a[1], *a[2:3])
         elif step == "abort":
             abort(port, simport, a[0], a[1])
         elif step == "watchdog":

@@ -2,8 +2,10 @@
 # SPDX-License-Identifier: MIT
 # tests/cli/plc_rig.sh CELLFIT: `cellfit serve --sim` (cellsim started as
 # its child, beside CELLFIT) driven through its registers only by pymodbus
-# and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig,
-# results, EXPORT, ACK_RESULTS; a SCAN_FIT to a tolerance, robustly (the
+# and mbpoll (tests/cli/plc_rig.py): HOME, SCAN_FIT on the simulated rig
+# (its points streamed into the fit, read from memory after the scan),
+# results, EXPORT, ACK_RESULTS; an on-the-fly SCAN_FIT streamed likewise,
+# equal to its journal's replay; a SCAN_FIT to a tolerance, robustly (the
 # cell's fit_to_tol, within, robust), equal to the shell's fit; the journal checked by `cellfit journal`;
 # invalid commands while scanning; an abort and a watchdog trip mid-scan
 # (cellsim's stage seen stopped, journal consistent); a drive fault and an
@@ -65,6 +67,12 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
 else
     no "no journal from the cycle ($jnl)"
 fi
+# SCAN_FIT streamed (issue 19): the points went into the fit as they
+# arrived and the passes after the scan read them from memory (the fit equal
+# to the journal's replay above); the time from the last row to the fit.
+r=$(sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$T/a.log" | head -1)
+[ -n "$r" ] && ok "log: SCAN_FIT's points from memory, fit ready $r s after the last row" ||
+    no "log lacks the streamed fit's source and time"
 # SCAN_FIT to a tolerance, robustly, on a cell configured so (fit_to_tol,
 # with tol 0.01: FIT_TOL's default; within, robust): a coarse nominal (8 x 6) under cellsim's dented part, so
 # the loop must insert knots. The cell's fit = the shell's `cellfit fit
@@ -90,6 +98,34 @@ else
 fi
 grep -q "fit: 861 points, [0-9]* x [0-9]* net, [0-9]* rounds, fit_status met" "$T/t.log" &&
     ok "log: the fit's rounds and fit_status" || no "log lacks the fit's rounds"
+grep -q "fit: points from memory, ready [0-9.]* s after the last row" "$T/t.log" &&
+    ok "log: the tolerance SCAN_FIT streamed, its points from memory" || no "log: tolerance SCAN_FIT not streamed"
+kill -TERM "$pid"; wait "$pid"
+pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
+# SCAN_FIT on the fly (scan_method otf), streamed into the fit: the
+# exported fit = the journal replayed by `cellfit journal fit` (float32
+# registers: equal to 1e-6 mm), all of the journal's points fitted, and from
+# memory after the last row.
+mkdir -p "$T/ores"
+start o --sim --sim-args="--speed 5000 --seed 4 --part $T/part/nominal.igs" \
+    --nominal "$T/part/nominal.igs" --results "$T/ores" --scan-method otf
+py otffit "$port" "$simport" "$T/ores" "$T/otf.out"
+d=$(sed -n 1p "$T/otf.out"); jnl=$(sed -n 2p "$T/otf.out"); np=$(sed -n 3p "$T/otf.out")
+if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/oinfo.json" &&
+    "$CF" journal fit "$jnl" --nominal "$T/part/nominal.igs" --out "$T/oreplay.igs" >/dev/null 2>&1; then
+    [ "$(json "$T/oinfo.json" points)" = "$np" ] && ok "otf SCAN_FIT: POINTS $np = the journal's points" ||
+        no "otf SCAN_FIT: POINTS $np, journal $(json "$T/oinfo.json" points)"
+    "$CF" eval "$d/fitted.igs" "$T/part/check.uv" >"$T/e1"
+    "$CF" eval "$T/oreplay.igs" "$T/part/check.uv" >"$T/e2"
+    paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
+        END { exit !(NR > 0 && m < 1e-6) }' && ok "otf SCAN_FIT streamed: exported fit = the journal replayed" ||
+        no "otf SCAN_FIT: exported fit differs from the replayed journal"
+else
+    no "no journal or replay from the otf SCAN_FIT ($jnl)"
+fi
+r=$(sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$T/o.log" | head -1)
+[ -n "$r" ] && ok "log: otf SCAN_FIT's points from memory, fit ready $r s after the last row" ||
+    no "log lacks the otf SCAN_FIT's streamed fit"
 kill -TERM "$pid"; wait "$pid"
 pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 port=$a_port; pid=$a_pid; simport=$a_simport; simpid=$a_simpid
