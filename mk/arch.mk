@@ -32,7 +32,11 @@ override UMOCK_HAVE :=
 endif
 
 QEMU_X86 ?= qemu-x86_64 -cpu Westmere
-QEMU_A64 ?= qemu-aarch64 -L /usr/aarch64-linux-gnu
+# The arm64 loader and libc of the multiarch packages (libc6:arm64, which the
+# :arm64 libraries bring), not the cross toolchain's copy in
+# /usr/aarch64-linux-gnu: that ld.so (2.36-8) with multiarch's newer libc
+# hangs the first pthread_create (the parse thread) under qemu-aarch64.
+QEMU_A64 ?= qemu-aarch64 -L /
 A64 := aarch64-linux-gnu
 # The unit tests run under emulation: the fitter's numerics (basis, stripe
 # accumulation and the solvers against dense references, PCG, refinement,
