@@ -144,9 +144,13 @@ int cf_resdb_open(const char *path, cf_resdb_t **out, char *msg, size_t ml)
         return CF_RESDB_EOPEN;
     }
     /* WAL: readers (the forwarder, `cellfit results`) never block the job's
-     * write; FULL: the commit is on disk when it returns. */
+     * write; FULL: the commit is on disk when it returns. A 256 KiB page
+     * cache: a row a job needs few pages, and serve holds three connections
+     * (recorder, forwarder, outbox registers) for weeks; SQLite's default
+     * lets each grow to 2 MB as the table does. */
     sqlite3_busy_timeout(d->db, 5000);
-    int rc = exec(d, "PRAGMA journal_mode=WAL") || exec(d, "PRAGMA synchronous=FULL")
+    int rc = exec(d, "PRAGMA journal_mode=WAL") || exec(d, "PRAGMA synchronous=FULL") ||
+                     exec(d, "PRAGMA cache_size=-256")
                  ? CF_RESDB_EOPEN
                  : migrate(d, msg, ml);
     if (rc) {

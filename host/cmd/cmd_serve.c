@@ -24,6 +24,7 @@
 #include "hal_rig.h"
 #include <arpa/inet.h>
 #include <errno.h>
+#include <malloc.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
@@ -489,6 +490,13 @@ int cmd_serve(int argc, char **argv)
         goto done;
     }
     cf_log_open(c.level, c.use_syslog);
+#ifdef M_MMAP_THRESHOLD
+    /* A fixed threshold: glibc raises it after the first large free, and a
+     * job's large buffers then stay resident in the heap after the job;
+     * mapped, they go back to the system between jobs (plc_rig's soak: RSS
+     * +2.3 MB after the first jobs without this, +0.2 MB with it). */
+    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+#endif
     /* The port file first: a live serve's is never taken over (nothing
      * started), a stale one (its serve killed) is replaced (cf_portfile.h). */
     cf_portfile_t pf = {-1, ""};
