@@ -198,7 +198,7 @@ test: deps
 	@$(STAGE) unit-clang $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-clang CC=clang unit-run
 	@$(STAGE) test-cli $(MAKE) test-cli
 	@$(STAGE) test-extra $(MAKE) test-extra
-	@$(STAGE) boards $(MAKE) boards
+	@$(STAGE) boards $(MAKE) -j$(TEST_JOBS) boards
 	@$(STAGE) boards-test $(MAKE) boards-test
 	@$(STAGE) lint $(MAKE) lint
 	@cat build/stages.txt
@@ -240,5 +240,7 @@ clean:
 include $(sort $(wildcard mk/*.mk))
 
 # After the fragments, which fill TEST_EXTRA.
+# Each extra builds on every core; its own runs stay one at a time unless the
+# target says otherwise (fuzz-run).
 test-extra:
-	@set -e; for t in $(TEST_EXTRA); do $(STAGE) $$t $(MAKE) $$t; done
+	@set -e; for t in $(TEST_EXTRA); do $(STAGE) $$t $(MAKE) -j$(TEST_JOBS) $$t; done

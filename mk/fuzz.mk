@@ -51,26 +51,14 @@ fuzz-bins: $(FUZZ_BIN)
 # libFuzzer: new inputs go to build/fuzz/work/<name> (the committed corpus
 # is only read); final figures in build/fuzz/summary.txt.
 fuzz:
-	$(MAKE) BOARD=sim BUILD=build/fuzz CC=clang SAN=1 OPT="-O1 -fsanitize=fuzzer-no-link" \
+	$(MAKE) -j$(FUZZ_JOBS) BOARD=sim BUILD=build/fuzz CC=clang SAN=1 OPT="-O1 -fsanitize=fuzzer-no-link" \
 	  FUZZ_LIBFUZZER=1 fuzz-bins
 	$(MAKE) BOARD=sim BUILD=build/fuzz FUZZ_LIBFUZZER=1 fuzz-run
 
+# FUZZ_JOBS targets at a time (mk/fuzz-run.sh), one core each.
+FUZZ_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 fuzz-run:
-	@set -e; mkdir -p $(BUILD)/findings; : >$(BUILD)/summary.txt; \
-	for t in $(FUZZ_NAMES); do \
-	  mkdir -p $(BUILD)/work/$$t; \
-	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
-	  if ! $(BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
-	      -close_fd_mask=3 -print_final_stats=1 -artifact_prefix=$(BUILD)/findings/$$t- \
-	      $(BUILD)/work/$$t tests/fuzz/corpus/$$t >$(BUILD)/$$t.log 2>&1; then \
-	    tail -40 $(BUILD)/$$t.log; echo "fuzz_$$t: FINDING (input in $(BUILD)/findings/)"; \
-	    exit 1; fi; \
-	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/$$t.log); \
-	  eps=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $(BUILD)/$$t.log); \
-	  cov=$$(grep -o 'cov: [0-9]*' $(BUILD)/$$t.log | tail -1); \
-	  echo "fuzz_$$t: $$runs runs in $(FUZZ_SECONDS) s, $$eps exec/s, $$cov, no finding" | \
-	    tee -a $(BUILD)/summary.txt; \
-	done
+	@sh mk/fuzz-run.sh $(BUILD) $(FUZZ_SECONDS) $(FUZZ_JOBS) $(FUZZ_NAMES)
 
 # make test: the corpus and the regression inputs, once, under gcc's ASan+UBSan.
 test-fuzz:
