@@ -1,11 +1,13 @@
 /* SPDX-License-Identifier: MIT */
 /* cf_plant.c: serve's results and plant settings, start and stop
  * (cf_plant.h). */
+#define _DEFAULT_SOURCE /* gethostname beside C11 */
 #include "cf_plant.h"
 #include "cf_log.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 void cf_plant_init(cf_plant_t *pl)
 {
@@ -112,6 +114,13 @@ int cf_plant_start(cf_plant_t *pl, cf_plcrun_t *rr, const char *results_dir,
     int fwd = pl->fo.plant_db || pl->fo.mqtt;
     if (out != inner)
         *out = *inner;
+    if (!pl->fo.cell_id) {
+        /* One name for results.db's rows, the plant's rows and the MQTT
+         * topics, as `fit --record` names the cell: the host's name. */
+        if (gethostname(pl->host_id, sizeof pl->host_id - 1) || !pl->host_id[0])
+            snprintf(pl->host_id, sizeof pl->host_id, "cell");
+        pl->fo.cell_id = pl->host_id;
+    }
     if (!pl->record) {
         if (fwd)
             return snprintf(msg, ml, "plant_db and mqtt need record = yes"), -1;

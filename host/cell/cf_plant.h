@@ -27,6 +27,7 @@ typedef struct cf_plant {
     int record; /* 1 by default */
     long outbox_max;
     char db_path[4096];
+    char host_id[64]; /* cell_id when the config names none: the host's name */
     cf_record_t rec;
     cf_forward_t *fwd;
     int started;

@@ -361,7 +361,8 @@ static const serve_key_t keys[] = {
     {"max_rate", "R", "requests a second per client, 0 no limit", "1000"},
     {"results_db", "FILE", "the cell's SQLite database of every job (docs/plant.md)",
      "results.db in results folder 0"},
-    {"cell_id", "NAME", "this cell's name in the results, topics and plant database", "cell"},
+    {"cell_id", "NAME", "this cell's name in the results, topics and plant database",
+     "the host's name"},
     {"plant_db", "URL",
      "forward every job to PostgreSQL: postgresql://USER@HOST:PORT/DB (the "
      "password from the config's plant_db_password or PGPASSWORD)",

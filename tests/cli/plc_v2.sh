@@ -77,6 +77,16 @@ else
     echo "skip gonescan: no cellsim beside $CF"
 fi
 
+# No cell_id in the config: results.db's rows carry the host's name, as the
+# MQTT topics and `fit --record` do (it was "" in the rows).
+if command -v sqlite3 >/dev/null && [ -f "$T/new/results/results.db" ]; then
+    ids=$(sqlite3 "$T/new/results/results.db" "SELECT DISTINCT cell_id FROM jobs")
+    [ -n "$ids" ] && [ "$ids" = "$(hostname)" ] && ok "results.db: cell_id '$ids' = the host's name" ||
+        no "results.db: cell_id '$ids', host $(hostname)"
+else
+    no "no results.db in $T/new/results (or no sqlite3)"
+fi
+
 if grep -E "Sanitizer|runtime error" "$T"/[adeg].log >/dev/null; then
     no "sanitizer reports in the server logs"; grep -hE "Sanitizer|runtime error" "$T"/[adeg].log | head -5
 else
