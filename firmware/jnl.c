@@ -2,6 +2,7 @@
 /* jnl.c: the journal of measured points: encoding, append with the sync
  * policy, recovery and the streaming reader (jnl.h, docs/journal.md). */
 #include "jnl.h"
+#include "board_config.h"
 #include <math.h>
 #include <string.h>
 
@@ -227,6 +228,31 @@ static int rec_valid(const uint8_t *b, uint64_t i, jnl_rec_t *r)
     return jnl_rec_decode(b, r) == RIG_OK && r->seq == (uint32_t)i && type_known(r->type);
 }
 
+/* jnl_scan reads this many records a call (on the stack): one pread per
+ * 80-byte record made a replay past 2^20 points slow on the cell. */
+#ifdef BOARD_JNL_SCAN_RECS
+#define JNL_SCAN_RECS BOARD_JNL_SCAN_RECS
+#else
+#define JNL_SCAN_RECS JNL_READ_RECS
+#endif
+
+/* Record i of a scan through chunks: *first and *n say what buf holds. */
+static int scan_rec(rig_store_t st, uint64_t nfull, uint64_t i, uint8_t *buf, uint64_t *first,
+                    uint64_t *n, const uint8_t **rec)
+{
+    if (i < *first || i >= *first + *n) {
+        uint64_t left = nfull - i;
+        uint64_t k = left < JNL_SCAN_RECS ? left : JNL_SCAN_RECS;
+        int rc = read_at(st, rec_off(i), buf, (size_t)k * JNL_REC_BYTES);
+        if (rc)
+            return rc;
+        *first = i;
+        *n = k;
+    }
+    *rec = buf + (size_t)(i - *first) * JNL_REC_BYTES;
+    return RIG_OK;
+}
+
 int jnl_scan(rig_store_t st, jnl_header_t *h, jnl_info_t *s)
 {
     if (!h || !s || !st.ops)
@@ -238,20 +264,22 @@ int jnl_scan(rig_store_t st, jnl_header_t *h, jnl_info_t *s)
     int rc = st.ops->size(st.ctx, &size);
     if (rc)
         return rc;
-    uint8_t b[JNL_HDR_BYTES];
+    uint8_t b[JNL_SCAN_RECS * JNL_REC_BYTES > JNL_HDR_BYTES ? JNL_SCAN_RECS * JNL_REC_BYTES
+                                                            : JNL_HDR_BYTES];
     if (size < JNL_HDR_BYTES)
         return RIG_ECORRUPT; /* torn while being created: nothing was acknowledged */
-    if ((rc = read_at(st, 0, b, sizeof b)) != RIG_OK)
+    if ((rc = read_at(st, 0, b, JNL_HDR_BYTES)) != RIG_OK)
         return rc;
     if (hdr_decode(b, h))
         return RIG_ECORRUPT;
     uint64_t nfull = (size - JNL_HDR_BYTES) / JNL_REC_BYTES;
-    uint64_t i;
+    uint64_t i, first = 0, nbuf = 0;
+    const uint8_t *p;
     jnl_rec_t r;
     for (i = 0; i < nfull; i++) {
-        if ((rc = read_at(st, rec_off(i), b, JNL_REC_BYTES)) != RIG_OK)
+        if ((rc = scan_rec(st, nfull, i, b, &first, &nbuf, &p)) != RIG_OK)
             return rc;
-        if (s->ended || !rec_valid(b, i, &r))
+        if (s->ended || !rec_valid(p, i, &r))
             break;
         if (r.type == JNL_T_END) {
             s->ended = 1;
@@ -276,9 +304,9 @@ int jnl_scan(rig_store_t st, jnl_header_t *h, jnl_info_t *s)
     /* A damaged record followed by a valid one that was appended after it
      * had been synced is damage to acknowledged data, not a torn write. */
     for (uint64_t k = i + 1; k < nfull; k++) {
-        if ((rc = read_at(st, rec_off(k), b, JNL_REC_BYTES)) != RIG_OK)
+        if ((rc = scan_rec(st, nfull, k, b, &first, &nbuf, &p)) != RIG_OK)
             return rc;
-        if (rec_valid(b, k, &r) && r.synced > i) {
+        if (rec_valid(p, k, &r) && r.synced > i) {
             s->bad_record = (int64_t)i;
             return RIG_ECORRUPT;
         }

@@ -7,6 +7,8 @@
 #define BOARD_NAME "sim"
 /* The journal's CRC from a 256-entry table (firmware/jnl_crc.c). */
 #define BOARD_JNL_CRC_TABLE256 1
+/* jnl_scan reads 512 records (40 KiB, on the stack) a call (firmware/jnl.c). */
+#define BOARD_JNL_SCAN_RECS 512
 
 #define NF_MAX_CP 40000L
 #define NF_MAX_DEGREE 5
