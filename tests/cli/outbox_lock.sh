@@ -9,17 +9,8 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-"$PY" -c "import sqlite3, fcntl" 2>/dev/null || { echo "outbox_lock: $PY with sqlite3 missing"; exit 1; }
-T=$(mktemp -d /tmp/cellfit-outbox.XXXXXX)
-pids=""
-cleanup() {
-    stop_servers
-    [ -n "${CF_KEEP:-}" ] && echo "outbox_lock: kept $T" || rm -rf "$T"
-}
-trap cleanup EXIT
-trap 'exit 1' INT TERM
+plc_setup outbox_lock
+"$PY" -c "import sqlite3, fcntl" 2>/dev/null || { echo "outbox_lock: $PY without sqlite3"; exit 1; }
 mkdir "$T/results"
 serve_start a --results "$T/results"
 [ -s "$T/results/results.db" ] && ok "results.db created" || no "no results.db: $(tail -2 "$T/a.log")"
@@ -27,5 +18,7 @@ py_step outbox_lock.py 60 regs "$port" "$T/results/results.db"
 stop_servers
 grep -q "outbox registers" "$T/a.log" && no "outbox registers: $(grep 'outbox registers' "$T/a.log")" ||
     ok "no outbox register warning in serve's log"
+grep -q "Sanitizer\|runtime error" "$T/a.log" && no "a sanitizer report: $(grep -m1 "Sanitizer\|runtime error" "$T/a.log")" ||
+    ok "no sanitizer report in serve's log"
 echo "outbox_lock: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
