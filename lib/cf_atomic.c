@@ -13,7 +13,7 @@ int cf_atomic_open(cf_atomic_t *a, const char *path, char *msg, size_t ml)
     int n = snprintf(a->tmp, sizeof a->tmp, "%s.tmp.%ld", path, (long)getpid());
     if (n < 0 || (size_t)n >= sizeof a->tmp)
         return cf_fail(msg, ml, CF_EIO, "%s: path too long", path);
-    a->f = fopen(a->tmp, "w");
+    a->f = fopen(a->tmp, "w+"); /* readable: a writer may patch what it wrote */
     if (!a->f)
         return cf_fail(msg, ml, CF_EIO, "%s: cannot create: %s", a->tmp, strerror(errno));
     return CF_OK;

@@ -10,7 +10,7 @@
 #include <stdio.h>
 
 typedef struct cf_atomic {
-    FILE *f; /* write here */
+    FILE *f; /* write here (read back too: opened "w+") */
     const char *path;
     char tmp[4096];
 } cf_atomic_t;

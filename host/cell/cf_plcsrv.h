@@ -91,8 +91,9 @@ typedef struct cf_plcsrv_opts {
      * port_file written plainly and removed at a clean exit. */
     struct cf_portfile *portfile;
     /* Appended (map version 3): asked from the server thread every
-     * CF_PLCSRV_STATS_MS, without the register lock; quick (no device
-     * I/O, one local database read). NULL: those registers stay 0. */
+     * CF_PLCSRV_STATS_MS, without the register lock; quick: no I/O at all
+     * (cf_plcstats reads results.db on a thread of its own), since every
+     * Modbus answer waits for it. NULL: those registers stay 0. */
     void (*stats)(void *ctx, cf_plc_stats_t *out);
     void *stats_ctx;
 } cf_plcsrv_opts_t;

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 struct cf_resdb {
@@ -25,6 +26,7 @@ const char *cf_resdb_strerror(int err)
         return "results database schema newer than this cellfit, or migration failed";
     case CF_RESDB_EIO: return "results database statement failed";
     case CF_RESDB_ENOTFOUND: return "no such job";
+    case CF_RESDB_ENOTDB: return "not a cellfit results database";
     default: return "unknown results database error";
     }
 }
@@ -128,6 +130,50 @@ static int migrate(cf_resdb_t *d, char *msg, size_t ml)
         return CF_RESDB_ESCHEMA;
     }
     return CF_RESDB_OK;
+}
+
+int cf_resdb_check(const char *path, char *msg, size_t ml)
+{
+    sqlite3 *db = NULL;
+    sqlite3_stmt *st = NULL;
+    int rc = CF_RESDB_OK, jobs = 0, v = 0;
+    if (sqlite3_open_v2(path, &db, SQLITE_OPEN_READONLY, NULL) != SQLITE_OK) {
+        snprintf(msg, ml, "%s: %s", path, db ? sqlite3_errmsg(db) : "cannot open");
+        rc = CF_RESDB_EOPEN;
+        goto out;
+    }
+    sqlite3_busy_timeout(db, 5000);
+    int e = sqlite3_prepare_v2(db,
+                               "SELECT (SELECT count(*) FROM sqlite_master WHERE type = 'table' "
+                               "AND name = 'jobs'), (SELECT user_version FROM pragma_user_version)",
+                               -1, &st, NULL);
+    if (e == SQLITE_OK && (e = sqlite3_step(st)) == SQLITE_ROW) {
+        jobs = sqlite3_column_int(st, 0);
+        v = sqlite3_column_int(st, 1);
+    }
+    if (e == SQLITE_NOTADB) {
+        snprintf(msg, ml, "%s: %s (not an SQLite database)", path,
+                 cf_resdb_strerror(CF_RESDB_ENOTDB));
+        rc = CF_RESDB_ENOTDB;
+    } else if (e != SQLITE_ROW) {
+        snprintf(msg, ml, "%s: %s", path, sqlite3_errmsg(db));
+        rc = CF_RESDB_EOPEN;
+    } else if (!jobs || v < 1) { /* SQLite reads an empty file as an empty database */
+        struct stat sb;
+        snprintf(msg, ml, "%s: %s (%s)", path, cf_resdb_strerror(CF_RESDB_ENOTDB),
+                 jobs                                  ? "schema version 0"
+                 : !stat(path, &sb) && sb.st_size == 0 ? "an empty file"
+                                                       : "an SQLite database without a jobs table");
+        rc = CF_RESDB_ENOTDB;
+    } else if (v > CF_RESDB_VERSION) {
+        snprintf(msg, ml, "%s: schema version %d, this cellfit knows %d", path, v,
+                 CF_RESDB_VERSION);
+        rc = CF_RESDB_ESCHEMA;
+    }
+out:
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+    return rc;
 }
 
 int cf_resdb_open(const char *path, cf_resdb_t **out, char *msg, size_t ml)

@@ -17,10 +17,11 @@
 
 enum {
     CF_RESDB_OK = 0,
-    CF_RESDB_EOPEN = -1,    /* cannot open or create the file */
-    CF_RESDB_ESCHEMA = -2,  /* a newer schema, or a migration failed */
-    CF_RESDB_EIO = -3,      /* a statement failed (disk full, locked too long) */
-    CF_RESDB_ENOTFOUND = -4 /* no such job */
+    CF_RESDB_EOPEN = -1,     /* cannot open or create the file */
+    CF_RESDB_ESCHEMA = -2,   /* a newer schema, or a migration failed */
+    CF_RESDB_EIO = -3,       /* a statement failed (disk full, locked too long) */
+    CF_RESDB_ENOTFOUND = -4, /* no such job */
+    CF_RESDB_ENOTDB = -5     /* a file, but not a results database */
 };
 const char *cf_resdb_strerror(int err);
 
@@ -66,6 +67,14 @@ typedef struct cf_resdb_obstat {
 } cf_resdb_obstat_t;
 
 typedef struct cf_resdb cf_resdb_t;
+
+/* Whether an existing path is a results database (SQLite, a jobs table,
+ * schema version 1 .. CF_RESDB_VERSION), looked at read-only, before
+ * cf_resdb_open would migrate whatever it is given: CF_RESDB_OK;
+ * CF_RESDB_ENOTDB (another file, another application's SQLite database, an
+ * empty file) or CF_RESDB_ESCHEMA (a newer schema) with msg saying why;
+ * CF_RESDB_EOPEN when it cannot be read. */
+int cf_resdb_check(const char *path, char *msg, size_t ml);
 
 /* Open (create) path and migrate it to CF_RESDB_VERSION. */
 int cf_resdb_open(const char *path, cf_resdb_t **out, char *msg, size_t ml);

@@ -87,9 +87,9 @@ static void fill_fit(cf_resdb_job_t *row, const cf_fitjob_result_t *f, const cf_
     row->control_points = (long)f->surf.nu * f->surf.nv;
 }
 
-static int db_path(const cmd_record_t *r, char *buf, size_t n)
+int cmd_record_db_path(const char *db, char *buf, size_t n)
 {
-    const char *p = r->db ? r->db : "results/results.db";
+    const char *p = db ? db : "results/results.db";
     struct stat sb;
     if (!stat(p, &sb) && S_ISDIR(sb.st_mode))
         return cf_record_default_path(p, buf, n);
@@ -101,8 +101,16 @@ int cmd_record(const char *cmd, const cmd_record_t *r, const cmd_record_job_t *j
     if (!r->on && !r->db)
         return CLI_OK;
     char path[4096], msg[512];
-    if (db_path(r, path, sizeof path))
+    if (cmd_record_db_path(r->db, path, sizeof path))
         return cli_error(cmd, CLI_FAIL, "--db %s: path too long; the job is not recorded", r->db);
+    /* An existing file must be ours: cf_resdb_open would migrate anything. */
+    struct stat sb;
+    int ce = stat(path, &sb) ? CF_RESDB_OK : cf_resdb_check(path, msg, sizeof msg);
+    if (ce)
+        return cli_error(cmd, CLI_FAIL,
+                         "--record: %s; the job is not recorded (--db: a results database, "
+                         "a folder for its results.db, or a new file)",
+                         msg);
     cf_resdb_job_t *row = calloc(1, sizeof *row);
     if (!row)
         return cli_error(cmd, CLI_FAIL, "--record: out of memory; the job is not recorded");

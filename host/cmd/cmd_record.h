@@ -25,6 +25,10 @@ typedef struct cmd_record {
 /* The rows --record and --db into t (r zeroed first). Returns CMD_RECORD_N. */
 int cmd_record_table(cf_opt_t *t, cmd_record_t *r);
 
+/* The database --db names (NULL: the default results/results.db): a
+ * folder stands for its results.db. 0, or -1 when it does not fit in n. */
+int cmd_record_db_path(const char *db, char *buf, size_t n);
+
 /* What the job wrote and how it ended, for its row. */
 typedef struct cmd_record_job {
     const char *command;                    /* "fit", "scan", "scan_fit" */

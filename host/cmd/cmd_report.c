@@ -6,10 +6,11 @@
  * points' best-fit plane, the per-point deviations for a spreadsheet (CSV)
  * and for CloudCompare (PLY coloured on the map's scale), and the figures
  * for an SPC system (Q-DAS DFQ), with the deviation at named check points
- * or zones (--checks, cf_checks.h) after the five figures. The points are streamed (three passes with
- * --png: plane, extent, deviations; one more for the PLY, whose colours
- * need the scale); memory is fixed by the surface, the map raster and the
- * histogram. The data footprint (cf_fpmap: the feet per cell of the
+ * or zones (--checks, cf_checks.h) after the five figures. The points are
+ * streamed (three passes with --png or --ply: plane, extent, deviations;
+ * each point projected once, the PLY's colours written over it at the end,
+ * when the scale is known); memory is fixed by the surface, the map raster
+ * and the histogram. The data footprint (cf_fpmap: the feet per cell of the
  * surface's knot spans) is counted (no_data_cells, footprint_share) and
  * marked on the map: "no data" cells hatched, the outline drawn. */
 #include "cf_checks.h"
@@ -170,39 +171,19 @@ static void map_rgb(double d, void *ctx, unsigned char rgb[3])
     rgb[2] = (unsigned char)c;
 }
 
-/* One more pass for the PLY: the scale chosen from the data is known once
- * the map has seen every deviation (cf_devmap_render). */
-static int write_ply(const report_opts_t *o, cf_devmap_t *map, const cf_stats_t *st,
-                     cf_points_t *pr, cf_seedgrid_t *sg, double *buf)
+/* The PLY's colours, once the scale is known: a scale chosen from the data
+ * needs every deviation (cf_devmap_render; the PNG's render fixed it already). */
+static int ply_colours(const report_opts_t *o, cf_devmap_t *map, const cf_stats_t *st,
+                       cf_ptsout_t *out)
 {
     char msg[512];
     cf_image_t im;
-    if (!o->png) { /* the PNG's render fixed the scale already */
+    if (!o->png) {
         if (cf_devmap_render(map, st, &im, msg, sizeof msg))
             return cli_error("report", CLI_FAIL, "%s", msg);
         cf_image_free(&im);
     }
-    cf_ptsout_t ply;
-    if (cf_points_rewind(pr) ||
-        cf_ptsout_open(&ply, NULL, o->ply, o->tol, 0, map_rgb, map, msg, sizeof msg))
-        return cli_error("report", CLI_FAIL, "%s: %s", o->ply, msg);
-    long got;
-    while ((got = cf_points_read(pr, buf, RBATCH, msg, sizeof msg)) > 0) {
-        const int cols = cf_points_cols(pr);
-        for (long k = 0; k < got; k++) {
-            const double *Q = xyz_of(buf, cols, k);
-            nf_proj_t pj;
-            cf_seedgrid_project(sg, Q, 1e-9, &pj);
-            cf_ptsout_pt_t p = {Q[0], Q[1], Q[2], pj.u, pj.v, pj.dist, NAN};
-            cf_ptsout_add(&ply, &p);
-        }
-    }
-    if (got < 0) {
-        cf_ptsout_abort(&ply);
-        return cli_error("report", CLI_USAGE, "%s", msg);
-    }
-    if (cf_ptsout_close(&ply, msg, sizeof msg))
-        return cli_error("report", CLI_FAIL, "%s", msg);
+    cf_ptsout_set_rgb(out, map_rgb, map);
     return CLI_OK;
 }
 
@@ -240,8 +221,8 @@ int cmd_report(int argc, char **argv)
     cf_seedgrid_t sg;
     memset(&sg, 0, sizeof sg);
     cf_devmap_t *map = NULL;
-    cf_ptsout_t csv;
-    memset(&csv, 0, sizeof csv);
+    cf_ptsout_t out; /* the CSV and the PLY */
+    memset(&out, 0, sizeof out);
     cf_fpmap_t fpm;
     memset(&fpm, 0, sizeof fpm);
     nf_footprint_stats_t fs;
@@ -302,7 +283,8 @@ int cmd_report(int argc, char **argv)
         }
     }
     /* The deviations: project each point, add its signed distance. */
-    if (o.csv && cf_ptsout_open(&csv, o.csv, NULL, o.tol, 0, NULL, NULL, msg, sizeof msg)) {
+    if ((o.csv || o.ply) &&
+        cf_ptsout_open(&out, o.csv, o.ply, o.tol, 0, NULL, NULL, msg, sizeof msg)) {
         ec = cli_error("report", CLI_FAIL, "%s", msg);
         goto done;
     }
@@ -318,9 +300,9 @@ int cmd_report(int argc, char **argv)
             cf_checks_add(&cs, Q, pj.dist);
             if (map)
                 cf_devmap_add(map, Q, pj.dist);
-            if (o.csv) {
+            if (o.csv || o.ply) {
                 cf_ptsout_pt_t p = {Q[0], Q[1], Q[2], pj.u, pj.v, pj.dist, NAN};
-                cf_ptsout_add(&csv, &p);
+                cf_ptsout_add(&out, &p);
             }
         }
     }
@@ -339,12 +321,12 @@ int cmd_report(int argc, char **argv)
         ec = cli_error("report", CLI_FAIL, "%s", msg);
         goto done;
     }
-    if (o.csv && cf_ptsout_close(&csv, msg, sizeof msg)) {
+    if (o.ply && (ec = ply_colours(&o, map, st, &out)) != CLI_OK)
+        goto done;
+    if ((o.csv || o.ply) && cf_ptsout_close(&out, msg, sizeof msg)) {
         ec = cli_error("report", CLI_FAIL, "%s", msg);
         goto done;
     }
-    if (o.ply && (ec = write_ply(&o, map, st, pr, &sg, buf)) != CLI_OK)
-        goto done;
     cf_checks_warn(&cs, stderr, "cellfit report");
     if (o.dfq && (ec = write_dfq(&o, st, &cs)) != CLI_OK)
         goto done;
@@ -406,8 +388,8 @@ int cmd_report(int argc, char **argv)
         }
     }
 done:
-    if (ec != CLI_OK && o.csv)
-        cf_ptsout_abort(&csv);
+    if (ec != CLI_OK)
+        cf_ptsout_abort(&out); /* nothing when closed or never opened */
     cf_checks_free(&cs);
     cf_devmap_free(map);
     cf_fpmap_free(&fpm);

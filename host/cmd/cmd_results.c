@@ -9,6 +9,7 @@
 #include "cf_resdb.h"
 #include "cf_resfmt.h"
 #include "cmd.h"
+#include "cmd_record.h"
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -88,8 +89,9 @@ int cmd_results(int argc, char **argv)
         {.name = "db",
          .kind = CF_OPT_STR,
          .dst = &dbpath,
-         .arg = "FILE",
-         .help = "the cell's results database (serve's RESULTS_DIR/results.db)."},
+         .arg = "PATH",
+         .help = "the cell's results database (serve's RESULTS_DIR/results.db), or a results "
+                 "folder (its results.db)."},
         {.name = "part",
          .kind = CF_OPT_LONG,
          .dst = &part,
@@ -130,12 +132,28 @@ int cmd_results(int argc, char **argv)
         return cli_error(CMD, CLI_USAGE, "%s takes %s", sub, want == 2 ? "a UUID" : "no argument");
     if (json && csv)
         return cli_error(CMD, CLI_USAGE, "--json or --csv, not both");
-    char msg[512];
+    char msg[512], path[4096];
     cf_resdb_t *db;
+    if (cmd_record_db_path(dbpath, path, sizeof path))
+        return cli_error(CMD, CLI_USAGE, "--db %s: path too long", dbpath);
+    dbpath = path;
     FILE *probe = fopen(dbpath, "rb"); /* querying never creates a database */
     if (!probe)
-        return cli_error(CMD, CLI_USAGE, "%s: no results database there", dbpath);
+        return cli_error(CMD, CLI_USAGE,
+                         "%s: no results database there (--db: serve's results folder or its "
+                         "results.db)",
+                         dbpath);
     fclose(probe);
+    /* Only ours is opened: cf_resdb_open would migrate (write into) any
+     * file, an empty one or another application's SQLite database too. */
+    int ce = cf_resdb_check(dbpath, msg, sizeof msg);
+    if (ce == CF_RESDB_ESCHEMA)
+        return cli_error(CMD, CLI_USAGE, "%s: query it with a cellfit that new", msg);
+    if (ce)
+        return cli_error(CMD, ce == CF_RESDB_EOPEN ? CLI_FAIL : CLI_USAGE,
+                         "%s; --db takes the results.db that `cellfit serve` or `cellfit fit "
+                         "--record` wrote, or their results folder",
+                         msg);
     if (cf_resdb_open(dbpath, &db, msg, sizeof msg))
         return cli_error(CMD, CLI_FAIL, "%s", msg);
     int ec = CLI_OK;

@@ -592,7 +592,8 @@ int cmd_serve(int argc, char **argv)
                                                              : PLC_REFINE_AUTO;
     /* Map version 3: the outbox (results.db, when jobs are recorded) and
      * the last scan's counts as registers. */
-    cf_plcstats_t stats = {&c.run, c.plant.started ? c.plant.db_path : NULL, NULL, 0};
+    cf_plcstats_t stats;
+    cf_plcstats_start(&stats, &c.run, c.plant.started ? c.plant.db_path : NULL);
     so.stats = cf_plcstats_read;
     so.stats_ctx = &stats;
     so.fit_robust = (uint16_t)(c.run.fit.robust != 0);

@@ -18,8 +18,7 @@ int cf_ptsout_open(cf_ptsout_t *o, const char *csv, const char *ply, double tol,
     o->weights = weights;
     o->rgb = rgb;
     o->rgb_ctx = rgb_ctx;
-    if (ply && !rgb)
-        return cf_fail(msg, ml, CF_EARG, "cf_ptsout_open: a PLY needs a colour scale");
+    o->late_rgb = ply && !rgb;
     int rc;
     if (csv) {
         if ((rc = cf_atomic_open(&o->csv, csv, msg, ml)))
@@ -44,6 +43,7 @@ int cf_ptsout_open(cf_ptsout_t *o, const char *csv, const char *ply, double tol,
               "property uchar red\nproperty uchar green\nproperty uchar blue\n"
               "property double scalar_deviation\nend_header\n",
               f);
+        o->data_at = ftell(f);
     }
     return CF_OK;
 }
@@ -75,8 +75,9 @@ void cf_ptsout_add(cf_ptsout_t *o, const cf_ptsout_pt_t *p)
         fputc('\n', o->csv.f);
     }
     if (o->has_ply) {
-        unsigned char rgb[3];
-        o->rgb(p->dev, o->rgb_ctx, rgb);
+        unsigned char rgb[3] = {0, 0, 0}; /* late colours: patched at close */
+        if (!o->late_rgb)
+            o->rgb(p->dev, o->rgb_ctx, rgb);
         put_le64(o->ply.f, p->x);
         put_le64(o->ply.f, p->y);
         put_le64(o->ply.f, p->z);
@@ -85,12 +86,56 @@ void cf_ptsout_add(cf_ptsout_t *o, const cf_ptsout_pt_t *p)
     }
 }
 
+void cf_ptsout_set_rgb(cf_ptsout_t *o, cf_ptsout_rgb_fn rgb, void *rgb_ctx)
+{
+    o->rgb = rgb;
+    o->rgb_ctx = rgb_ctx;
+}
+
+static double get_le64(const unsigned char *c)
+{
+    uint64_t b = 0;
+    for (int i = 0; i < 8; i++)
+        b |= (uint64_t)c[i] << (8 * i);
+    double d;
+    memcpy(&d, &b, 8);
+    return d;
+}
+
+/* The late colours: each vertex's from the deviation written in it, a block
+ * at a time (relative seeks: a long offset may not reach 2 GB). 0 or -1. */
+static int recolour(cf_ptsout_t *o)
+{
+    enum { REC = 35, DEV = 27, RGB = 24, BLOCK = 256 }; /* x y z, r g b, deviation */
+    unsigned char buf[REC * BLOCK];
+    FILE *f = o->ply.f;
+    if (fflush(f) || fseek(f, o->data_at, SEEK_SET))
+        return -1;
+    for (long long left = o->n; left > 0;) {
+        size_t k = left < BLOCK ? (size_t)left : BLOCK;
+        if (fread(buf, REC, k, f) != k)
+            return -1;
+        for (size_t i = 0; i < k; i++)
+            o->rgb(get_le64(buf + REC * i + DEV), o->rgb_ctx, buf + REC * i + RGB);
+        if (fseek(f, -(long)(REC * k), SEEK_CUR) || fwrite(buf, REC, k, f) != k ||
+            fseek(f, 0, SEEK_CUR)) /* a seek between a write and the next read */
+            return -1;
+        left -= (long long)k;
+    }
+    return 0;
+}
+
 int cf_ptsout_close(cf_ptsout_t *o, char *msg, size_t ml)
 {
     int rc = CF_OK;
     if (o->has_ply) {
         FILE *f = o->ply.f;
-        if (fseek(f, o->count_at, SEEK_SET) || fprintf(f, "%0*lld", PLY_COUNT_DIGITS, o->n) < 0)
+        if (o->late_rgb && !o->rgb)
+            rc = cf_fail(msg, ml, CF_EARG, "cf_ptsout_close: the PLY has no colour scale");
+        else if (o->late_rgb && recolour(o))
+            rc = cf_fail(msg, ml, CF_EIO, "%s: cannot write the colours", o->ply.path);
+        else if (fseek(f, o->count_at, SEEK_SET) ||
+                 fprintf(f, "%0*lld", PLY_COUNT_DIGITS, o->n) < 0)
             rc = cf_fail(msg, ml, CF_EIO, "%s: cannot patch the vertex count", o->ply.path);
         if (rc)
             cf_atomic_abort(&o->ply);

@@ -3,8 +3,9 @@
 # `set -u`: the pass/fail count and its ok/no lines, expect (exit code, with
 # stdout and stderr kept in $T/out and $T/err), json (a field of a one-line
 # JSON object), le (numeric <=), and stop_all (the PIDs in $PIDS stopped in
-# reverse order: TERM, a short wait, KILL). Not a test itself: the Makefile's
-# test-cli leaves it out.
+# reverse order: TERM, a short wait, KILL); for the scripts that serve:
+# stop_servers, plc_setup, plc_part, serve_start, py_step. Not a test
+# itself: the Makefile's test-cli leaves it out.
 pass=0
 fail=0
 PIDS=""
@@ -45,6 +46,44 @@ stop_servers() {
         kill -KILL "$p" 2>/dev/null
     done
     pids=""
+}
+# plc_setup NAME [rig] [TOOL...]: the preamble of the scripts that run
+# serve with a Python PLC (plc*.sh, trim.sh), after CF=$(realpath "$1"):
+# HERE, and PY (Debian's python3) with its pymodbus checked, and each TOOL
+# (missing: exit 1); with rig, no cellsim beside $CF skips the script (exit
+# 0, "NAME: 0 passed, 0 failed") and $T/part is the simulated rig's part;
+# $T made, and at exit $plc_atexit (a command, if set), stop_servers and $T
+# removed; INT and TERM exit 1. Its variables are plc_*: expect and
+# serve_start set want, name and got (sh has only globals).
+plc_setup() {
+    plc_name=$1; shift
+    plc_rig=; [ "${1:-}" = rig ] && { plc_rig=1; shift; }
+    HERE=$(cd "$(dirname "$0")" && pwd)
+    PY=/usr/bin/python3
+    "$PY" -c "import sys; sys.path.insert(0, '$HERE'); import plc_cycle" 2>/dev/null ||
+        { echo "$plc_name: $PY without pymodbus (scripts/deps.sh test)"; exit 1; }
+    for plc_tool in "$@"; do
+        command -v "$plc_tool" >/dev/null ||
+            { echo "$plc_name: $plc_tool missing (scripts/deps.sh test)"; exit 1; }
+    done
+    if [ -n "$plc_rig" ] && [ ! -x "$(dirname "$CF")/cellsim" ]; then
+        echo "skip $plc_name: no cellsim beside $CF"
+        echo "$plc_name: 0 passed, 0 failed"
+        exit 0
+    fi
+    T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-$plc_name.XXXXXX")
+    pids=""
+    trap 'eval "${plc_atexit:-}"; stop_servers; rm -rf "$T"' EXIT
+    trap 'exit 1' INT TERM
+    if [ -n "$plc_rig" ]; then # cellsim's part (--part): its nominal and check.uv
+        "$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
+    fi
+}
+# plc_part DIR NU NV COUNT: a part for FIT (`cellfit gen`, noise 0.002 mm)
+# in DIR, and its points as x y z in DIR/points.xyz.
+plc_part() {
+    "$CF" gen --dir "$1" --nu "$2" --nv "$3" --count "$4" --noise 0.002 >/dev/null
+    grep -v '^#' "$1/points.uvxyz" | cut -d' ' -f3- >"$1/points.xyz"
 }
 # serve_start NAME ARGS...: `$CF serve` on 127.0.0.1, port 0, in the
 # background, stderr in $T/NAME.log; sets $port and $pid, adds $pid to $pids.

@@ -9,12 +9,7 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plc.XXXXXX")
-pids=""
-stop_all() { stop_servers; }
-trap 'stop_all; rm -rf "$T"' EXIT
+plc_setup plc mbpoll
 py() { py_step plc_cycle.py 300 "$@"; } # py STEP ARGS...
 start() { serve_start "$@"; }          # start NAME ARGS...
 mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
@@ -22,10 +17,8 @@ mb() { timeout 10 mbpoll -m tcp -p "$port" -0 -1 "$@" 127.0.0.1 2>&1; }
 # The part: 200000 x y z points (projected by the fit: a job of a few
 # tenths of a second). The watchdog's cell gets 10^6 (a job of seconds,
 # which must outlast WATCHDOG_MS = 300 ms on a fast machine too).
-"$CF" gen --dir "$T" --nu 16 --nv 12 --count 200000 --noise 0.002 >/dev/null
-grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
-"$CF" gen --dir "$T/big" --nu 16 --nv 12 --count 1000000 --noise 0.002 >/dev/null
-grep -v '^#' "$T/big/points.uvxyz" | cut -d' ' -f3- >"$T/big/points.xyz"
+plc_part "$T" 16 12 200000
+plc_part "$T/big" 16 12 1000000
 # EXPORT's check points and zones (config checks): a point near row 5000, a
 # zone around row 120000 and one far from every point (no value).
 awk 'NR == 5000 { printf "P1 %.6f %.6f %.6f\n", $1 + 0.05, $2 - 0.03, $3 + 0.1 }
@@ -212,6 +205,6 @@ if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/b.log" "$T/c.log" "$T/w.log"
 else
     ok "no sanitizer report in the server logs"
 fi
-stop_all
+stop_servers
 echo "plc: $pass passed, $fail failed"
 [ $fail -eq 0 ]

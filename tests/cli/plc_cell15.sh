@@ -13,21 +13,11 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-cell15.XXXXXX")
-pids=""
-stop_all() { stop_servers; }
-trap 'stop_all; umount "$T/small" 2>/dev/null; rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
+plc_atexit='umount "$T/small" 2>/dev/null' # the small journal folder (5.), before $T goes
+plc_setup plc_cell15 rig
 py() { py_step plc_cell15.py 120 "$@"; } # py STEP PORT ARGS...
 stop_one() { kill -TERM "$1"; wait "$1"; pids=$(echo "$pids" | sed "s/\\b$1\\b//"); }
 BOUND=${CELL15_ABORT_BOUND:-2.0}
-
-if [ ! -x "$(dirname "$CF")/cellsim" ]; then
-    echo "skip: no cellsim beside $CF"; echo "plc_cell15: 0 passed, 0 failed"; exit 0
-fi
-"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
 
 # 1. ABORT against a hung device: bounded.
 serve_start h --sim --nominal "$T/part/nominal.igs" --results "$T/res" \
@@ -120,8 +110,7 @@ expect 2 "serve --min-free-mb -1: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --mi
 
 # 5a. The outbox registers = `cellfit results outbox`, the broker down,
 # then up (mosquitto on a free port of 127.0.0.1).
-"$CF" gen --dir "$T/fp" --nu 16 --nv 12 --count 20000 --noise 0.002 >/dev/null
-grep -v '^#' "$T/fp/points.uvxyz" | cut -d' ' -f3- >"$T/fp/points.xyz"
+plc_part "$T/fp" 16 12 20000
 if command -v mosquitto >/dev/null; then
     mq=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
     serve_start o --nominal "$T/fp/nominal.igs" --points "$T/fp/points.xyz" --results "$T/reso" \
@@ -162,8 +151,7 @@ stop_one "$pid"
 # `cellfit fit --refine auto` (1: --refine residual): a coarse 8 x 6
 # nominal under the 40 x 30 part's points, fitted to 0.01 mm for 99 %.
 "$CF" gen --dir "$T/coarse" --nu 8 --nv 6 --count 1000 >/dev/null
-"$CF" gen --dir "$T/fine" --nu 40 --nv 30 --count 20000 --noise 0.002 >/dev/null
-grep -v '^#' "$T/fine/points.uvxyz" | cut -d' ' -f3- >"$T/fine/points.xyz"
+plc_part "$T/fine" 40 30 20000
 serve_start r --nominal "$T/coarse/nominal.igs" --points "$T/fine/points.xyz" --results "$T/resr"
 grep -q "fit defaults (FIT_TOL .. FIT_REPARAM): plain" "$T/r.log" && ok "serve starts with FIT_TOL 0" || no "fit defaults: $(grep 'fit defaults' "$T/r.log")"
 py refine "$port" "$T/refine.cps"
@@ -190,6 +178,6 @@ if grep -E "Sanitizer|runtime error" "$T"/*.log >/dev/null; then
 else
     ok "no sanitizer report in the server logs"
 fi
-stop_all
+stop_servers
 echo "plc_cell15: $pass passed, $fail failed"
 [ $fail -eq 0 ]

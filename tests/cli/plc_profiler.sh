@@ -12,17 +12,7 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-if [ ! -x "$(dirname "$CF")/cellsim" ]; then
-    echo "skip plc_profiler: no cellsim beside $CF"
-    echo "plc_profiler: 0 passed, 0 failed"
-    exit 0
-fi
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plcprof.XXXXXX")
-pids=""
-trap 'stop_servers; rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
+plc_setup plc_profiler rig
 py() { py_step plc_rig.py 120 "$@"; }
 
 # The GigE Vision port free (another profiler test may hold it): up to 60 s.
@@ -32,7 +22,6 @@ while ! "$PY" -c 'import socket; s = socket.socket(socket.AF_INET, socket.SOCK_D
     sleep 1; i=$((i + 1))
 done
 
-"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
 mkdir -p "$T/res"
 serve_start p --sim --scan-method profiler \
     --sim-args="--speed 5000 --seed 5 --part $T/part/nominal.igs --gev-width 256 --gev-height 16 --gev-profiles 160" \

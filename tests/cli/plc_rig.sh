@@ -16,18 +16,7 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-if [ ! -x "$(dirname "$CF")/cellsim" ]; then
-    echo "skip plc_rig: no cellsim beside $CF"
-    echo "plc_rig: 0 passed, 0 failed"
-    exit 0
-fi
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plcrig.XXXXXX")
-pids=""
-stop_all() { stop_servers; }
-trap 'stop_all; rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
+plc_setup plc_rig rig mbpoll
 PYS=plc_rig.py
 py() { py_step "$PYS" 120 "$@"; } # py STEP ARGS...: one client step
 # start NAME ARGS...: serve_start, and with --sim $simport and $simpid (from
@@ -38,7 +27,6 @@ start() {
     simpid=$(sed -n 's/.*rig: cellsim pid \([0-9]*\) on .*/\1/p' "$T/$1.log")
 }
 
-"$CF" gen --dir "$T/part" --nu 40 --nv 30 --count 1000 >/dev/null
 mkdir -p "$T/res"
 SIMARGS="--speed 5000 --seed 1 --part $T/part/nominal.igs --control $T/a.ctl"
 start a --sim --sim-args="$SIMARGS" --nominal "$T/part/nominal.igs" --results "$T/res"
@@ -194,6 +182,6 @@ if grep -E "Sanitizer|runtime error" "$T"/*.log >/dev/null; then
 else
     ok "no sanitizer report in the server logs"
 fi
-stop_all
+stop_servers
 echo "plc_rig: $pass passed, $fail failed"
 [ $fail -eq 0 ]

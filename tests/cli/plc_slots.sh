@@ -13,17 +13,11 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-slots.XXXXXX")
-pids=""
-stop_all() { stop_servers; }
-trap 'stop_all; rm -rf "$T"' EXIT
+plc_setup plc_slots
 py() { py_step plc_slots.py 120 "$@"; } # py STEP ARGS...
 
 # A FIT of 200,000 projected points: a job of a few tenths of a second.
-"$CF" gen --dir "$T" --nu 16 --nv 12 --count 200000 --noise 0.002 >/dev/null
-grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
+plc_part "$T" 16 12 200000
 mkdir -p "$T/results"
 
 serve_start a --nominal "$T/nominal.igs" --points "$T/points.xyz" --results "$T/results" \
@@ -60,6 +54,6 @@ if grep -E "Sanitizer|runtime error" "$T/a.log" "$T/s.log" >/dev/null; then
 else
     ok "no sanitizer report in the server logs"
 fi
-stop_all
+stop_servers
 echo "plc_slots: $pass passed, $fail failed"
 [ $fail -eq 0 ]

@@ -12,18 +12,11 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-plcv2.XXXXXX")
-pids=""
-stop_all() { stop_servers; }
-trap 'stop_all; rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
+plc_setup plc_v2
 py() { py_step plc_v2.py 120 "$@"; }  # py STEP PORT ARGS...
 py1() { py_step plc_cycle.py 120 "$@"; }
 
-"$CF" gen --dir "$T" --nu 16 --nv 12 --count 20000 --noise 0.002 >/dev/null
-grep -v '^#' "$T/points.uvxyz" | cut -d' ' -f3- >"$T/points.xyz"
+plc_part "$T" 16 12 20000
 mkdir -p "$T/n2" && cp "$T/nominal.igs" "$T/n2/nominal.igs"
 printf 'not IGES\n' >"$T/bad.igs"
 
@@ -92,6 +85,6 @@ if grep -E "Sanitizer|runtime error" "$T"/[adeg].log >/dev/null; then
 else
     ok "no sanitizer report in the server logs"
 fi
-stop_all
+stop_servers
 echo "plc_v2: $pass passed, $fail failed"
 [ $fail -eq 0 ]

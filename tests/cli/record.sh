@@ -5,7 +5,9 @@
 # results.db as serve does: `cellfit results show UUID --json` checked
 # against the command's own JSON summary, sha256sum of the files written
 # and sqlite3 reading the database directly; a database that cannot be
-# opened fails the command (exit 1) with the surface still written.
+# opened fails the command (exit 1) with the surface still written; `results
+# --db` takes a folder, and refuses (fit --record too) a file that is not a
+# results database, leaving it as it was.
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
@@ -99,6 +101,36 @@ mkdir "$T/cwd"
 expect 1 "--db in a folder that does not exist: exit 1" "$CF" fit --base "$T/part/nominal.igs" \
     --points "$T/points.xyz" --out "$T/f3.igs" --db "$T/nowhere/results.db"
 grep -q "not recorded" "$T/err" && [ -f "$T/f3.igs" ] && ok "  said so; the surface is written" ||
+    no "  message: $(cat "$T/err")"
+
+# `results --db` takes a folder like `fit --db`; a file that is not a
+# results database (text, empty, another application's SQLite database)
+# is refused, exit 2 saying what --db takes, and left as it was (cmp);
+# `fit --record --db` on one likewise (exit 1, the surface written).
+n=$("$CF" results list --db "$T/results" | wc -l)
+[ "$n" = 2 ] && ok "results list --db FOLDER: its results.db, 2 jobs" || no "results list --db FOLDER: $n"
+printf 'x y z\n1 2 3\n' >"$T/notes.txt"
+: >"$T/empty.db"
+sqlite3 "$T/other.db" "CREATE TABLE parts (id INTEGER); INSERT INTO parts VALUES (7)"
+for f in notes.txt empty.db other.db; do
+    cp "$T/$f" "$T/$f.orig"
+    for sub in list outbox; do
+        expect 2 "results $sub --db $f: refused, exit 2" "$CF" results $sub --db "$T/$f"
+        grep -q "$f: not a cellfit results database (.*); --db takes the results.db that .cellfit serve. or .cellfit fit --record. wrote, or their results folder" "$T/err" &&
+            ok "  says it is not one and what --db takes" || no "  message: $(cat "$T/err")"
+    done
+    expect 1 "fit --record --db $f: not recorded, exit 1" "$CF" fit --base "$T/part/nominal.igs" \
+        --points "$T/points.xyz" --out "$T/f5.igs" --db "$T/$f"
+    grep -q "not a cellfit results database" "$T/err" && [ -f "$T/f5.igs" ] &&
+        ok "  said so; the surface is written" || no "  message: $(cat "$T/err")"
+    cmp -s "$T/$f" "$T/$f.orig" && [ ! -e "$T/$f-wal" ] && ok "  $f left as it was" ||
+        no "$f changed: $(ls -la "$T/$f"*)"
+    rm -f "$T/f5.igs"
+done
+"$CF" results list --db "$T/empty.db" 2>&1 | grep -q "(an empty file)" &&
+    ok "an empty file is called one" || no "empty file: $("$CF" results list --db "$T/empty.db" 2>&1)"
+expect 2 "results list --db a folder without results.db: exit 2" "$CF" results list --db "$T/cwd"
+grep -q "cwd/results.db: no results database there" "$T/err" && ok "  names the results.db it looked for" ||
     no "  message: $(cat "$T/err")"
 
 # cellfit scan --fit --record on the simulated rig: the journal, the

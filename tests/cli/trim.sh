@@ -17,12 +17,7 @@
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
-HERE=$(cd "$(dirname "$0")" && pwd)
-PY=/usr/bin/python3
-T=$(mktemp -d "${TMPDIR:-/tmp}/cellfit-trim.XXXXXX")
-pids=""
-stop_pids() { stop_servers; }
-trap 'stop_pids; rm -rf "$T"' EXIT
+plc_setup trim
 if ! sh tests/occt/build.sh "$T/occt" >"$T/occt.log" 2>&1; then
     if [ "${CI:-}" = true ]; then no "OpenCASCADE check could not be built: $(tail -2 "$T/occt.log")"; else
         echo "skip OpenCASCADE trim check: $(tail -1 "$T/occt.log")"; fi
@@ -154,7 +149,7 @@ if [ -f "$d/fitted.igs" ] && [ -f "$d/fitted.stp" ]; then
 else
     no "serve: $(tail -3 "$T/cell.out"; tail -3 "$T/cell.log")"
 fi
-stop_pids
+stop_servers
 grep -q "Sanitizer\|runtime error" "$T/cell.log" && no "serve: a sanitizer report: $(grep -m1 "Sanitizer\|runtime error" "$T/cell.log")" ||
     ok "serve: no sanitizer report in its log"
 echo "trim: $pass passed, $fail failed"

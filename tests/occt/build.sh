@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 # tests/occt/build.sh OUTDIR: build OUTDIR/occt_eval (IGES),
 # OUTDIR/occt_step (STEP) and OUTDIR/occt_trim (trimmed faces) against Debian's OpenCASCADE packages. Exits 3 with "occt: not available" when the headers
-# or libraries are missing, so callers can skip the check.
+# or libraries are missing, so callers can skip the check. The three share
+# occt_shape.hxx (reading a file into a shape, evaluating its surface).
 set -u
 out="${1:?usage: build.sh OUTDIR}"
 here=$(dirname "$0")

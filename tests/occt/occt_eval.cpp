@@ -5,67 +5,33 @@
 // for each "u v" line on stdin prints "x y z" with %.17g. Degrees, pole counts
 // and rationality go to stderr; --info adds the surface and face UV bounds.
 // Usage: occt_eval [--info] FILE.igs < uv.txt
-#include <BRepTools.hxx>
-#include <BRep_Tool.hxx>
-#include <Geom_BSplineSurface.hxx>
-#include <Geom_RectangularTrimmedSurface.hxx>
-#include <Geom_Surface.hxx>
-#include <IFSelect_ReturnStatus.hxx>
-#include <IGESControl_Reader.hxx>
-#include <Interface_Static.hxx>
-#include <Message.hxx>
-#include <Message_Messenger.hxx>
-#include <Message_PrinterOStream.hxx>
-#include <Standard_Failure.hxx>
-#include <TopExp_Explorer.hxx>
-#include <TopLoc_Location.hxx>
-#include <TopoDS.hxx>
-#include <TopoDS_Face.hxx>
-#include <TopoDS_Shape.hxx>
-#include <gp_Pnt.hxx>
+#include "occt_shape.hxx"
 
-#include <cstdio>
-#include <cstring>
+#include <BRepTools.hxx>
+#include <Standard_Failure.hxx>
 
 static int run(const char *path, bool info)
 {
-    // OCCT reports progress on std::cout; stdout must carry only the points.
-    Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
-    IGESControl_Reader rd;
-    // Keep the B-spline as written: no splitting of C0 patches into faces.
-    Interface_Static::SetIVal("read.iges.bspline.continuity", 0);
-    if (rd.ReadFile(path) != IFSelect_RetDone) {
+    occt_quiet();
+    TopoDS_Shape shape;
+    if (!occt_read_iges(path, shape)) {
         std::fprintf(stderr, "occt_eval: %s: IGESControl_Reader cannot read it\n", path);
         return 2;
     }
-    rd.TransferRoots();
-    TopoDS_Shape shape = rd.OneShape();
-    TopExp_Explorer ex(shape, TopAbs_FACE);
-    if (!ex.More()) {
+    TopoDS_Face face;
+    if (!occt_first_face(shape, face)) {
         std::fprintf(stderr, "occt_eval: %s: no face after transfer\n", path);
         return 2;
     }
-    TopoDS_Face face = TopoDS::Face(ex.Current());
     TopLoc_Location loc;
     Handle(Geom_Surface) surf = BRep_Tool::Surface(face, loc);
     if (surf.IsNull()) {
         std::fprintf(stderr, "occt_eval: %s: face without a surface\n", path);
         return 2;
     }
-    Handle(Geom_Surface) basis = surf;
-    Handle(Geom_RectangularTrimmedSurface) tr =
-        Handle(Geom_RectangularTrimmedSurface)::DownCast(surf);
-    if (!tr.IsNull())
-        basis = tr->BasisSurface();
-    Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(basis);
-    if (bs.IsNull())
-        std::fprintf(stderr, "occt_eval: surface type %s, not Geom_BSplineSurface\n",
-                     basis->DynamicType()->Name());
-    else
-        std::fprintf(
-            stderr, "occt_eval: degrees %d %d, poles %d x %d, rational %d %d, location %s\n",
-            bs->UDegree(), bs->VDegree(), bs->NbUPoles(), bs->NbVPoles(), (int)bs->IsURational(),
-            (int)bs->IsVRational(), loc.IsIdentity() ? "identity" : "non-identity");
+    char d[256];
+    occt_describe(surf, loc, d, sizeof d);
+    std::fprintf(stderr, "occt_eval: %s\n", d);
     if (info) {
         double u0, u1, v0, v1;
         surf->Bounds(u0, u1, v0, v1);
@@ -74,22 +40,10 @@ static int run(const char *path, bool info)
         BRepTools::UVBounds(face, u0, u1, v0, v1);
         std::fprintf(stderr, "occt_eval: face bounds u [%.17g, %.17g] v [%.17g, %.17g]\n", u0, u1,
                      v0, v1);
-        int nf = 0;
-        for (TopExp_Explorer e2(shape, TopAbs_FACE); e2.More(); e2.Next())
-            nf++;
-        std::fprintf(stderr, "occt_eval: %d face(s) in the file\n", nf);
+        std::fprintf(stderr, "occt_eval: %d face(s) in the file\n",
+                     occt_count(shape, TopAbs_FACE));
     }
-    char line[512];
-    while (std::fgets(line, sizeof line, stdin)) {
-        double u, v;
-        if (std::sscanf(line, "%lf %lf", &u, &v) != 2)
-            continue;
-        gp_Pnt p;
-        surf->D0(u, v, p);
-        if (!loc.IsIdentity())
-            p.Transform(loc.Transformation());
-        std::printf("%.17g %.17g %.17g\n", p.X(), p.Y(), p.Z());
-    }
+    occt_eval_stdin(surf, loc, "");
     return 0;
 }
 

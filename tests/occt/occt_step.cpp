@@ -9,47 +9,25 @@
 // STEPControl_Writer (as a shell-based surface model, mm), so that our
 // reader can be checked on a file we did not write.
 // Usage: occt_step [--write OUT.stp] FILE.stp < uv.txt
+#include "occt_shape.hxx"
+
 #include <BRepCheck_Analyzer.hxx>
-#include <BRep_Tool.hxx>
-#include <Geom_BSplineSurface.hxx>
-#include <Geom_RectangularTrimmedSurface.hxx>
-#include <Geom_Surface.hxx>
-#include <IFSelect_ReturnStatus.hxx>
-#include <Message.hxx>
-#include <Message_Messenger.hxx>
-#include <Message_PrinterOStream.hxx>
-#include <Interface_Static.hxx>
-#include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
 #include <Standard_Failure.hxx>
-#include <TopExp_Explorer.hxx>
-#include <TopLoc_Location.hxx>
-#include <TopoDS.hxx>
-#include <TopoDS_Face.hxx>
-#include <TopoDS_Shape.hxx>
-#include <gp_Pnt.hxx>
-
-#include <cstdio>
-#include <cstring>
 
 static int run(const char *path, const char *out)
 {
-    // OCCT reports progress on std::cout; stdout must carry only the points.
-    Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
-    STEPControl_Reader rd;
-    if (rd.ReadFile(path) != IFSelect_RetDone) {
+    occt_quiet();
+    TopoDS_Shape shape;
+    int roots = 0, done = 0;
+    if (!occt_read_step(path, shape, &roots, &done)) {
         std::fprintf(stderr, "occt_step: %s: STEPControl_Reader cannot read it\n", path);
         return 2;
     }
-    int roots = rd.NbRootsForTransfer();
-    int done = rd.TransferRoots();
-    TopoDS_Shape shape = rd.OneShape();
-    int nf = 0, ne = 0;
-    for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next())
-        nf++;
-    TopExp_Explorer ex(shape, TopAbs_FACE);
+    int nf = occt_count(shape, TopAbs_FACE);
     std::fprintf(stderr, "occt_step: %d root(s), %d transferred, %d face(s)\n", roots, done, nf);
-    if (!ex.More())
+    TopoDS_Face face;
+    if (!occt_first_face(shape, face))
         return 2;
     if (out) {
         STEPControl_Writer wr;
@@ -60,9 +38,7 @@ static int run(const char *path, const char *out)
             return 2;
         }
     }
-    TopoDS_Face face = TopoDS::Face(ex.Current());
-    for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next())
-        ne++;
+    int ne = occt_count(face, TopAbs_EDGE);
     // The topology as OCCT's checker sees it: edges on the surface, a
     // closed wire, vertices within tolerance.
     BRepCheck_Analyzer chk(shape);
@@ -73,33 +49,13 @@ static int run(const char *path, const char *out)
         std::fprintf(stderr, "occt_step: %s: face without a surface\n", path);
         return 2;
     }
-    Handle(Geom_Surface) basis = surf;
-    Handle(Geom_RectangularTrimmedSurface) tr =
-        Handle(Geom_RectangularTrimmedSurface)::DownCast(surf);
-    if (!tr.IsNull())
-        basis = tr->BasisSurface();
-    Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(basis);
-    if (bs.IsNull())
-        std::fprintf(stderr, "occt_step: surface type %s, not Geom_BSplineSurface\n",
-                     basis->DynamicType()->Name());
+    char d[256];
+    occt_describe(surf, loc, d, sizeof d);
+    if (std::strncmp(d, "degrees", 7))
+        std::fprintf(stderr, "occt_step: %s\n", d);
     else
-        std::fprintf(stderr,
-                     "occt_step: %d edge(s); degrees %d %d, poles %d x %d, rational %d %d, "
-                     "location %s\n",
-                     ne, bs->UDegree(), bs->VDegree(), bs->NbUPoles(), bs->NbVPoles(),
-                     (int)bs->IsURational(), (int)bs->IsVRational(),
-                     loc.IsIdentity() ? "identity" : "non-identity");
-    char line[512];
-    while (std::fgets(line, sizeof line, stdin)) {
-        double u, v;
-        if (std::sscanf(line, "%lf %lf", &u, &v) != 2)
-            continue;
-        gp_Pnt p;
-        surf->D0(u, v, p);
-        if (!loc.IsIdentity())
-            p.Transform(loc.Transformation());
-        std::printf("%.17g %.17g %.17g\n", p.X(), p.Y(), p.Z());
-    }
+        std::fprintf(stderr, "occt_step: %d edge(s); %s\n", ne, d);
+    occt_eval_stdin(surf, loc, "");
     return nf == 1 ? 0 : 3;
 }
 

@@ -11,6 +11,8 @@
 // "wire K edges E length L bbox U0 V0 U1 V1" (uv length and box of its
 // parameter-space curves) and "pt K U V" samples (9 per edge), then for
 // each "u v" line on stdin the face's surface at (u, v) as "xyz X Y Z".
+#include "occt_shape.hxx"
+
 #include <BRepAdaptor_Curve2d.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
@@ -19,39 +21,24 @@
 #include <BRepLib.hxx>
 #include <BRepTools.hxx>
 #include <BRepTools_WireExplorer.hxx>
-#include <BRep_Tool.hxx>
 #include <GCE2d_MakeSegment.hxx>
 #include <GCPnts_AbscissaPoint.hxx>
 #include <Geom2dConvert.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Circle.hxx>
 #include <Geom2d_TrimmedCurve.hxx>
-#include <Geom_BSplineSurface.hxx>
-#include <Geom_RectangularTrimmedSurface.hxx>
-#include <IFSelect_ReturnStatus.hxx>
 #include <IGESControl_Controller.hxx>
-#include <IGESControl_Reader.hxx>
 #include <IGESControl_Writer.hxx>
-#include <Interface_Static.hxx>
-#include <Message.hxx>
-#include <Message_Messenger.hxx>
-#include <Message_PrinterOStream.hxx>
-#include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
 #include <Standard_Failure.hxx>
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
-#include <TopExp_Explorer.hxx>
-#include <TopoDS.hxx>
-#include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
 #include <gp_Ax2d.hxx>
 #include <gp_Circ2d.hxx>
 
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <vector>
 
 static Handle(Geom_BSplineSurface) nominal()
@@ -119,17 +106,6 @@ static int make(const char *igs, const char *stp)
     return 0;
 }
 
-static bool ends(const char *p, const char *e)
-{
-    size_t n = std::strlen(p), m = std::strlen(e);
-    if (n < m)
-        return false;
-    for (size_t i = 0; i < m; i++)
-        if (std::tolower((unsigned char)p[n - m + i]) != e[i])
-            return false;
-    return true;
-}
-
 static void wire_out(int k, const TopoDS_Wire &w, const TopoDS_Face &f)
 {
     double len = 0, b[4] = {1e300, 1e300, -1e300, -1e300};
@@ -159,28 +135,12 @@ static void wire_out(int k, const TopoDS_Wire &w, const TopoDS_Face &f)
 static int read(const char *path)
 {
     TopoDS_Shape shape;
-    if (ends(path, ".stp") || ends(path, ".step")) {
-        STEPControl_Reader rd;
-        if (rd.ReadFile(path) != IFSelect_RetDone)
-            return 2;
-        rd.TransferRoots();
-        shape = rd.OneShape();
-    } else {
-        IGESControl_Reader rd;
-        Interface_Static::SetIVal("read.iges.bspline.continuity", 0);
-        if (rd.ReadFile(path) != IFSelect_RetDone)
-            return 2;
-        rd.TransferRoots();
-        shape = rd.OneShape();
-    }
-    int nf = 0;
-    for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next())
-        nf++;
-    std::printf("faces %d\n", nf);
-    TopExp_Explorer ex(shape, TopAbs_FACE);
-    if (!ex.More())
+    if (!occt_read(path, shape))
         return 2;
-    TopoDS_Face face = TopoDS::Face(ex.Current());
+    std::printf("faces %d\n", occt_count(shape, TopAbs_FACE));
+    TopoDS_Face face;
+    if (!occt_first_face(shape, face))
+        return 2;
     std::printf("valid %d\n", (int)BRepCheck_Analyzer(face).IsValid());
     TopoDS_Wire outer = BRepTools::OuterWire(face);
     wire_out(0, outer, face);
@@ -190,23 +150,13 @@ static int read(const char *path)
             wire_out(k++, TopoDS::Wire(e.Current()), face);
     TopLoc_Location loc;
     Handle(Geom_Surface) surf = BRep_Tool::Surface(face, loc);
-    char line[512];
-    while (std::fgets(line, sizeof line, stdin)) {
-        double u, v;
-        if (std::sscanf(line, "%lf %lf", &u, &v) != 2)
-            continue;
-        gp_Pnt p;
-        surf->D0(u, v, p);
-        if (!loc.IsIdentity())
-            p.Transform(loc.Transformation());
-        std::printf("xyz %.17g %.17g %.17g\n", p.X(), p.Y(), p.Z());
-    }
+    occt_eval_stdin(surf, loc, "xyz ");
     return 0;
 }
 
 int main(int argc, char **argv)
 {
-    Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
+    occt_quiet();
     try {
         if (argc >= 3 && !std::strcmp(argv[1], "make"))
             return make(argv[2], argc > 3 ? argv[3] : nullptr);

@@ -2,7 +2,8 @@
 /* test_ptsout.c: per-point CSV and binary PLY read back by the point
  * reader (cf_points: a separate parser) and byte by byte: every point's
  * coordinates bit for bit, the header's count patched, the colour and the
- * in/out column as the scale and the tolerance say. */
+ * in/out column as the scale and the tolerance say, whether the colours
+ * are given at open or only before close (written over the finished PLY). */
 #include "cf_err.h"
 #include "cf_points.h"
 #include "cf_ptsout.h"
@@ -20,22 +21,24 @@ static void rgb(double dev, void *ctx, unsigned char c[3])
     c[2] = dev > 0 ? 0 : 255;
 }
 
-static void test_csv_and_ply(void **state)
+static void csv_and_ply(int late)
 {
-    (void)state;
     char csv[256], ply[256], msg[256];
     const char *tmp = getenv("CF_TEST_TMP");
     snprintf(csv, sizeof csv, "%s/p%ld.csv", tmp && *tmp ? tmp : "/tmp", (long)getpid());
     snprintf(ply, sizeof ply, "%s/p%ld.ply", tmp && *tmp ? tmp : "/tmp", (long)getpid());
     enum { N = 1000 };
     cf_ptsout_t o;
-    assert_int_equal(cf_ptsout_open(&o, csv, ply, 0.05, 1, rgb, NULL, msg, sizeof msg), CF_OK);
+    assert_int_equal(
+        cf_ptsout_open(&o, csv, ply, 0.05, 1, late ? NULL : rgb, NULL, msg, sizeof msg), CF_OK);
     assert_int_equal(access(csv, F_OK), -1); /* nothing visible before close */
     for (int i = 0; i < N; i++) {
         cf_ptsout_pt_t p = {i * 0.1, 1.0 / (i + 1),      -i * 1e-7,         i / 1000.0,
                             0.5,     (i % 7 - 3) * 0.02, i % 2 ? 1.0 : 0.25};
         cf_ptsout_add(&o, &p);
     }
+    if (late)
+        cf_ptsout_set_rgb(&o, rgb, NULL);
     assert_int_equal(cf_ptsout_close(&o, msg, sizeof msg), CF_OK);
     /* The CSV through the header-aware reader: u v x y z by name. */
     cf_points_t *r;
@@ -89,8 +92,37 @@ static void test_csv_and_ply(void **state)
     remove(ply);
 }
 
+static void test_csv_and_ply(void **state)
+{
+    (void)state;
+    csv_and_ply(0);
+}
+
+static void test_late_colours(void **state)
+{
+    (void)state;
+    csv_and_ply(1);
+}
+
+/* A PLY whose colours never came: refused at close, nothing left behind. */
+static void test_no_colours(void **state)
+{
+    (void)state;
+    char ply[256], msg[256];
+    const char *tmp = getenv("CF_TEST_TMP");
+    snprintf(ply, sizeof ply, "%s/q%ld.ply", tmp && *tmp ? tmp : "/tmp", (long)getpid());
+    cf_ptsout_t o;
+    assert_int_equal(cf_ptsout_open(&o, NULL, ply, 0.05, 0, NULL, NULL, msg, sizeof msg), CF_OK);
+    cf_ptsout_pt_t p = {1, 2, 3, 0, 0, 0.01, 1};
+    cf_ptsout_add(&o, &p);
+    assert_int_equal(cf_ptsout_close(&o, msg, sizeof msg), CF_EARG);
+    assert_int_equal(access(ply, F_OK), -1);
+}
+
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_csv_and_ply)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_csv_and_ply),
+                                       cmocka_unit_test(test_late_colours),
+                                       cmocka_unit_test(test_no_colours)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

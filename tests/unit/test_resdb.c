@@ -5,7 +5,9 @@
  * refused; a record and its outbox entries in one transaction; the outbox's
  * bound (oldest dropped and counted); due, retry and delivery; the queries'
  * filters; WAL on the file; figures a shell fit does not know (NaN,
- * verdict 0) stored as NULL and read back as NaN and 0. */
+ * verdict 0) stored as NULL and read back as NaN and 0; cf_resdb_check
+ * telling ours from a text file, an empty one and another SQLite database
+ * (each left byte for byte as it was). */
 #include "cf_resdb.h"
 #include "cf_test.h"
 #include <math.h>
@@ -130,6 +132,47 @@ static void test_newer_refused(void **state)
     assert_null(db);
     assert_non_null(strstr(msg, "99"));
     assert_int_equal(q1("PRAGMA user_version"), 99); /* untouched */
+}
+
+/* cf_resdb_check on what --db may be given: each file's bytes unchanged. */
+static void check_file(const char *bytes, size_t n, int want, const char *why)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, n, f), n);
+    fclose(f);
+    char msg[256] = "", back[64];
+    assert_int_equal(cf_resdb_check(path, msg, sizeof msg), want);
+    assert_non_null(strstr(msg, why));
+    f = fopen(path, "rb");
+    assert_int_equal(fread(back, 1, sizeof back, f), n);
+    fclose(f);
+    assert_memory_equal(back, bytes, n);
+    remove(path);
+}
+
+static void test_check(void **state)
+{
+    (void)state;
+    char msg[256];
+    check_file("x y z\n1 2 3\n", 12, CF_RESDB_ENOTDB, "not an SQLite database");
+    check_file("", 0, CF_RESDB_ENOTDB, "an empty file");
+    assert_int_equal(cf_resdb_check(path, msg, sizeof msg), CF_RESDB_EOPEN); /* none there */
+    exec_raw("CREATE TABLE parts (id INTEGER); INSERT INTO parts VALUES (7);");
+    assert_int_equal(cf_resdb_check(path, msg, sizeof msg), CF_RESDB_ENOTDB);
+    assert_non_null(strstr(msg, "without a jobs table"));
+    assert_int_equal(q1("SELECT count(*) FROM sqlite_master"), 1); /* parts alone, as it was */
+    remove(path);
+    exec_raw("CREATE TABLE jobs (x); PRAGMA user_version = 99;");
+    assert_int_equal(cf_resdb_check(path, msg, sizeof msg), CF_RESDB_ESCHEMA);
+    remove(path);
+    cf_resdb_t *db; /* ours, current and (test_migrate_v1's) version 1 */
+    assert_int_equal(cf_resdb_open(path, &db, msg, sizeof msg), CF_RESDB_OK);
+    cf_resdb_close(db);
+    assert_int_equal(cf_resdb_check(path, msg, sizeof msg), CF_RESDB_OK);
+    remove(path);
+    exec_raw("CREATE TABLE jobs (job_uuid TEXT); PRAGMA user_version = 1;");
+    assert_int_equal(cf_resdb_check(path, msg, sizeof msg), CF_RESDB_OK);
 }
 
 static void test_record_wal(void **state)
@@ -286,6 +329,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_migrate_v1, setup),
         cmocka_unit_test_setup(test_newer_refused, setup),
+        cmocka_unit_test_setup(test_check, setup),
         cmocka_unit_test_setup(test_record_wal, setup),
         cmocka_unit_test_setup(test_outbox_bound, setup),
         cmocka_unit_test_setup(test_due_retry_delivered, setup),
