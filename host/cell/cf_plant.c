@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 void cf_plant_init(cf_plant_t *pl)
@@ -136,6 +137,11 @@ int cf_plant_start(cf_plant_t *pl, cf_plcrun_t *rr, const char *results_dir,
     }
     cf_record_t *r = &pl->rec;
     memset(r, 0, sizeof *r);
+    /* An existing file that is not a results database is refused, never
+     * migrated (as `cellfit results` and `fit --record` refuse it). */
+    struct stat sb;
+    if (!stat(pl->db_path, &sb) && cf_resdb_check(pl->db_path, msg, ml))
+        return -1;
     int rc = cf_resdb_open(pl->db_path, &r->db, msg, ml);
     if (rc)
         return -1;

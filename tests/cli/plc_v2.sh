@@ -51,6 +51,15 @@ py defaults "$port" 0.04 95 4000 0 1 2
 py idle "$port" 1500
 grep -q "idle timeout 1500 ms" "$T/d.log" && ok "log: idle timeout 1500 ms" || no "idle_ms not logged"
 expect 2 "serve --idle-ms 999: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --idle-ms 999
+# results_db naming another application's SQLite database: refused at
+# start, the file left as it was (serve migrated it into one before).
+/usr/bin/python3 -c 'import sqlite3, sys; c = sqlite3.connect(sys.argv[1]); c.execute("CREATE TABLE t (x)"); c.commit()' \
+    "$T/other.db"
+cp "$T/other.db" "$T/other.orig"
+expect 1 "serve --results-db on another application's SQLite file: refused" timeout 10 "$CF" serve \
+    --plc tcp:127.0.0.1:0 --results-db "$T/other.db"
+cmp -s "$T/other.db" "$T/other.orig" && ok "that file is left byte for byte as it was" ||
+    no "serve changed another application's database"
 kill -TERM "$pid"; wait "$pid"; pids=$(echo "$pids" | sed "s/\\b$pid\\b//")
 
 # A nominal that is not IGES: FIT ends in ERROR 301 (the doc's code).
