@@ -39,9 +39,53 @@ int scan_otf_row_begin(scan_otf_t *o, long row)
     o->hi_trig = o->hi_read = 0;
     o->any_trig = o->any_read = 0;
     o->n_out = 0;
+    o->has_end = o->end_seen = 0;
     for (int i = 0; i < SCAN_OTF_WINDOW; i++)
         o->slot[i].state = 0;
     return RIG_OK;
+}
+
+int scan_otf_row_end_at(scan_otf_t *o, double x, double y, double tol)
+{
+    if (!o || !(tol > 0) || !(x - x == 0) || !(y - y == 0)) /* finite, without math.h */
+        return RIG_EARG;
+    if (o->row < 0)
+        return RIG_ESTATE;
+    o->has_end = 1;
+    o->end_xy[0] = x;
+    o->end_xy[1] = y;
+    o->end_tol = tol;
+    return RIG_OK;
+}
+
+int scan_otf_end_seen(const scan_otf_t *o)
+{
+    return o && o->row >= 0 && o->end_seen;
+}
+
+/* Number num latched the row's end: it is the row's last, and whatever
+ * the window already holds after it is dropped (arrival out of order). */
+static void end_latched(scan_otf_t *o, uint64_t num)
+{
+    if (o->end_seen && num >= o->end_num)
+        return;
+    o->end_seen = 1;
+    o->end_num = num;
+    for (int i = 0; i < SCAN_OTF_WINDOW; i++) {
+        scan_otf_slot_t *s = &o->slot[i];
+        if (!s->state || s->num <= num)
+            continue;
+        if (s->state & HAVE_POS)
+            o->c.trig--, o->c.past_end++;
+        if (s->state & HAVE_RD)
+            o->c.read--, o->c.past_end++;
+        s->state = 0;
+    }
+}
+
+static int past_end(const scan_otf_t *o, uint64_t num)
+{
+    return o->end_seen && num != UINT64_MAX && num > o->end_num;
 }
 
 /* The unwrapped number of a 16-bit one, against the stream's highest so
@@ -207,6 +251,12 @@ int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n)
         return RIG_ESTATE;
     for (size_t i = 0; i < n; i++) {
         uint64_t num = unwrap(o->hi_trig, o->any_trig, ev[i].seq);
+        if (past_end(o, num)) {
+            o->hi_trig = num > o->hi_trig ? num : o->hi_trig; /* unwrapping goes on */
+            o->any_trig = 1;
+            o->c.past_end++;
+            continue;
+        }
         int rc;
         scan_otf_slot_t *s = slot_for(o, num, &rc);
         if (rc)
@@ -226,6 +276,9 @@ int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n)
         s->state |= HAVE_POS;
         s->x = o->enc.org[0] + (double)ev[i].enc[0] * o->enc.mm_per_count[0];
         s->y = o->enc.org[1] + (double)ev[i].enc[1] * o->enc.mm_per_count[1];
+        if (o->has_end && s->x - o->end_xy[0] <= o->end_tol && o->end_xy[0] - s->x <= o->end_tol &&
+            s->y - o->end_xy[1] <= o->end_tol && o->end_xy[1] - s->y <= o->end_tol)
+            end_latched(o, num);
     }
     return advance(o);
 }
@@ -240,6 +293,12 @@ int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n)
         return RIG_ESTATE;
     for (size_t i = 0; i < n; i++) {
         uint64_t num = unwrap(o->hi_read, o->any_read, r[i].seq);
+        if (past_end(o, num)) {
+            o->hi_read = !o->any_read || num > o->hi_read ? num : o->hi_read;
+            o->any_read = 1;
+            o->c.past_end++;
+            continue;
+        }
         int rc;
         scan_otf_slot_t *s = slot_for(o, num, &rc);
         if (rc)
@@ -271,6 +330,8 @@ int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected)
         return RIG_ESTATE;
     uint64_t end =
         o->any_trig || o->any_read ? (o->hi_trig > o->hi_read ? o->hi_trig : o->hi_read) + 1 : 0;
+    if (o->end_seen && end > o->end_num + 1)
+        end = o->end_num + 1; /* what came after the end trigger was dropped */
     int rc = RIG_OK;
     while (!rc && o->base < end)
         rc = retire_one(o);

@@ -14,6 +14,8 @@
  *   a number already behind the window     -> late (dropped)
  *   the box's overrun flag                 -> overrun
  *   a row ended by a stage fault           -> rows_cut
+ *   an event numbered after the trigger that
+ *   latched the row's end position          -> past_end (dropped)
  * so that, once a row is ended, trig = paired + nosurf + errors +
  * trig_no_read and read = paired + nosurf + errors + read_no_trig, and every
  * number below the row's end is in exactly one of paired, nosurf, errors,
@@ -51,6 +53,7 @@ typedef struct scan_otf_counts {
     uint64_t trig_no_read, read_no_trig, both_lost;
     uint64_t dup_trig, dup_read, late, overrun;
     uint64_t rows, rows_cut;
+    uint64_t past_end; /* events after the row's end trigger, each side counted */
 } scan_otf_counts_t;
 
 /* A chunk of a row: n points (x y z each) in trigger order, their trigger
@@ -96,6 +99,11 @@ typedef struct scan_otf {
     int gp_kind, gp_has_xy;
     uint64_t gp_num, gp_count;
     double gp_xy[2];
+    /* The row's end (scan_otf_row_end_at): once a position within end_tol
+     * of end_xy is latched, end_num is its number and the row's last. */
+    int has_end, end_seen;
+    double end_xy[2], end_tol;
+    uint64_t end_num;
 } scan_otf_t;
 
 /* Errors beyond rig_err_t's: none; RIG_EARG for a bad call, RIG_ESTATE for
@@ -109,6 +117,18 @@ void scan_otf_set_gap(scan_otf_t *o, scan_otf_gap_fn fn);
 
 /* A row starts (the box and the probe were armed for it: numbering from 0). */
 int scan_otf_row_begin(scan_otf_t *o, long row);
+
+/* The row ends at stage position (x, y): the first trigger (by number)
+ * whose latched position lies within tol (mm, each axis) of it is the
+ * row's last. The box keeps firing until the host stops it, at a stage
+ * standing at the end; those events (numbered after it) are dropped and
+ * counted as past_end, never paired nor counted as losses, so that a
+ * host late to see the row's end adds no point (issue 19). After
+ * scan_otf_row_begin; without it a row ends at scan_otf_row_end only. */
+int scan_otf_row_end_at(scan_otf_t *o, double x, double y, double tol);
+
+/* 1 once the row's end position has been latched (the triggers can stop). */
+int scan_otf_end_seen(const scan_otf_t *o);
 
 /* Events as they arrive, in any order and in batches of any size. */
 int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n);
