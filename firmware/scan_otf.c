@@ -3,6 +3,7 @@
  * readings by trigger number (scan_otf.h): a ring of SCAN_OTF_WINDOW slots
  * indexed by number, retired in number order. */
 #include "scan_otf.h"
+#include <math.h>
 #include <string.h>
 
 enum { HAVE_POS = 1, HAVE_RD = 2 };
@@ -47,7 +48,7 @@ int scan_otf_row_begin(scan_otf_t *o, long row)
 
 int scan_otf_row_end_at(scan_otf_t *o, double x, double y, double tol)
 {
-    if (!o || !(tol > 0) || !(x - x == 0) || !(y - y == 0)) /* finite, without math.h */
+    if (!o || !(tol > 0) || !isfinite(x) || !isfinite(y) || !isfinite(tol))
         return RIG_EARG;
     if (o->row < 0)
         return RIG_ESTATE;
