@@ -336,7 +336,8 @@ int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected)
     int rc = RIG_OK;
     while (!rc && o->base < end)
         rc = retire_one(o);
-    if (!rc && !stage_fault && expected > o->base) { /* the last triggers, lost on both sides */
+    if (!rc && !stage_fault && !o->end_seen &&
+        expected > o->base) { /* the last triggers, lost on both sides */
         o->c.both_lost += expected - o->base;
         rc = gap_add(o, JNL_GAP_BOTH, o->base, expected - o->base, NULL);
     }

@@ -139,7 +139,8 @@ int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n);
  * should have fired (its length over the spacing; 0 unknown), so triggers
  * lost at its end on both sides are counted too. stage_fault != 0 counts
  * the row as cut short by the stage (its points so far are kept, and the
- * triggers it never reached are not losses). */
+ * triggers it never reached are not losses; nor are those after the end
+ * trigger of scan_otf_row_end_at). */
 int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected);
 
 #endif
