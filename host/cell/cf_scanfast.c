@@ -146,6 +146,7 @@ static void otf_counts(const scan_otf_t *o, unsigned long dropped, cf_scanfast_r
     res->overrun = (long)c->overrun;
     res->rows_cut = (long)c->rows_cut;
     res->past_end = (long)c->past_end;
+    res->before_start = (long)c->before_start;
     res->dropped_by_probe = (long)dropped;
 }
 
@@ -158,18 +159,28 @@ static void otf_counts(const scan_otf_t *o, unsigned long dropped, cf_scanfast_r
  * a loaded machine) adds no point, only drain time (issue 19). *fault set
  * when the stage faulted (or E-stop) mid-row. */
 static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t *cb,
-                          double period_us, double t_row, unsigned long *dropped, int *fault,
-                          int *where)
+                          double period_us, double t_row, const double to[2],
+                          unsigned long *dropped, int *fault, int *where)
 {
     /* Bounds, so that a stage that never reports the row's end or a stream
      * whose end never comes is an error, not a hang: the row's travel three
      * times over plus 2 s; 2 s without an entry once stopped. */
     double t_start = cli_now(), t_entry = t_start, t_max = 3 * t_row + 2;
+    /* Armed before the move: the row's first triggers fall on the stage
+     * standing at its start, and the pairing keeps the last of them
+     * (scan_otf_row_start_at), so no trigger of the travel is missed
+     * however long the move command takes. */
     int moving = 1, armed = 1, rc = hal_probe_stream_start(&rig->pr, (uint32_t)lround(period_us));
     if (rc) {
         *where = SCAN_AT_PROBE;
         return rc;
     }
+    if ((rc = hal_stage_move_start(&rig->st, to[0], to[1])) != 0) {
+        *where = SCAN_AT_STAGE;
+        hal_probe_stream_stop(&rig->pr);
+        return rc;
+    }
+    t_start = t_entry = cli_now();
     int stopped = 0, skip = 0;
     double t_poll = cli_now();
     while (!rc) {
@@ -318,16 +329,13 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
         /* The row's end: the first trigger latched within half a step of
          * it (or 2 um, an encoder's jitter at rest) is the row's last. */
         if ((rc = scan_otf_row_begin(&o, row)) != 0 ||
-            (rc = scan_otf_row_end_at(&o, xb, y, fmax(pl->dx / 2, 0.002))) != 0)
+            (rc = scan_otf_row_end_at(&o, xb, y, fmax(pl->dx / 2, 0.002))) != 0 ||
+            (rc = scan_otf_row_start_at(&o, xa, y)) != 0)
             break;
-        if ((rc = hal_stage_move_start(&rig->st, xb, y)) != 0) {
-            res->where = SCAN_AT_STAGE;
-            scan_otf_row_end(&o, 1, 0);
-            break;
-        }
         int fault = 0, where = SCAN_AT_NONE;
-        rc = otf_stream_row(rig, &o, cb, res->period_us, fabs(xb - xa) / speed, &dropped, &fault,
-                            &where);
+        const double to[2] = {xb, y};
+        rc = otf_stream_row(rig, &o, cb, res->period_us, fabs(xb - xa) / speed, to, &dropped,
+                            &fault, &where);
         int erc = scan_otf_row_end(&o, fault != 0, 0);
         if (!rc)
             rc = erc;

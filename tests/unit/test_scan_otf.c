@@ -103,7 +103,8 @@ static int on_gap(void *ctx, long row, int kind, uint64_t num, uint64_t count, c
 typedef struct plan {
     long n;
     uint8_t *drop_t, *drop_r, *dup_t, *dup_r, *nosurf, *overrun, *late;
-    long stop_at; /* > 0: the stage stands from this number on (its position latched again) */
+    long stop_at;  /* > 0: the stage stands from this number on (its position latched again) */
+    long start_at; /* > 0: the stage stands at this number's position until it */
 } plan_t;
 
 static void plan_alloc(plan_t *p, long n)
@@ -176,7 +177,9 @@ static void deliver(scan_otf_t *o, const plan_t *p, long lag)
                 break;
             }
             last_t = nt;
-            uint64_t at = (uint64_t)(p->stop_at > 0 && nt > p->stop_at ? p->stop_at : nt);
+            uint64_t at = (uint64_t)(nt < p->start_at                    ? p->start_at
+                                     : p->stop_at > 0 && nt > p->stop_at ? p->stop_at
+                                                                         : nt);
             rig_trig_event_t e = {(uint16_t)nt,
                                   p->overrun[nt] ? RIG_TRIG_F_OVERRUN : 0,
                                   (uint32_t)(nt * 50),
@@ -529,12 +532,51 @@ static void t_end_at(void **state)
     assert_int_equal(s.bad, 0);
 }
 
+/* The box armed before the stage moves (scan_otf_row_start_at): numbers
+ * 0..399 fall on the stage standing at number 400's position; only 400,
+ * the last there, is the row's first point, the rest dropped as
+ * before_start; the row ends at 3000 as in t_end_at. Losses only while
+ * moving (one lost while standing ends the start: scan_otf.h). */
+static void t_start_at(void **state)
+{
+    (void)state;
+    static scan_otf_t o;
+    const long start = 400, end = 3000;
+    plan_t p;
+    plan_alloc(&p, 5000);
+    p.start_at = start;
+    p.stop_at = end;
+    for (long k = start + 1; k < end; k++)
+        plan_loss(&p, k);
+    sink_t s = {0};
+    assert_int_equal(scan_otf_init(&o, &kin, &enc, on_row, &s), RIG_OK);
+    assert_int_equal(scan_otf_row_begin(&o, 0), RIG_OK);
+    const double sx = enc.org[0] + enc_x(start) * enc.mm_per_count[0];
+    const double sy = enc.org[1] + enc_y(start) * enc.mm_per_count[1];
+    assert_int_equal(scan_otf_row_start_at(&o, sx, sy), RIG_ESTATE); /* its tol comes first */
+    assert_int_equal(scan_otf_row_end_at(&o, enc.org[0] + enc_x(end) * enc.mm_per_count[0],
+                                         enc.org[1] + enc_y(end) * enc.mm_per_count[1], 3e-3),
+                     RIG_OK);
+    assert_int_equal(scan_otf_row_start_at(&o, sx, sy), RIG_OK);
+    deliver(&o, &p, 8);
+    assert_int_equal(scan_otf_row_end(&o, 0, 0), RIG_OK);
+    assert_int_equal(o.c.before_start, 2 * start);
+    plan_t mid = p; /* the counts of numbers start..end only */
+    mid.drop_t += start, mid.drop_r += start, mid.dup_t += start, mid.dup_r += start;
+    mid.nosurf += start, mid.overrun += start, mid.late += start;
+    mid.n = end - start + 1;
+    check_counts(&o, &mid, &s);
+    assert_true(s.points > 0 && s.prev <= (uint64_t)end);
+    plan_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(t_clean_wraps), cmocka_unit_test(t_injected),
         cmocka_unit_test(t_cut_row),     cmocka_unit_test(t_rows_and_errors),
         cmocka_unit_test(t_gaps),        cmocka_unit_test(t_end_at),
+        cmocka_unit_test(t_start_at),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
