@@ -3,6 +3,7 @@
  * readings by trigger number (scan_otf.h): a ring of SCAN_OTF_WINDOW slots
  * indexed by number, retired in number order. */
 #include "scan_otf.h"
+#include <math.h>
 #include <string.h>
 
 enum { HAVE_POS = 1, HAVE_RD = 2 };
@@ -39,9 +40,68 @@ int scan_otf_row_begin(scan_otf_t *o, long row)
     o->hi_trig = o->hi_read = 0;
     o->any_trig = o->any_read = 0;
     o->n_out = 0;
+    o->has_end = o->end_seen = 0;
+    o->has_start = o->st_have = 0;
     for (int i = 0; i < SCAN_OTF_WINDOW; i++)
         o->slot[i].state = 0;
     return RIG_OK;
+}
+
+int scan_otf_row_end_at(scan_otf_t *o, double x, double y, double tol)
+{
+    if (!o || !(tol > 0) || !isfinite(x) || !isfinite(y) || !isfinite(tol))
+        return RIG_EARG;
+    if (o->row < 0)
+        return RIG_ESTATE;
+    o->has_end = 1;
+    o->end_xy[0] = x;
+    o->end_xy[1] = y;
+    o->end_tol = tol;
+    return RIG_OK;
+}
+
+int scan_otf_row_start_at(scan_otf_t *o, double x, double y)
+{
+    if (!o || !isfinite(x) || !isfinite(y))
+        return RIG_EARG;
+    if (o->row < 0)
+        return RIG_ESTATE;
+    if (!o->has_end || o->base || o->any_trig || o->any_read)
+        return RIG_ESTATE; /* after scan_otf_row_end_at (its tol), before any event */
+    o->has_start = 1;
+    o->start_xy[0] = x;
+    o->start_xy[1] = y;
+    return RIG_OK;
+}
+
+int scan_otf_end_seen(const scan_otf_t *o)
+{
+    return o && o->row >= 0 && o->end_seen;
+}
+
+/* Number num latched the row's end: it is the row's last, and whatever
+ * the window already holds after it is dropped (arrival out of order). */
+static void end_latched(scan_otf_t *o, uint64_t num)
+{
+    if (o->end_seen && num >= o->end_num)
+        return;
+    o->end_seen = 1;
+    o->end_num = num;
+    for (int i = 0; i < SCAN_OTF_WINDOW; i++) {
+        scan_otf_slot_t *s = &o->slot[i];
+        if (!s->state || s->num <= num)
+            continue;
+        if (s->state & HAVE_POS)
+            o->c.trig--, o->c.past_end++;
+        if (s->state & HAVE_RD)
+            o->c.read--, o->c.past_end++;
+        s->state = 0;
+    }
+}
+
+static int past_end(const scan_otf_t *o, uint64_t num)
+{
+    return o->end_seen && num != UINT64_MAX && num > o->end_num;
 }
 
 /* The unwrapped number of a 16-bit one, against the stream's highest so
@@ -107,12 +167,11 @@ static int gap_add(scan_otf_t *o, int kind, uint64_t num, uint64_t count, const 
     return RIG_OK;
 }
 
-/* Settle the slot of number base and move the window on by one. */
-static int retire_one(scan_otf_t *o)
+/* Settle slot s as number num (a point, or a loss counted). */
+static int settle(scan_otf_t *o, const scan_otf_slot_t *s, uint64_t num)
 {
-    scan_otf_slot_t *s = &o->slot[o->base & (SCAN_OTF_WINDOW - 1)];
     int rc = RIG_OK;
-    if (s->state == (HAVE_POS | HAVE_RD) && s->num == o->base) {
+    if (s->state == (HAVE_POS | HAVE_RD) && s->num == num) {
         if (s->rst == RIG_RD_VALID) {
             if (o->gp_count && (rc = gap_emit(o)) != RIG_OK)
                 return rc;
@@ -128,14 +187,52 @@ static int retire_one(scan_otf_t *o)
     } else if (s->state == HAVE_POS) {
         o->c.trig_no_read++;
         const double xy[2] = {s->x, s->y};
-        rc = gap_add(o, JNL_GAP_NO_READING, o->base, 1, xy);
+        rc = gap_add(o, JNL_GAP_NO_READING, num, 1, xy);
     } else if (s->state == HAVE_RD) {
         o->c.read_no_trig++;
-        rc = gap_add(o, JNL_GAP_NO_TRIGGER, o->base, 1, NULL);
+        rc = gap_add(o, JNL_GAP_NO_TRIGGER, num, 1, NULL);
     } else {
         o->c.both_lost++;
-        rc = gap_add(o, JNL_GAP_BOTH, o->base, 1, NULL);
+        rc = gap_add(o, JNL_GAP_BOTH, num, 1, NULL);
     }
+    return rc;
+}
+
+static int near_xy(const scan_otf_t *o, double x, double y, const double at[2])
+{
+    return x - at[0] <= o->end_tol && at[0] - x <= o->end_tol && y - at[1] <= o->end_tol &&
+           at[1] - y <= o->end_tol;
+}
+
+/* The start phase ends (at the first number that is not a position at the
+ * row's start): the last position held there is settled first. */
+static int start_done(scan_otf_t *o)
+{
+    int rc = RIG_OK;
+    if (o->has_start && o->st_have)
+        rc = settle(o, &o->stash, o->stash.num);
+    o->has_start = o->st_have = 0;
+    return rc;
+}
+
+/* Settle the slot of number base and move the window on by one. While the
+ * row is starting, a position at its start is held back instead, and the
+ * one it replaces dropped (the stage stood there: only the last counts). */
+static int retire_one(scan_otf_t *o)
+{
+    scan_otf_slot_t *s = &o->slot[o->base & (SCAN_OTF_WINDOW - 1)];
+    int rc = RIG_OK;
+    if (o->has_start && (s->state & HAVE_POS) && s->num == o->base &&
+        near_xy(o, s->x, s->y, o->start_xy)) {
+        if (o->st_have) {
+            o->c.trig--, o->c.before_start++;
+            if (o->stash.state & HAVE_RD)
+                o->c.read--, o->c.before_start++;
+        }
+        o->stash = *s;
+        o->st_have = 1;
+    } else if ((rc = start_done(o)) == RIG_OK)
+        rc = settle(o, s, o->base);
     s->state = 0;
     o->base++;
     return rc;
@@ -150,6 +247,8 @@ static int make_room(scan_otf_t *o, uint64_t num)
             int rc = RIG_OK;
             for (int i = 0; i < SCAN_OTF_WINDOW && !rc; i++)
                 rc = retire_one(o);
+            if (!rc)
+                rc = start_done(o); /* before the run's gap */
             if (rc)
                 return rc;
             o->c.both_lost += num - SCAN_OTF_WINDOW + 1 - o->base;
@@ -207,6 +306,12 @@ int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n)
         return RIG_ESTATE;
     for (size_t i = 0; i < n; i++) {
         uint64_t num = unwrap(o->hi_trig, o->any_trig, ev[i].seq);
+        if (past_end(o, num)) {
+            o->hi_trig = num > o->hi_trig ? num : o->hi_trig; /* unwrapping goes on */
+            o->any_trig = 1;
+            o->c.past_end++;
+            continue;
+        }
         int rc;
         scan_otf_slot_t *s = slot_for(o, num, &rc);
         if (rc)
@@ -226,6 +331,8 @@ int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n)
         s->state |= HAVE_POS;
         s->x = o->enc.org[0] + (double)ev[i].enc[0] * o->enc.mm_per_count[0];
         s->y = o->enc.org[1] + (double)ev[i].enc[1] * o->enc.mm_per_count[1];
+        if (o->has_end && near_xy(o, s->x, s->y, o->end_xy))
+            end_latched(o, num);
     }
     return advance(o);
 }
@@ -240,6 +347,12 @@ int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n)
         return RIG_ESTATE;
     for (size_t i = 0; i < n; i++) {
         uint64_t num = unwrap(o->hi_read, o->any_read, r[i].seq);
+        if (past_end(o, num)) {
+            o->hi_read = !o->any_read || num > o->hi_read ? num : o->hi_read;
+            o->any_read = 1;
+            o->c.past_end++;
+            continue;
+        }
         int rc;
         scan_otf_slot_t *s = slot_for(o, num, &rc);
         if (rc)
@@ -271,10 +384,15 @@ int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected)
         return RIG_ESTATE;
     uint64_t end =
         o->any_trig || o->any_read ? (o->hi_trig > o->hi_read ? o->hi_trig : o->hi_read) + 1 : 0;
+    if (o->end_seen && end > o->end_num + 1)
+        end = o->end_num + 1; /* what came after the end trigger was dropped */
     int rc = RIG_OK;
     while (!rc && o->base < end)
         rc = retire_one(o);
-    if (!rc && !stage_fault && expected > o->base) { /* the last triggers, lost on both sides */
+    if (!rc)
+        rc = start_done(o);
+    if (!rc && !stage_fault && !o->end_seen &&
+        expected > o->base) { /* the last triggers, lost on both sides */
         o->c.both_lost += expected - o->base;
         rc = gap_add(o, JNL_GAP_BOTH, o->base, expected - o->base, NULL);
     }

@@ -14,6 +14,10 @@
  *   a number already behind the window     -> late (dropped)
  *   the box's overrun flag                 -> overrun
  *   a row ended by a stage fault           -> rows_cut
+ *   an event numbered after the trigger that
+ *   latched the row's end position          -> past_end (dropped)
+ *   a position at the row's start before
+ *   the last one there                       -> before_start (dropped)
  * so that, once a row is ended, trig = paired + nosurf + errors +
  * trig_no_read and read = paired + nosurf + errors + read_no_trig, and every
  * number below the row's end is in exactly one of paired, nosurf, errors,
@@ -51,6 +55,8 @@ typedef struct scan_otf_counts {
     uint64_t trig_no_read, read_no_trig, both_lost;
     uint64_t dup_trig, dup_read, late, overrun;
     uint64_t rows, rows_cut;
+    uint64_t past_end;     /* events after the row's end trigger, each side counted */
+    uint64_t before_start; /* events at the row's start before its last there, each side */
 } scan_otf_counts_t;
 
 /* A chunk of a row: n points (x y z each) in trigger order, their trigger
@@ -96,6 +102,16 @@ typedef struct scan_otf {
     int gp_kind, gp_has_xy;
     uint64_t gp_num, gp_count;
     double gp_xy[2];
+    /* The row's end (scan_otf_row_end_at): once a position within end_tol
+     * of end_xy is latched, end_num is its number and the row's last. */
+    int has_end, end_seen;
+    double end_xy[2], end_tol;
+    uint64_t end_num;
+    /* The row's start (scan_otf_row_start_at): the last position retired
+     * there is held back (stash) until a number past it is. */
+    int has_start, st_have;
+    double start_xy[2];
+    scan_otf_slot_t stash;
 } scan_otf_t;
 
 /* Errors beyond rig_err_t's: none; RIG_EARG for a bad call, RIG_ESTATE for
@@ -110,6 +126,27 @@ void scan_otf_set_gap(scan_otf_t *o, scan_otf_gap_fn fn);
 /* A row starts (the box and the probe were armed for it: numbering from 0). */
 int scan_otf_row_begin(scan_otf_t *o, long row);
 
+/* The row ends at stage position (x, y): the first trigger (by number)
+ * whose latched position lies within tol (mm, each axis) of it is the
+ * row's last. The box keeps firing until the host stops it, at a stage
+ * standing at the end; those events (numbered after it) are dropped and
+ * counted as past_end, never paired nor counted as losses, so that a
+ * host late to see the row's end adds no point (issue 19). After
+ * scan_otf_row_begin; without it a row ends at scan_otf_row_end only. */
+int scan_otf_row_end_at(scan_otf_t *o, double x, double y, double tol);
+
+/* The row starts at stage position (x, y) (within scan_otf_row_end_at's
+ * tol; after it, before any event): the box is armed before the stage
+ * moves, so the triggers fire first at a standing stage; of the
+ * positions latched there only the last is the row's first point, those
+ * before it (and their readings) dropped and counted as before_start. The
+ * start ends at the first number that is not a position there (a loss
+ * too), so a row's point count does not depend on how long it stood. */
+int scan_otf_row_start_at(scan_otf_t *o, double x, double y);
+
+/* 1 once the row's end position has been latched (the triggers can stop). */
+int scan_otf_end_seen(const scan_otf_t *o);
+
 /* Events as they arrive, in any order and in batches of any size. */
 int scan_otf_trig(scan_otf_t *o, const rig_trig_event_t *ev, size_t n);
 int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n);
@@ -119,7 +156,8 @@ int scan_otf_read(scan_otf_t *o, const rig_reading_t *r, size_t n);
  * should have fired (its length over the spacing; 0 unknown), so triggers
  * lost at its end on both sides are counted too. stage_fault != 0 counts
  * the row as cut short by the stage (its points so far are kept, and the
- * triggers it never reached are not losses). */
+ * triggers it never reached are not losses; nor are those after the end
+ * trigger of scan_otf_row_end_at). */
 int scan_otf_row_end(scan_otf_t *o, int stage_fault, uint64_t expected);
 
 #endif

@@ -10,7 +10,9 @@
  * lost, as does a frame id that never arrives; the ids of incomplete frames
  * are not trusted, so a loss is counted by the gap in the ids of the frames
  * delivered around it (frames_gap); losses after the last delivered frame
- * show only in frames_bad. Each delivered frame says
+ * show only in frames_bad, and incomplete frames before the first
+ * delivered one (the numbering starts there) are no losses at all
+ * (frames_bad_before). Each delivered frame says
  * how many frames were lost just before it (gap_before), so a lost profile
  * is a gap in the numbering, never a shifted row: profile r of frame f is
  * profile f * Height + r of the scan. Frame ids are 16 bits on the wire
@@ -47,9 +49,12 @@ typedef struct hal_gev_frame {
 } hal_gev_frame_t;
 
 typedef struct hal_gev_stats {
-    uint64_t frames;     /* delivered */
-    uint64_t frames_bad; /* arrived incomplete (missing packets, timeout), not delivered */
-    uint64_t frames_gap; /* ids skipped between delivered frames: every lost frame (bad or
+    uint64_t frames;            /* delivered */
+    uint64_t frames_bad;        /* arrived incomplete (missing packets, timeout), not delivered,
+                          * after the first delivered frame: lost frames (<= frames_gap
+                          * but for those after the last delivered one) */
+    uint64_t frames_bad_before; /* the same before the first delivered frame: not losses */
+    uint64_t frames_gap;        /* ids skipped between delivered frames: every lost frame (bad or
                           * never seen) that a later frame revealed */
     uint64_t packets_missing, packets_resent; /* Aravis's counts */
     uint64_t underruns;                       /* frames dropped for want of a buffer */

@@ -44,7 +44,8 @@ typedef enum sim_fkind {
 typedef struct sim_fault {
     sim_fkind_t kind;
     int wires;  /* SIM_W_* mask it applies to, 0 any */
-    char mode;  /* 'n': the K-th event only, 'e': every K-th, 'p': probability P */
+    char mode;  /* 'n': the K-th event only, 'e': every K-th, 'p': probability P,
+                 * 's': (wire kinds) the reply carrying stream entry K of each arming */
     long k;     /* for n and e */
     double p;   /* for p */
     double ms;  /* slow, disconnect */
@@ -68,6 +69,12 @@ typedef struct sim_faults {
 /* One event of a class on a wire: bit (1 << kind) set for every fault that
  * fires; *ms gets the largest MS of those. */
 unsigned sim_faults_event(sim_faults_t *fs, int cls, int wire, double *ms);
+/* A reply that carries the stream's entries lo .. lo + n - 1 (trigger
+ * numbers since arming, as on the wire): the wire faults of mode 's' whose
+ * K is among them fire (bits and *ms as sim_faults_event). Keyed to the
+ * trigger number, not to a request count: the same entries are hit however
+ * the host batches its reads (issue 19). */
+unsigned sim_faults_stream(sim_faults_t *fs, int wire, uint16_t lo, int n, double *ms);
 
 /* --- the stage (sim_stage.c) --- */
 typedef struct sim_stage {
@@ -137,6 +144,9 @@ typedef struct sim_stream {
     int ascii;             /* 0 off, 1 streaming, 2 stopped: end line after the queue */
     int ascii_new;         /* MS just answered: the server records its connection */
     int ascii_conn;        /* that connection (sim_net.c) */
+    /* The entries the last FIFO read popped (sim_net.c's 's' faults). */
+    uint16_t popped_lo;
+    int popped;
 } sim_stream_t;
 
 /* --- the probe (sim_probe.c) --- */

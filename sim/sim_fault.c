@@ -76,8 +76,17 @@ int sim_fault_parse(const char *spec, sim_fault_t *f, char *msg, size_t len)
         f->p = strtod(when + 1, &end);
         if (end == when + 1 || *end || !(f->p >= 0 && f->p <= 1))
             return fail(msg, len, spec, "WHEN: pP with 0 <= P <= 1");
+    } else if (f->mode == 's') {
+        f->k = strtol(when + 1, &end, 10);
+        if (end == when + 1 || *end || f->k < 0 || f->k > 65535)
+            return fail(msg, len, spec, "WHEN: sK with 0 <= K <= 65535");
+        if (f->kind != SIM_F_CRC && f->kind != SIM_F_GARBLE && f->kind != SIM_F_DROP &&
+            f->kind != SIM_F_SLOW && f->kind != SIM_F_SILENT)
+            return fail(msg, len, spec, "sK (a stream entry): crc, garble, drop, slow or silent");
     } else
-        return fail(msg, len, spec, "WHEN not nK (K-th), eK (every K-th) or pP (probability)");
+        return fail(msg, len, spec,
+                    "WHEN not nK (K-th), eK (every K-th), pP (probability) or sK (the reply with "
+                    "stream entry K)");
     int needs_ms = f->kind == SIM_F_SLOW || f->kind == SIM_F_DISCONNECT;
     if (needs_ms) {
         if (!ms)
@@ -96,7 +105,8 @@ unsigned sim_faults_event(sim_faults_t *fs, int cls, int wire, double *ms)
     *ms = 0;
     for (int i = 0; i < fs->n; i++) {
         sim_fault_t *f = &fs->f[i];
-        if (sim_fault_class(f->kind) != cls || (f->wires && wire && !(f->wires & wire)))
+        if (sim_fault_class(f->kind) != cls || (f->wires && wire && !(f->wires & wire)) ||
+            f->mode == 's')
             continue;
         f->count++;
         int fire = f->mode == 'n'   ? f->count == f->k
@@ -109,6 +119,25 @@ unsigned sim_faults_event(sim_faults_t *fs, int cls, int wire, double *ms)
             *ms = f->ms;
         if (fs->verbose)
             fprintf(stderr, "cellsim: fault %s at event %ld\n", names[f->kind], f->count);
+    }
+    return fired;
+}
+
+unsigned sim_faults_stream(sim_faults_t *fs, int wire, uint16_t lo, int n, double *ms)
+{
+    unsigned fired = 0;
+    *ms = 0;
+    for (int i = 0; i < fs->n && n > 0; i++) {
+        sim_fault_t *f = &fs->f[i];
+        if (f->mode != 's' || (f->wires && wire && !(f->wires & wire)) ||
+            (uint16_t)((uint16_t)f->k - lo) >= (unsigned)n)
+            continue;
+        f->count++;
+        fired |= 1u << f->kind;
+        if (f->ms > *ms)
+            *ms = f->ms;
+        if (fs->verbose)
+            fprintf(stderr, "cellsim: fault %s at stream entry %ld\n", names[f->kind], f->k);
     }
     return fired;
 }

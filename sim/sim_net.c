@@ -209,8 +209,19 @@ static int request(sim_net_t *n, sim_conn_t *c, int wire, const uint8_t *hdr, in
             n->rig->probe->stream.ascii_new = 0;
             n->rig->probe->stream.ascii_conn = (int)(c - n->conn);
         }
-    } else
+    } else {
+        sim_probe_t *pr = n->rig->probe;
+        if (pr)
+            pr->stream.popped = 0;
         rl = sim_mb_pdu(n->rig, wire, unit, pdu, plen, rsp, (f & (1u << SIM_F_BUSY)) != 0);
+        if (pr && pr->stream.popped) { /* faults keyed to the entries this reply carries */
+            double ms2;
+            f |= sim_faults_stream(n->faults, wire, pr->stream.popped_lo, pr->stream.popped, &ms2);
+            ms = ms2 > ms ? ms2 : ms;
+        }
+    }
+    if (f & (1u << SIM_F_SILENT))
+        return 0;
     if (rl > 0)
         reply(n, c, wire, hdr, unit, rsp, rl, f, ms);
     return 0;

@@ -113,6 +113,7 @@ int sim_stream_read_fifo(sim_probe_t *pr, int addr, int n, uint16_t *out)
     out[0] = (uint16_t)(s->count > 65535 ? 65535 : s->count);
     out[1] = s->overrun;
     int k = (n - 2) / PRB_FIFO_ENTRY;
+    s->popped = 0;
     for (int i = 0; i < k; i++) {
         uint16_t *r = out + PRB_FIFO_DATA - PRB_FIFO_COUNT + i * PRB_FIFO_ENTRY;
         if (!s->count) {
@@ -121,6 +122,8 @@ int sim_stream_read_fifo(sim_probe_t *pr, int addr, int n, uint16_t *out)
             continue;
         }
         const sim_fifo_ent_t *e = &s->fifo[s->head];
+        if (!s->popped++)
+            s->popped_lo = e->seq;
         s->head = (s->head + 1) % s->cap;
         s->count--;
         r[PRB_FE_SEQ] = e->seq;

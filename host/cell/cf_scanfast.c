@@ -145,32 +145,49 @@ static void otf_counts(const scan_otf_t *o, unsigned long dropped, cf_scanfast_r
     res->late = (long)c->late;
     res->overrun = (long)c->overrun;
     res->rows_cut = (long)c->rows_cut;
+    res->past_end = (long)c->past_end;
+    res->before_start = (long)c->before_start;
     res->dropped_by_probe = (long)dropped;
 }
 
 /* The stream's entries while the stage runs the row, then the stop and
- * the drain. *fault set when the stage faulted (or E-stop) mid-row. */
+ * the drain. The triggers are stopped at the first of: the row's end
+ * position latched (scan_otf_end_seen), the stage's BUSY cleared, a fault;
+ * the stage is polled until BUSY clears all the same (the next move must
+ * not cut its settling short). What the box fires after the end is
+ * dropped by the pairing, so a host late to see the end (a dropped reply,
+ * a loaded machine) adds no point, only drain time (issue 19). *fault set
+ * when the stage faulted (or E-stop) mid-row. */
 static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t *cb,
-                          double period_us, double t_row, unsigned long *dropped, int *fault,
-                          int *where)
+                          double period_us, double t_row, const double to[2],
+                          unsigned long *dropped, int *fault, int *where)
 {
     /* Bounds, so that a stage that never reports the row's end or a stream
      * whose end never comes is an error, not a hang: the row's travel three
      * times over plus 2 s; 2 s without an entry once stopped. */
     double t_start = cli_now(), t_entry = t_start, t_max = 3 * t_row + 2;
-    int moving = 1, rc = hal_probe_stream_start(&rig->pr, (uint32_t)lround(period_us));
+    /* Armed before the move: the row's first triggers fall on the stage
+     * standing at its start, and the pairing keeps the last of them
+     * (scan_otf_row_start_at), so no trigger of the travel is missed
+     * however long the move command takes. */
+    int moving = 1, armed = 1, rc = hal_probe_stream_start(&rig->pr, (uint32_t)lround(period_us));
     if (rc) {
         *where = SCAN_AT_PROBE;
         return rc;
     }
-    int stopped = 0;
+    if ((rc = hal_stage_move_start(&rig->st, to[0], to[1])) != 0) {
+        *where = SCAN_AT_STAGE;
+        hal_probe_stream_stop(&rig->pr);
+        return rc;
+    }
+    t_start = t_entry = cli_now();
+    int stopped = 0, skip = 0;
     double t_poll = cli_now();
     while (!rc) {
         rig_reading_t rd[256];
         rig_trig_event_t pos[256];
         size_t n = 0;
-        rc = hal_probe_stream_read(&rig->pr, rd, pos, 256, &n, dropped);
-        if (rc) {
+        if (!skip && (rc = hal_probe_stream_read(&rig->pr, rd, pos, 256, &n, dropped)) != 0) {
             *where = SCAN_AT_PROBE;
             break;
         }
@@ -184,12 +201,26 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
             *where = o->err ? SCAN_AT_CALLER : SCAN_AT_PROBE;
             break;
         }
-        if (!moving && !n && !rig->pr.streaming)
+        if (scan_otf_end_seen(o)) {
+            if (armed) { /* the row's end latched: no trigger after it is wanted */
+                armed = 0;
+                if ((rc = hal_probe_stream_stop(&rig->pr)) != 0) {
+                    *where = SCAN_AT_PROBE;
+                    break;
+                }
+            }
+            /* The Modbus FIFO holds entries in number order, all after the
+             * end now, and the next arming empties it: not read (a host
+             * that was held up would spend seconds on them). The ASCII
+             * stream is read to its end line, which must not be left. */
+            skip = rig->pr.modbus;
+        }
+        if (!moving && !armed && (skip || (!n && !rig->pr.streaming)))
             break;
         double t_now = cli_now();
         if (n)
             t_entry = t_now;
-        if (!moving && !n && t_now - t_entry > 2.0) {
+        if (!moving && !armed && !n && t_now - t_entry > 2.0) {
             rc = RIG_ETIMEOUT;
             *where = SCAN_AT_PROBE;
             snprintf(rig->pr.err, sizeof rig->pr.err,
@@ -204,12 +235,14 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
                      "stage: the row's move did not end within %.1f s (still busy)", t_max);
             break;
         }
-        if (moving && !stopped && stop_asked(cb)) {
+        if ((moving || armed) && !stopped && stop_asked(cb)) {
             /* ABORT or the watchdog: the stage first, then the stream. */
             rig->stage.ops->stop(rig->stage.ctx);
             stopped = 1;
             moving = 0;
-            rc = hal_probe_stream_stop(&rig->pr);
+            if (armed)
+                rc = hal_probe_stream_stop(&rig->pr);
+            armed = 0;
             continue;
         }
         /* The stage's status when the FIFO is drained, and at least every
@@ -227,8 +260,9 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
                 *fault = st & RIG_ST_ESTOP ? RIG_EESTOP : RIG_EFAULT;
             if (*fault || !(st & RIG_ST_BUSY)) {
                 moving = 0; /* the row's end (or its fault): stop the triggers, drain */
-                if ((rc = hal_probe_stream_stop(&rig->pr)) != 0)
+                if (armed && (rc = hal_probe_stream_stop(&rig->pr)) != 0)
                     *where = SCAN_AT_PROBE;
+                armed = 0;
             }
         }
     }
@@ -292,16 +326,16 @@ int cf_scanfast_otf(hal_rig_t *rig, const scan_plan_t *pl, const scan_kin_t *kin
             res->where = SCAN_AT_STAGE;
             break;
         }
-        if ((rc = scan_otf_row_begin(&o, row)) != 0)
+        /* The row's end: the first trigger latched within half a step of
+         * it (or 2 um, an encoder's jitter at rest) is the row's last. */
+        if ((rc = scan_otf_row_begin(&o, row)) != 0 ||
+            (rc = scan_otf_row_end_at(&o, xb, y, fmax(pl->dx / 2, 0.002))) != 0 ||
+            (rc = scan_otf_row_start_at(&o, xa, y)) != 0)
             break;
-        if ((rc = hal_stage_move_start(&rig->st, xb, y)) != 0) {
-            res->where = SCAN_AT_STAGE;
-            scan_otf_row_end(&o, 1, 0);
-            break;
-        }
         int fault = 0, where = SCAN_AT_NONE;
-        rc = otf_stream_row(rig, &o, cb, res->period_us, fabs(xb - xa) / speed, &dropped, &fault,
-                            &where);
+        const double to[2] = {xb, y};
+        rc = otf_stream_row(rig, &o, cb, res->period_us, fabs(xb - xa) / speed, to, &dropped,
+                            &fault, &where);
         int erc = scan_otf_row_end(&o, fault != 0, 0);
         if (!rc)
             rc = erc;

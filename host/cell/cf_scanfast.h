@@ -63,6 +63,8 @@ typedef struct cf_scanfast_res {
     /* on the fly (scan_otf_counts_t) */
     long triggers, nosurf, sensor_errors, lost_readings, lost_triggers, both_lost, dup, late,
         overrun, dropped_by_probe, rows_cut;
+    long past_end;     /* events after a row's end trigger, dropped (scan_otf_row_end_at) */
+    long before_start; /* events at a row's start before its last there (scan_otf_row_start_at) */
     double speed, period_us; /* the stage's speed and the trigger period used */
     /* profiler (hal_gev_stats_t) */
     long frames, frames_lost, profiles_lost, frames_bad, dropouts;

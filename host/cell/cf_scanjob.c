@@ -79,9 +79,8 @@ static void on_progress(void *ctx, long done, long planned, uint64_t acked)
     }
 }
 
-/* On the fly (cf_scanfast.h): rows instead of grid points for progress
- * and the stop check; the result in the stop-and-go terms (fail_index the
- * row's first grid point); each point into the live fit (o->fit). */
+/* The fast methods (cf_scanfast.h): rows instead of grid points for
+ * progress and the stop check; each point into the live fit (o->fit). */
 static int fast_point(void *ctx, const double xyz[3])
 {
     return live_add(ctx, xyz);
@@ -98,41 +97,21 @@ static void fast_progress(void *ctx, long rows_done, long rows, long points)
     on_progress(ctx, rows_done, rows, 0);
 }
 
-static int run_otf(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
-                   scan_result_t *res, char *msg, size_t ml)
-{
-    cf_scanfast_cb_t cb = {o->fit ? fast_point : NULL, fast_progress, fast_stop, sc};
-    cf_scanfast_res_t fr;
-    int rc = cf_scanfast_otf(o->rig, &job->plan, &job->kin, o->period_us > 0 ? o->period_us : 50, j,
-                             &cb, &fr, msg, ml);
-    if (o->fast_out)
-        *o->fast_out = fr;
-    if (o->t_last_row && fr.t_last_row > 0)
-        *o->t_last_row = fr.t_last_row;
-    res->points = fr.points;
-    res->flagged = fr.flagged;
-    res->done = fr.points + fr.flagged;
-    res->fail_index = fr.fail_row >= 0 ? fr.fail_row * job->plan.nx : -1;
-    res->code = rc;
-    res->where = fr.where;
-    cf_log(rc ? CF_LOG_WARN : CF_LOG_INFO,
-           "scan on the fly: %ld rows, %ld points, %.0f points/s; lost: %ld readings, %ld "
-           "triggers, %ld on both sides (%ld dropped by the probe), %ld overrun, %ld rows cut",
-           fr.rows_done, fr.points, fr.seconds > 0 ? (double)fr.points / fr.seconds : 0,
-           fr.lost_readings, fr.lost_triggers, fr.both_lost, fr.dropped_by_probe, fr.overrun,
-           fr.rows_cut);
-    return rc;
-}
-
-/* The profiler (cf_scanfast.h): one pass of the geometry's profiles,
- * each a row; the result in the stop-and-go terms (fail_index the row's
- * first point). */
-static int run_prof(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
+/* The fast methods (cf_scanfast.h), on the fly or the profiler: the
+ * result in the stop-and-go terms. fail_index is the failing row's first
+ * grid point in the method's own scan order: on the fly, rows of nx points
+ * along x; the profiler, profile by profile, each ny (Width) points along
+ * y (its plan: profiles along x, cf_scanjob_run), so profile r's first
+ * point is r * ny (the journal's order too), not scan_plan_point's. */
+static int run_fast(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j, sj_ctx_t *sc,
                     scan_result_t *res, char *msg, size_t ml)
 {
+    const int prof = o->method == CF_SCAN_PROFILER;
     cf_scanfast_cb_t cb = {o->fit ? fast_point : NULL, fast_progress, fast_stop, sc};
     cf_scanfast_res_t fr;
-    int rc = cf_scanfast_profiler(o->gev_uri, o->gev_geom, 0, 0, j, &cb, &fr, msg, ml);
+    int rc = prof ? cf_scanfast_profiler(o->gev_uri, o->gev_geom, 0, 0, j, &cb, &fr, msg, ml)
+                  : cf_scanfast_otf(o->rig, &job->plan, &job->kin,
+                                    o->period_us > 0 ? o->period_us : 50, j, &cb, &fr, msg, ml);
     if (o->fast_out)
         *o->fast_out = fr;
     if (o->t_last_row && fr.t_last_row > 0)
@@ -140,14 +119,24 @@ static int run_prof(const cf_scanjob_opts_t *o, const scan_job_t *job, jnl_t *j,
     res->points = fr.points;
     res->flagged = fr.flagged;
     res->done = fr.points + fr.flagged;
-    res->fail_index = fr.fail_row >= 0 ? fr.fail_row * job->plan.ny : -1;
+    res->fail_index = fr.fail_row >= 0 ? fr.fail_row * (prof ? job->plan.ny : job->plan.nx) : -1;
     res->code = rc;
     res->where = fr.where;
-    cf_log(rc ? CF_LOG_WARN : CF_LOG_INFO,
-           "scan by the profiler: %ld profiles, %ld points, %.0f points/s; lost: %ld profiles "
-           "(%ld frames), %ld bad frames, %ld dropouts",
-           fr.rows_done, fr.points, fr.seconds > 0 ? (double)fr.points / fr.seconds : 0,
-           fr.profiles_lost, fr.frames_lost, fr.frames_bad, fr.dropouts);
+    const int lvl = rc ? CF_LOG_WARN : CF_LOG_INFO;
+    const double pps = fr.seconds > 0 ? (double)fr.points / fr.seconds : 0;
+    if (prof)
+        cf_log(lvl,
+               "scan by the profiler: %ld profiles, %ld points, %.0f points/s; lost: %ld profiles "
+               "(%ld frames), %ld bad frames, %ld dropouts",
+               fr.rows_done, fr.points, pps, fr.profiles_lost, fr.frames_lost, fr.frames_bad,
+               fr.dropouts);
+    else
+        cf_log(lvl,
+               "scan on the fly: %ld rows, %ld points, %.0f points/s; lost: %ld readings, %ld "
+               "triggers, %ld on both sides (%ld dropped by the probe), %ld overrun, %ld rows cut; "
+               "%ld events after the rows' ends dropped",
+               fr.rows_done, fr.points, pps, fr.lost_readings, fr.lost_triggers, fr.both_lost,
+               fr.dropped_by_probe, fr.overrun, fr.rows_cut, fr.past_end);
     return rc;
 }
 
@@ -210,10 +199,8 @@ int cf_scanjob_run(const cf_scanjob_opts_t *o, const cf_job_ctl_t *ctl, scan_res
     if (o->t_last_row)
         *o->t_last_row = 0;
     progress(ctl, o->pct0);
-    if (o->method == CF_SCAN_OTF)
-        rc = run_otf(o, &job, &j, &sc, res, msg, ml);
-    else if (prof)
-        rc = run_prof(o, &job, &j, &sc, res, msg, ml);
+    if (o->method == CF_SCAN_OTF || prof)
+        rc = run_fast(o, &job, &j, &sc, res, msg, ml);
     else {
         rc = scan_run(&job, &j, res);
         if (o->t_last_row)

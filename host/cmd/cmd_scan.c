@@ -471,6 +471,8 @@ static void summary_fast(cf_json_t *js, int method, const cf_scanfast_res_t *x, 
         cf_json_int(js, "overrun", x->overrun);
         cf_json_int(js, "dropped_by_probe", x->dropped_by_probe);
         cf_json_int(js, "rows_cut", x->rows_cut);
+        cf_json_int(js, "past_end", x->past_end);
+        cf_json_int(js, "before_start", x->before_start);
     } else {
         cf_json_int(js, "frames", x->frames);
         cf_json_int(js, "frames_lost", x->frames_lost);

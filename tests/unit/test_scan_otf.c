@@ -103,6 +103,8 @@ static int on_gap(void *ctx, long row, int kind, uint64_t num, uint64_t count, c
 typedef struct plan {
     long n;
     uint8_t *drop_t, *drop_r, *dup_t, *dup_r, *nosurf, *overrun, *late;
+    long stop_at;  /* > 0: the stage stands from this number on (its position latched again) */
+    long start_at; /* > 0: the stage stands at this number's position until it */
 } plan_t;
 
 static void plan_alloc(plan_t *p, long n)
@@ -126,6 +128,28 @@ static void plan_free(plan_t *p)
     free(p->nosurf);
     free(p->overrun);
     free(p->late);
+}
+
+/* The losses t_injected, t_gaps and t_end_at inject at number k: 1 % of
+ * the readings, 1 % of the triggers, 0.5 % both; the draw is returned so a
+ * caller can add its own faults above 0.025. */
+static double plan_loss(plan_t *p, long k)
+{
+    double r = urand();
+    if (r < 0.01)
+        p->drop_r[k] = 1;
+    else if (r < 0.02)
+        p->drop_t[k] = 1;
+    else if (r < 0.025)
+        p->drop_t[k] = p->drop_r[k] = 1;
+    return r;
+}
+
+/* Numbers [from, to) lost on both sides. */
+static void plan_lose_both(plan_t *p, long from, long to)
+{
+    for (long k = from; k < to; k++)
+        p->drop_t[k] = p->drop_r[k] = 1;
 }
 
 /* Deliver the plan: triggers in random batches, readings lagging by up to
@@ -153,10 +177,13 @@ static void deliver(scan_otf_t *o, const plan_t *p, long lag)
                 break;
             }
             last_t = nt;
+            uint64_t at = (uint64_t)(nt < p->start_at                    ? p->start_at
+                                     : p->stop_at > 0 && nt > p->stop_at ? p->stop_at
+                                                                         : nt);
             rig_trig_event_t e = {(uint16_t)nt,
                                   p->overrun[nt] ? RIG_TRIG_F_OVERRUN : 0,
                                   (uint32_t)(nt * 50),
-                                  {enc_x((uint64_t)nt), enc_y((uint64_t)nt)}};
+                                  {enc_x(at), enc_y(at)}};
             ev[ne++] = e;
             if (p->dup_t[nt] && ne < 8) {
                 e.enc[0] += 1000; /* a duplicate must not replace the first */
@@ -281,14 +308,8 @@ static void t_injected(void **state)
     plan_t p;
     plan_alloc(&p, 100000);
     for (long k = 0; k < p.n; k++) {
-        double r = urand();
-        if (r < 0.01)
-            p.drop_r[k] = 1;
-        else if (r < 0.02)
-            p.drop_t[k] = 1;
-        else if (r < 0.025)
-            p.drop_t[k] = p.drop_r[k] = 1;
-        else if (r < 0.03)
+        double r = plan_loss(&p, k);
+        if (r >= 0.025 && r < 0.03)
             p.late[k] = 1;
         p.dup_t[k] = urand() < 0.01;
         p.dup_r[k] = urand() < 0.01;
@@ -296,10 +317,8 @@ static void t_injected(void **state)
         p.overrun[k] = urand() < 0.001;
     }
     /* A run of 3 windows lost on both sides, and the last 5 triggers. */
-    for (long k = 50000; k < 50000 + 3 * SCAN_OTF_WINDOW; k++)
-        p.drop_t[k] = p.drop_r[k] = 1;
-    for (long k = p.n - 5; k < p.n; k++)
-        p.drop_t[k] = p.drop_r[k] = 1;
+    plan_lose_both(&p, 50000, 50000 + 3 * SCAN_OTF_WINDOW);
+    plan_lose_both(&p, p.n - 5, p.n);
     for (int pass = 0; pass < 2; pass++) {
         sink_t s = {0};
         assert_int_equal(scan_otf_init(&o, &kin, &enc, on_row, &s), RIG_OK);
@@ -410,19 +429,10 @@ static void t_gaps(void **state)
     static scan_otf_t o;
     plan_t p;
     plan_alloc(&p, 30000);
-    for (long k = 0; k < p.n; k++) {
-        double r = urand();
-        if (r < 0.01)
-            p.drop_r[k] = 1;
-        else if (r < 0.02)
-            p.drop_t[k] = 1;
-        else if (r < 0.025)
-            p.drop_t[k] = p.drop_r[k] = 1;
-    }
-    for (long k = 12000; k < 12700; k++) /* more than two windows: make_room's jump */
-        p.drop_t[k] = p.drop_r[k] = 1;
-    for (long k = p.n - 5; k < p.n; k++) /* the row's last, lost on both sides */
-        p.drop_t[k] = p.drop_r[k] = 1;
+    for (long k = 0; k < p.n; k++)
+        plan_loss(&p, k);
+    plan_lose_both(&p, 12000, 12700); /* more than two windows: make_room's jump */
+    plan_lose_both(&p, p.n - 5, p.n); /* the row's last, lost on both sides */
     sink_t s = {0};
     s.gap = calloc((size_t)p.n, 1);
     assert_non_null(s.gap);
@@ -452,12 +462,121 @@ static void t_gaps(void **state)
     plan_free(&p);
 }
 
+/* Issue 19: the stage stands at the row's end while the box keeps firing
+ * (the host sees the end late). With the end position given, the first
+ * trigger latched there is the row's last: nothing after it becomes a
+ * point (each would repeat the end's position with another reading) or a
+ * loss, and everything up to it is settled as usual. Pass 1 loses the end
+ * trigger itself: the next one, standing there too, ends the row. */
+static void t_end_at(void **state)
+{
+    (void)state;
+    static scan_otf_t o;
+    const long end = 3000;
+    const double ex = enc.org[0] + enc_x(end) * enc.mm_per_count[0];
+    const double ey = enc.org[1] + enc_y(end) * enc.mm_per_count[1];
+    for (int pass = 0; pass < 2; pass++) {
+        plan_t p;
+        plan_alloc(&p, 9000); /* 6000 triggers after the end, far more than a window */
+        p.stop_at = end;
+        for (long k = 0; k < p.n; k++)
+            plan_loss(&p, k);
+        p.drop_t[end] = p.drop_r[end] = (uint8_t)pass;
+        p.drop_t[end + 1] = 0; /* so that pass 1 ends at end + 1 */
+        sink_t s = {0};
+        assert_int_equal(scan_otf_init(&o, &kin, &enc, on_row, &s), RIG_OK);
+        assert_int_equal(scan_otf_row_end_at(&o, ex, ey, 1e-3), RIG_ESTATE);
+        assert_int_equal(scan_otf_row_begin(&o, 0), RIG_OK);
+        assert_int_equal(scan_otf_row_end_at(&o, ex, ey, 0), RIG_EARG);
+        /* x steps 7 um a number: only the stage standing is within 3 um */
+        assert_int_equal(scan_otf_row_end_at(&o, ex, ey, 3e-3), RIG_OK);
+        deliver(&o, &p, 8);
+        assert_int_equal(scan_otf_end_seen(&o), 1);
+        assert_int_equal(o.end_num, (uint64_t)(end + pass));
+        /* the triggers expected past the end are no losses either */
+        assert_int_equal(scan_otf_row_end(&o, 0, (uint64_t)p.n + 100), RIG_OK);
+        uint64_t after = 0;
+        for (long k = end + pass + 1; k < p.n; k++)
+            after += (uint64_t)!p.drop_t[k] + (uint64_t)!p.drop_r[k];
+        assert_int_equal(o.c.past_end, after);
+        plan_t upto = p; /* the counts of numbers 0..end + pass only */
+        upto.n = end + pass + 1;
+        check_counts(&o, &upto, &s);
+        assert_true(s.prev <= (uint64_t)(end + pass));
+        plan_free(&p);
+    }
+    /* Out of order: number 8 (past the end) arrives before the end's
+     * trigger 6 and is taken back out when 6 latches the end. */
+    sink_t s = {0};
+    assert_int_equal(scan_otf_init(&o, &kin, &enc, on_row, &s), RIG_OK);
+    assert_int_equal(scan_otf_row_begin(&o, 1), RIG_OK);
+    assert_int_equal(scan_otf_row_end_at(&o, enc.org[0] + enc_x(6) * enc.mm_per_count[0],
+                                         enc.org[1] + enc_y(6) * enc.mm_per_count[1], 3e-3),
+                     RIG_OK);
+    static const int order[][2] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}, {2, 0}, {2, 1}, {3, 0},
+                                   {3, 1}, {4, 0}, {5, 0}, {4, 1}, {8, 0}, {8, 1}, {6, 0},
+                                   {7, 0}, {7, 1}, {5, 1}, {6, 1}, {9, 0}};
+    for (size_t i = 0; i < sizeof order / sizeof order[0]; i++) {
+        uint64_t k = (uint64_t)order[i][0], at = k > 6 ? 6 : k;
+        rig_trig_event_t e = {(uint16_t)k, 0, 0, {enc_x(at), enc_y(at)}};
+        rig_reading_t r = {(uint16_t)k, RIG_RD_VALID, dist(k)};
+        assert_int_equal(order[i][1] ? scan_otf_read(&o, &r, 1) : scan_otf_trig(&o, &e, 1), RIG_OK);
+    }
+    assert_int_equal(scan_otf_row_end(&o, 0, 0), RIG_OK);
+    assert_int_equal(o.c.paired, 7);
+    assert_int_equal(o.c.past_end, 5);
+    assert_int_equal(o.c.trig, 7);
+    assert_int_equal(o.c.read, 7);
+    assert_int_equal(o.c.both_lost + o.c.trig_no_read + o.c.read_no_trig, 0);
+    assert_int_equal(s.points, 7);
+    assert_int_equal(s.bad, 0);
+}
+
+/* The box armed before the stage moves (scan_otf_row_start_at): numbers
+ * 0..399 fall on the stage standing at number 400's position; only 400,
+ * the last there, is the row's first point, the rest dropped as
+ * before_start; the row ends at 3000 as in t_end_at. Losses only while
+ * moving (one lost while standing ends the start: scan_otf.h). */
+static void t_start_at(void **state)
+{
+    (void)state;
+    static scan_otf_t o;
+    const long start = 400, end = 3000;
+    plan_t p;
+    plan_alloc(&p, 5000);
+    p.start_at = start;
+    p.stop_at = end;
+    for (long k = start + 1; k < end; k++)
+        plan_loss(&p, k);
+    sink_t s = {0};
+    assert_int_equal(scan_otf_init(&o, &kin, &enc, on_row, &s), RIG_OK);
+    assert_int_equal(scan_otf_row_begin(&o, 0), RIG_OK);
+    const double sx = enc.org[0] + enc_x(start) * enc.mm_per_count[0];
+    const double sy = enc.org[1] + enc_y(start) * enc.mm_per_count[1];
+    assert_int_equal(scan_otf_row_start_at(&o, sx, sy), RIG_ESTATE); /* its tol comes first */
+    assert_int_equal(scan_otf_row_end_at(&o, enc.org[0] + enc_x(end) * enc.mm_per_count[0],
+                                         enc.org[1] + enc_y(end) * enc.mm_per_count[1], 3e-3),
+                     RIG_OK);
+    assert_int_equal(scan_otf_row_start_at(&o, sx, sy), RIG_OK);
+    deliver(&o, &p, 8);
+    assert_int_equal(scan_otf_row_end(&o, 0, 0), RIG_OK);
+    assert_int_equal(o.c.before_start, 2 * start);
+    plan_t mid = p; /* the counts of numbers start..end only */
+    mid.drop_t += start, mid.drop_r += start, mid.dup_t += start, mid.dup_r += start;
+    mid.nosurf += start, mid.overrun += start, mid.late += start;
+    mid.n = end - start + 1;
+    check_counts(&o, &mid, &s);
+    assert_true(s.points > 0 && s.prev <= (uint64_t)end);
+    plan_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(t_clean_wraps), cmocka_unit_test(t_injected),
         cmocka_unit_test(t_cut_row),     cmocka_unit_test(t_rows_and_errors),
-        cmocka_unit_test(t_gaps),
+        cmocka_unit_test(t_gaps),        cmocka_unit_test(t_end_at),
+        cmocka_unit_test(t_start_at),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
