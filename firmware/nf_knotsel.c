@@ -204,9 +204,10 @@ static int best_split(const double *sp, double t0, double t1, int b0, int b1, in
  * FITPACK's fpknot does when it gives one interval several knots in one
  * iteration (each new interval keeps its share of the residual sum and
  * competes again), each side of it with misfit gets a knot at its own
- * misfit's centroid, scored by that side's misfit (level 1): a wide span
- * with much misfit is split in up to four in one round, a narrow feature
- * bracketed, instead of one halving per round. */
+ * misfit's centroid, no closer than a quarter side to the side's ends
+ * (rounded up: at least one sub-bin), scored by that side's misfit (level
+ * 1): a wide span with much misfit is split in up to four in one round, a
+ * narrow feature bracketed, instead of one halving per round. */
 static int candidates(const nf_knotsel_t *a, int dir, int i, int min_pts, int min_rows,
                       int per_span, double cost, nf_knotsel_cand_t *c, int *blocked)
 {
@@ -236,7 +237,11 @@ static int candidates(const nf_knotsel_t *a, int dir, int i, int min_pts, int mi
         double x2 = 0.0, g2 = 0.0;
         int j2 = 0;
         const int b0 = side ? j : 0, b1 = side ? NF_KNOTSEL_BINS : j;
-        if (best_split(sp, t0, t1, b0, b1, b0 + 1, b1 - 1, min_pts, min_rows, &x2, &j2, &g2) &&
+        /* A quarter of the side from its ends, as the first knot is from
+         * the span's: spans stay balanced (at the side's own centroid,
+         * unclamped, knots piled a sub-bin apart onto a peak). */
+        const int qs = (b1 - b0 + 3) / 4;
+        if (best_split(sp, t0, t1, b0, b1, b0 + qs, b1 - qs, min_pts, min_rows, &x2, &j2, &g2) &&
             x2 != x)
             c[n++] = (nf_knotsel_cand_t){dir, i, x2, g2 / cost, 1};
     }

@@ -22,11 +22,11 @@
  * 2. Choose (nf_knotsel_choose): one candidate per span with misfit, at the
  *    sub-bin boundary nearest the misfit's centroid, no closer than a
  *    quarter span to the span's ends (and one on each side of it with
- *    misfit, at that side's centroid: NF_KNOTSEL_PER_SPAN), and only where
- *    each new span holds at
- *    least min_pts points and min_rows data rows (a knot between two scan
- *    rows with no data between them would leave control points that no
- *    point determines: the ripple between rows of issue 14). Candidates are
+ *    misfit, at that side's centroid, no closer than a quarter side to
+ *    the side's ends: NF_KNOTSEL_PER_SPAN), and only where each new span
+ *    holds at least min_pts points and min_rows data rows (a knot between
+ *    two scan rows with no data between them would leave control points
+ *    that no point determines: the ripple between rows of issue 14). Candidates are
  *    ranked by gain per control point, taken best first while they score at
  *    least NF_KNOTSEL_RATIO of the best and their direction has not yet
  *    been given NF_KNOTSEL_SHARE of its misfit, and while the net stays
@@ -57,8 +57,9 @@
 #define NF_KNOTSEL_SHARE 0.5
 /* Knots a span may get in one round (nf_knotsel_opts_t.per_span, at most
  * 3): the first near the misfit's centroid, then one on each side of it
- * with misfit, at that side's centroid, the side holding more first (2:
- * that side only); FITPACK's several knots per interval. */
+ * with misfit, at that side's centroid (a quarter side or more from the
+ * side's ends), the side holding more first (2: that side only); FITPACK's
+ * several knots per interval. */
 #define NF_KNOTSEL_PER_SPAN 3
 /* Candidates nf_knotsel_choose may list: NF_KNOTSEL_PER_SPAN per span. */
 #define NF_KNOTSEL_CANDS(nu, nv, p, q) (NF_KNOTSEL_PER_SPAN * ((nu) - (p) + (nv) - (q)))

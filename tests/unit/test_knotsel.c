@@ -166,15 +166,19 @@ static void test_concentrated(void **state)
 
 /* The same cell with the default per_span (3): each direction also gets a
  * knot on each side of its first, at that side's misfit centroid (the
- * nearest sub-bin boundary within the side), scored by the side's misfit
- * per control point; worked out by hand from the sub-bins (width 1/64):
- * u span [0.375, 0.5): misfit rows 0.40 | 0.41 0.42 | 0.43 | 0.44 0.45 in
- * sub-bins 1, 2, 3, 4, centroid 0.425 -> 0.421875 (boundary 3); left
- * (0.40 .. 0.42, centroid 0.41) -> 0.40625, right (0.43 .. 0.45, 0.44) ->
- * 0.4375. v span [0.25, 0.375): 0.30 0.31 | 0.32 | 0.33 0.34 | 0.35 in
- * sub-bins 3 .. 6, centroid 0.325 -> 0.328125; left (0.31) -> 0.3125,
- * right (0.34) -> 0.34375. g = 36 points of d^2 = 1, 18 a side; a knot
- * line adds 11 control points. */
+ * nearest sub-bin boundary within the side no closer than a quarter of the
+ * side, rounded up to whole sub-bins, to its ends), scored by the side's
+ * misfit per control point; worked out by hand from the sub-bins (width
+ * 1/64): u span [0.375, 0.5): misfit rows 0.40 | 0.41 0.42 | 0.43 | 0.44
+ * 0.45 in sub-bins 1, 2, 3, 4, centroid 0.425 -> 0.421875 (boundary 3);
+ * left (sub-bins 0 .. 2, boundaries 1 .. 2 allowed; 0.40 .. 0.42, centroid
+ * 0.41) -> 0.40625, right (sub-bins 3 .. 7, boundaries 5 .. 6; 0.43 ..
+ * 0.45, centroid 0.44) -> 0.453125 (0.4375, boundary 4, would leave a fifth
+ * of the side). v span [0.25, 0.375): 0.30 0.31 | 0.32 | 0.33 0.34 | 0.35
+ * in sub-bins 3 .. 6, centroid 0.325 -> 0.328125 (boundary 5); left
+ * (sub-bins 0 .. 4, boundaries 2 .. 3; centroid 0.31) -> 0.296875, right
+ * (sub-bins 5 .. 7, boundaries 6 .. 7; centroid 0.34) -> 0.34375. g = 36
+ * points of d^2 = 1, 18 a side; a knot line adds 11 control points. */
 static void test_sides(void **state)
 {
     (void)state;
@@ -187,7 +191,7 @@ static void test_sides(void **state)
     assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.st, NF_KNOTSEL_INSERT);
     assert_int_equal(x.n, 6);
-    const double want[2][3] = {{0.421875, 0.40625, 0.4375}, {0.328125, 0.3125, 0.34375}};
+    const double want[2][3] = {{0.421875, 0.40625, 0.453125}, {0.328125, 0.296875, 0.34375}};
     int seen[2][3] = {{0, 0, 0}, {0, 0, 0}};
     for (int k = 0; k < x.n; k++) {
         const nf_knotsel_cand_t *c = &x.c[k];
@@ -227,6 +231,57 @@ static void test_sides(void **state)
     for (int k = 0; k < x.n; k++)
         assert_true(x.c[k].level == 0 || fabs(x.c[k].x - want[x.c[k].dir][1]) < 1e-12);
     sel_end(&x);
+}
+
+/* Balanced spans: on random misfit (clusters of random width, place and
+ * size on a 64 x 64 grid, 8 x 8 spans), every knot the chooser returns
+ * leaves new spans of at least a quarter of what it splits: a first knot a
+ * quarter span from the span's ends, a side's knot a quarter side from the
+ * side's ends (the side runs from the span's end to its first knot). At
+ * the side's own centroid, unclamped, side knots fell a sub-bin from the
+ * first knot: spans of 1/64 beside spans of 1/8 (the holes field's pile
+ * at its hill). Checked from the knots alone, per span. */
+static void test_side_balance(void **state)
+{
+    (void)state;
+    ref_seed(14);
+    int sides = 0;
+    for (int trial = 0; trial < 200; trial++) {
+        sel_t x;
+        sel_start(&x, 8, 8, 0.1);
+        grid(&x.a, 64, 64);
+        const int nc = 1 + trial % 3;
+        for (int c = 0; c < nc; c++) {
+            const double u0 = ref_rand(0.0, 0.95), v0 = ref_rand(0.0, 0.95),
+                         wu = ref_rand(0.005, 0.05), wv = ref_rand(0.005, 0.05),
+                         d = ref_rand(0.2, 3.0);
+            for (int j = 0; j < 8; j++)
+                for (int i = 0; i < 8; i++)
+                    nf_knotsel_add(&x.a, u0 + wu * i / 7.0, v0 + wv * j / 7.0, d);
+        }
+        assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+        for (int k = 0; k < x.n; k++) {
+            const nf_knotsel_cand_t *c = &x.c[k];
+            const double t0 = c->span / 8.0, t1 = (c->span + 1) / 8.0;
+            double a = t0, b = t1; /* what this knot splits */
+            if (c->level) {
+                double x0 = -1.0; /* its span's first knot, taken in the same round */
+                for (int m = 0; m < x.n; m++)
+                    if (!x.c[m].level && x.c[m].dir == c->dir && x.c[m].span == c->span)
+                        x0 = x.c[m].x;
+                assert_true(x0 > t0 && x0 < t1);
+                if (c->x < x0)
+                    b = x0;
+                else
+                    a = x0;
+                sides++;
+            }
+            assert_true(c->x - a >= 0.25 * (b - a) - 1e-12);
+            assert_true(b - c->x >= 0.25 * (b - a) - 1e-12);
+        }
+        sel_end(&x);
+    }
+    assert_true(sides > 100); /* the rule was exercised */
 }
 
 /* nf_knotsel_merge_span: points a holds as data without misfit (NaN, a
@@ -634,12 +689,12 @@ static void test_loop_bump(void **state)
 int main(void)
 {
     const struct CMUnitTest t[] = {
-        cmocka_unit_test(test_counts),    cmocka_unit_test(test_concentrated),
-        cmocka_unit_test(test_sides),     cmocka_unit_test(test_merge),
-        cmocka_unit_test(test_rows),      cmocka_unit_test(test_gain_order),
-        cmocka_unit_test(test_caps),      cmocka_unit_test(test_verdict),
-        cmocka_unit_test(test_budget),    cmocka_unit_test(test_alpha),
-        cmocka_unit_test(test_loop_bump),
+        cmocka_unit_test(test_counts),     cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_sides),      cmocka_unit_test(test_side_balance),
+        cmocka_unit_test(test_merge),      cmocka_unit_test(test_rows),
+        cmocka_unit_test(test_gain_order), cmocka_unit_test(test_caps),
+        cmocka_unit_test(test_verdict),    cmocka_unit_test(test_budget),
+        cmocka_unit_test(test_alpha),      cmocka_unit_test(test_loop_bump),
     };
     return cmocka_run_group_tests(t, NULL, NULL);
 }
