@@ -94,7 +94,8 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
         g->head[i] = -1;
     g->sreach = calloc((size_t)n2, sizeof(double));
     g->breach = calloc((size_t)cells, sizeof(double));
-    if (!g->sreach || !g->breach) {
+    g->rreach = calloc((size_t)g->dim[1] * (size_t)g->dim[2], sizeof(double));
+    if (!g->sreach || !g->breach || !g->rreach) {
         cf_seedgrid_free(g);
         return CF_ENOMEM;
     }
@@ -118,6 +119,7 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
         g->next[k] = g->head[ci];
         g->head[ci] = (int)k;
         g->breach[ci] = fmax(g->breach[ci], g->sreach[k]);
+        g->rreach[ci / g->dim[0]] = fmax(g->rreach[ci / g->dim[0]], g->sreach[k]);
     }
     return CF_OK;
 }
@@ -250,6 +252,9 @@ static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
         const double gz = cell_gap(g, 2, iz, Q[2], slack);
         for (int iy = c0[1] - R < 0 ? 0 : c0[1] - R; iy < g->dim[1] && iy <= c0[1] + R; iy++) {
             const double gy = cell_gap(g, 1, iy, Q[1], slack);
+            const double rl = core + g->rreach[iy + (long)g->dim[1] * iz];
+            if (gy * gy + gz * gz >= rl * rl)
+                continue; /* the whole row is beyond its reach */
             for (int ix = c0[0] - R < 0 ? 0 : c0[0] - R; ix < g->dim[0] && ix <= c0[0] + R; ix++) {
                 const long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
                 if (g->head[ci] < 0)
@@ -332,5 +337,6 @@ void cf_seedgrid_free(cf_seedgrid_t *g)
     free(g->head);
     free(g->sreach);
     free(g->breach);
+    free(g->rreach);
     memset(g, 0, sizeof *g);
 }

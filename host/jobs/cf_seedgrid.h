@@ -30,6 +30,7 @@ typedef struct cf_seedgrid {
     int *head, *next; /* per cell: first sample; per sample: next in its cell, -1 ends */
     double *sreach;   /* per sample: twice the longest chord of the grid cells at it */
     double *breach;   /* per cell: the largest sreach of its samples (0: none) */
+    double *rreach;   /* per row of cells along x (y, z): the largest breach */
 } cf_seedgrid_t;
 
 /* Samples of s (about `per_span` per knot span and direction, capped) and
