@@ -92,9 +92,9 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
     }
     for (long i = 0; i < cells; i++)
         g->head[i] = -1;
-    g->sreach = calloc((size_t)n2, sizeof(double));
-    g->breach = calloc((size_t)cells, sizeof(double));
-    g->rreach = calloc((size_t)g->dim[1] * (size_t)g->dim[2], sizeof(double));
+    g->sreach = calloc((size_t)n2, sizeof(float));
+    g->breach = calloc((size_t)cells, sizeof(float));
+    g->rreach = calloc((size_t)g->dim[1] * (size_t)g->dim[2], sizeof(float));
     if (!g->sreach || !g->breach || !g->rreach) {
         cf_seedgrid_free(g);
         return CF_ENOMEM;
@@ -111,15 +111,18 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
                 const double dx = X[a] - X[b], dy = Y[a] - Y[b], dz = Z[a] - Z[b];
                 h2 = fmax(h2, dx * dx + dy * dy + dz * dz);
             }
+            /* up: a float rounds by at most 2^-24 of it */
+            const float r = (float)(2.0 * sqrt(h2) * (1.0 + 1e-6));
             for (int t = 0; t < 4; t++)
-                g->sreach[c[t]] = fmax(g->sreach[c[t]], 2.0 * sqrt(h2));
+                g->sreach[c[t]] = g->sreach[c[t]] > r ? g->sreach[c[t]] : r;
         }
     for (long k = n2 - 1; k >= 0; k--) {
         const long ci = cell_index(g, X[k], Y[k], Z[k]);
         g->next[k] = g->head[ci];
         g->head[ci] = (int)k;
-        g->breach[ci] = fmax(g->breach[ci], g->sreach[k]);
-        g->rreach[ci / g->dim[0]] = fmax(g->rreach[ci / g->dim[0]], g->sreach[k]);
+        const float r = g->sreach[k];
+        g->breach[ci] = g->breach[ci] > r ? g->breach[ci] : r;
+        g->rreach[ci / g->dim[0]] = g->rreach[ci / g->dim[0]] > r ? g->rreach[ci / g->dim[0]] : r;
     }
     return CF_OK;
 }

@@ -28,9 +28,11 @@ typedef struct cf_seedgrid {
     int dim[3];
     double lo[3], cell;
     int *head, *next; /* per cell: first sample; per sample: next in its cell, -1 ends */
-    double *sreach;   /* per sample: twice the longest chord of the grid cells at it */
-    double *breach;   /* per cell: the largest sreach of its samples (0: none) */
-    double *rreach;   /* per row of cells along x (y, z): the largest breach */
+    /* Reaches, rounded up to float (a cell grid of 4 M cells: 16 MB):
+     * per sample twice the longest chord of the grid cells at it, per cell
+     * the largest of its samples' (0: none), per row of cells along x
+     * (y, z) the largest of its cells'. */
+    float *sreach, *breach, *rreach;
 } cf_seedgrid_t;
 
 /* Samples of s (about `per_span` per knot span and direction, capped) and
