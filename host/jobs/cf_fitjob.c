@@ -29,6 +29,7 @@
  * touched whole when allocated, so that memory never follows the points. */
 #define BATCH 65536
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
+#define FOOT 2        /* doubles per kept foot: u v */
 #define SEEDS 8       /* seed samples per knot span and direction (cf_seedgrid) */
 
 struct cf_fitjob {
@@ -50,6 +51,12 @@ struct cf_fitjob {
     long nhold, hcap;
     int hold_over;
     long nlive; /* live points added */
+    /* The feet of the last check pass (u v per point in source order, at
+     * most CF_FITJOB_HOLD_ROWS; NaN: search again): the next round's fit
+     * pass projects onto that fit refined by Boehm insertion, the same
+     * surface, so each foot is its start (Newton ends there). nfeet 0: none. */
+    double *feet;
+    long nfeet, fcap;
 };
 
 void cf_fitjob_defaults(cf_fitjob_opts_t *o)
@@ -256,6 +263,7 @@ typedef struct proj {
     const nf_surf_t *s;
     cf_seedgrid_t g;
     int ready;
+    int rc; /* the last projection's code */
 } proj_t;
 
 static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
@@ -265,8 +273,28 @@ static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
             return CF_ENOMEM;
         p->ready = 1;
     }
-    cf_seedgrid_project(&p->g, Q, PROJ_TOL, out); /* best point kept on ENOCONV */
+    p->rc = cf_seedgrid_project(&p->g, Q, PROJ_TOL, out); /* best point kept on ENOCONV */
     return 0;
+}
+
+/* Room for n feet (doubling up to CF_FITJOB_HOLD_ROWS): 0 when there is
+ * none, the feet then let go (the next round searches every foot). */
+static int feet_room(cf_fitjob_t *j, long n)
+{
+    if (n <= j->fcap)
+        return 1;
+    long cap = j->fcap ? 2 * j->fcap : 4096;
+    double *f =
+        cap <= CF_FITJOB_HOLD_ROWS ? realloc(j->feet, sizeof(double) * FOOT * (size_t)cap) : NULL;
+    if (!f) {
+        free(j->feet);
+        j->feet = NULL;
+        j->fcap = j->nfeet = 0;
+        return 0;
+    }
+    j->feet = f;
+    j->fcap = cap;
+    return 1;
 }
 
 static void proj_free(proj_t *p)
@@ -283,10 +311,33 @@ typedef struct pass {
     proj_t pj;
     const nf_surf_t *proj;
     const weigh_t *wt;
+    long nin;      /* the first nin of the job's feet are on proj (Boehm): Newton from them */
     cf_edges_t ed; /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
     long points, clamped, nfar, dropped;
     double ss0, mx0; /* |distance| to proj of the points projected */
 } pass_t;
+
+/* The foot of point i (Q) from its foot on the surface before Boehm
+ * insertion: Newton from there; 0 (search) when there is none or Newton
+ * fails (a foot on a bound is checked by nf_project_edge, as the search's). */
+static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, const double Q[3],
+                     nf_proj_t *out)
+{
+    if (i >= ps->nin || !(j->feet[FOOT * i] == j->feet[FOOT * i]))
+        return 0;
+    return nf_project(ps->proj, Q, j->feet[FOOT * i], j->feet[FOOT * i + 1], PROJ_TOL, out) ==
+           NF_OK;
+}
+
+/* Foot i (u, v; NaN u: none) into the job's feet, in order. */
+static void foot_keep(cf_fitjob_t *j, long i, const nf_proj_t *pr, int ok)
+{
+    if (i > j->nfeet || (i == j->nfeet && !feet_room(j, i + 1)))
+        return;
+    j->feet[FOOT * i] = ok ? pr->u : NAN;
+    j->feet[FOOT * i + 1] = pr->v;
+    j->nfeet += i == j->nfeet;
+}
 
 /* Distance of row q (u v x y z) to s at its parameters. */
 static double dist_at(const nf_surf_t *s, const double *q)
@@ -329,7 +380,7 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
             if (ps->proj) {
                 const double *Q = in + 3 * k;
                 nf_proj_t pr;
-                if (proj_foot(&ps->pj, Q, &pr)) {
+                if (!foot_from(j, ps, ps->points + k, Q, &pr) && proj_foot(&ps->pj, Q, &pr)) {
                     *bad = k;
                     return CF_ENOMEM;
                 }
@@ -495,11 +546,13 @@ static int rewind_src(const run_t *r)
 
 /* One fit pass from the source into out (cur's shape). */
 static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const weigh_t *wt,
-                    nf_surf_t *out, pass_t *ps)
+                    int feet, nf_surf_t *out, pass_t *ps)
 {
     cf_fitjob_t *j = r->j;
     const cf_fitsrc_t *s = r->src;
     int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, s->name, r->msg, r->ml);
+    if (feet && ps->proj)
+        ps->nin = j->nfeet;
     if (!rc)
         rc = rewind_src(r);
     long got;
@@ -578,6 +631,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     memset(&pj, 0, sizeof pj);
     pj.s = s;
     int uv = src->cols == 5;
+    /* The check's feet: the next round's fit pass starts from them. */
+    const int keep = ck && !uv && j->o.loop;
+    if (keep)
+        j->nfeet = 0;
     cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
     if (cf_surfrow_init(&ev, s))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
@@ -600,6 +657,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                     rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
                     break;
                 }
+                if (keep)
+                    foot_keep(j, out->n, &pr, pj.rc == NF_OK);
                 sd = pr.dist;
                 clamped = !uv && pr.clamped;
                 if (!uv)
@@ -637,6 +696,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     }
     if (!rc && got < 0)
         rc = (int)got;
+    if (keep && (rc || out->n != j->nfeet))
+        j->nfeet = 0; /* not every point's: no starts */
     cf_surfrow_free(&ev);
     proj_free(&pj);
     return rc;
@@ -727,7 +788,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             if (!rc && r->total < 0)
                 r->total = po->points;
         } else
-            rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, NULL, &S->fit, po);
+            rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, NULL, pass == 0 && k > 0, &S->fit, po);
         if (rc)
             return rc;
         if (k == 0 && pass == 0) {
@@ -762,7 +823,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             break; /* the fit is exact: nothing to reweight */
         weigh_t wt = {*c, &S->prev};
         set_pass(r, lo, hi, ip++, npass);
-        if ((rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, &wt, &S->fit, po)))
+        if ((rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, &wt, 0, &S->fit, po)))
             return rc;
         *rejected = po->fp.rejected;
         out->t_acc += po->fp.t_acc;
@@ -1113,6 +1174,7 @@ void cf_fitjob_close(cf_fitjob_t *j)
     free(j->rows);
     free(j->src);
     free(j->hold);
+    free(j->feet);
     cf_surf_free(&j->base);
     free(j);
 }

@@ -19,7 +19,12 @@
  * per pass; a live scan adds its points as they arrive (cf_fitjob_add), the
  * first pass, and hands its journal for the rest. Memory: the fitter's byte
  * formula for the largest net plus buffers of the net's size and a fixed
- * batch, never a function of the number of points. Progress and a stop
+ * batch, never a function of the number of points, but for two holds of
+ * at most CF_FITJOB_HOLD_ROWS points: a live scan's points, and the
+ * tolerance loop's feet (u v per point, 16 bytes: the next round's fit
+ * pass projects onto the last fit refined, the same surface, and starts
+ * Newton at each point's foot on it instead of searching: half the loop's
+ * projection work, the same feet). Progress and a stop
  * check between batches (the cell's ABORT and watchdog). */
 #ifndef CF_FITJOB_H
 #define CF_FITJOB_H

@@ -15,6 +15,14 @@ static int clampi(long x, int hi)
     return x < 0 ? 0 : (x > hi ? hi : (int)x);
 }
 
+static long cell_index(const cf_seedgrid_t *g, double x, double y, double z)
+{
+    const int ix = clampi((long)floor((x - g->lo[0]) / g->cell), g->dim[0] - 1);
+    const int iy = clampi((long)floor((y - g->lo[1]) / g->cell), g->dim[1] - 1);
+    const int iz = clampi((long)floor((z - g->lo[2]) / g->cell), g->dim[2] - 1);
+    return ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+}
+
 int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
 {
     memset(g, 0, sizeof *g);
@@ -84,14 +92,37 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
     }
     for (long i = 0; i < cells; i++)
         g->head[i] = -1;
+    g->sreach = calloc((size_t)n2, sizeof(float));
+    g->breach = calloc((size_t)cells, sizeof(float));
+    g->rreach = calloc((size_t)g->dim[1] * (size_t)g->dim[2], sizeof(float));
+    if (!g->sreach || !g->breach || !g->rreach) {
+        cf_seedgrid_free(g);
+        return CF_ENOMEM;
+    }
+    /* The local reach: a surface point of a grid cell is within twice its
+     * longest edge chord of each corner (nf_seed's reach, cell by cell). */
+    for (long j = 0; j + 1 < ns; j++)
+        for (long i = 0; i + 1 < ns; i++) {
+            const long c[4] = {i + j * ns, i + 1 + j * ns, i + (j + 1) * ns, i + 1 + (j + 1) * ns};
+            static const int e[4][2] = {{0, 1}, {2, 3}, {0, 2}, {1, 3}};
+            double h2 = 0.0;
+            for (int t = 0; t < 4; t++) {
+                const long a = c[e[t][0]], b = c[e[t][1]];
+                const double dx = X[a] - X[b], dy = Y[a] - Y[b], dz = Z[a] - Z[b];
+                h2 = fmax(h2, dx * dx + dy * dy + dz * dz);
+            }
+            /* up: a float rounds by at most 2^-24 of it */
+            const float r = (float)(2.0 * sqrt(h2) * (1.0 + 1e-6));
+            for (int t = 0; t < 4; t++)
+                g->sreach[c[t]] = g->sreach[c[t]] > r ? g->sreach[c[t]] : r;
+        }
     for (long k = n2 - 1; k >= 0; k--) {
-        const double P[3] = {X[k], Y[k], Z[k]};
-        int ix = clampi((long)floor((P[0] - g->lo[0]) / g->cell), g->dim[0] - 1);
-        int iy = clampi((long)floor((P[1] - g->lo[1]) / g->cell), g->dim[1] - 1);
-        int iz = clampi((long)floor((P[2] - g->lo[2]) / g->cell), g->dim[2] - 1);
-        long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+        const long ci = cell_index(g, X[k], Y[k], Z[k]);
         g->next[k] = g->head[ci];
         g->head[ci] = (int)k;
+        const float r = g->sreach[k];
+        g->breach[ci] = g->breach[ci] > r ? g->breach[ci] : r;
+        g->rreach[ci / g->dim[0]] = g->rreach[ci / g->dim[0]] > r ? g->rreach[ci / g->dim[0]] : r;
     }
     return CF_OK;
 }
@@ -143,6 +174,48 @@ static long nearest(const cf_seedgrid_t *g, const double Q[3], const int c0[3], 
     return bk;
 }
 
+/* Distance from x to cell i's extent along axis c (0 inside; the first
+ * and last cells open outward, as the clamped binning puts samples there),
+ * less slack, at least 0. */
+static double cell_gap(const cf_seedgrid_t *g, int c, int i, double x, double slack)
+{
+    const double a = g->lo[c] + g->cell * i, b = a + g->cell;
+    double d = 0.0;
+    if (i > 0 && x < a)
+        d = a - x;
+    else if (i < g->dim[c] - 1 && x > b)
+        d = x - b;
+    return d > slack ? d - slack : 0.0;
+}
+
+/* Steepest descent of the distance to Q over the sample grid from sample
+ * k (squared distance *d): to the nearest 4-neighbour while one is
+ * strictly nearer; the local minimum it ends on (nf_seed_local_min's). */
+static long descend(const cf_seedgrid_t *g, long k, const double Q[3], double *d)
+{
+    const long ns = g->seed.ns, n2 = ns * ns;
+    const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
+    for (;;) {
+        const long i = k % ns, j = k / ns;
+        const long nb[4] = {i > 0 ? k - 1 : -1, i + 1 < ns ? k + 1 : -1, j > 0 ? k - ns : -1,
+                            j + 1 < ns ? k + ns : -1};
+        long bk = k;
+        for (int t = 0; t < 4; t++) {
+            if (nb[t] < 0)
+                continue;
+            const double dx = X[nb[t]] - Q[0], dy = Y[nb[t]] - Q[1], dz = Z[nb[t]] - Q[2];
+            const double e = dx * dx + dy * dy + dz * dz;
+            if (e < *d) {
+                *d = e;
+                bk = nb[t];
+            }
+        }
+        if (bk == k)
+            return k;
+        k = bk;
+    }
+}
+
 /* Up to NF_PROJ_STARTS starts, nearest first: the nearest sample, then the
  * other samples that are local minima of the distance over the sample grid
  * within the band sqrt(nearest) + reach (nf_seed_starts's rule: a valley
@@ -165,29 +238,62 @@ static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
     const double rr = floor(band / g->cell) + 1;
     const int R = rr > SG_MAX_DIM ? SG_MAX_DIM : (int)rr;
     double bd[NF_PROJ_STARTS];
+    long key[NF_PROJ_STARTS]; /* (cell, sample): ties ordered as a scan by cells */
     int found = 1;
     bd[0] = best;
-    for (int iz = c0[2] - R < 0 ? 0 : c0[2] - R; iz < g->dim[2] && iz <= c0[2] + R; iz++)
-        for (int iy = c0[1] - R < 0 ? 0 : c0[1] - R; iy < g->dim[1] && iy <= c0[1] + R; iy++)
+    key[0] = -1;
+    /* Local bands: the valley of a foot no further than the nearest sample
+     * has a corner of the foot's grid cell within sqrt(best) + that cell's
+     * reach, and the valley's start is where steepest descent over the
+     * grid from that corner ends. So only samples within their own reach
+     * of the band's core are descended from, and a cell whose box is
+     * further than its largest reach is skipped: a long chord elsewhere
+     * (a stretched free edge) no longer makes every search read every
+     * sample. */
+    const double core = sqrt(best), slack = 1e-9 * g->cell;
+    for (int iz = c0[2] - R < 0 ? 0 : c0[2] - R; iz < g->dim[2] && iz <= c0[2] + R; iz++) {
+        const double gz = cell_gap(g, 2, iz, Q[2], slack);
+        for (int iy = c0[1] - R < 0 ? 0 : c0[1] - R; iy < g->dim[1] && iy <= c0[1] + R; iy++) {
+            const double gy = cell_gap(g, 1, iy, Q[1], slack);
+            const double rl = core + g->rreach[iy + (long)g->dim[1] * iz];
+            if (gy * gy + gz * gz >= rl * rl)
+                continue; /* the whole row is beyond its reach */
             for (int ix = c0[0] - R < 0 ? 0 : c0[0] - R; ix < g->dim[0] && ix <= c0[0] + R; ix++) {
-                long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+                const long ci = ix + (long)g->dim[0] * (iy + (long)g->dim[1] * iz);
+                if (g->head[ci] < 0)
+                    continue;
+                const double gx = cell_gap(g, 0, ix, Q[0], slack), lim = core + g->breach[ci];
+                if (gx * gx + gy * gy + gz * gz >= lim * lim)
+                    continue;
                 for (int k = g->head[ci]; k >= 0; k = g->next[k]) {
-                    if (k == ks[0])
-                        continue;
-                    double dx3 = X[k] - Q[0], dy3 = Y[k] - Q[1], dz3 = Z[k] - Q[2];
+                    const double dx3 = X[k] - Q[0], dy3 = Y[k] - Q[1], dz3 = Z[k] - Q[2];
                     double d = dx3 * dx3 + dy3 * dy3 + dz3 * dz3;
-                    if (!(d < band2) || (found == NF_PROJ_STARTS && d >= bd[found - 1]) ||
-                        !nf_seed_local_min(&g->seed, k, Q))
+                    const double lk = core + g->sreach[k];
+                    if (!(d < lk * lk))
+                        continue;
+                    const long m = descend(g, k, Q, &d);
+                    if (m == ks[0] || !(d < band2))
+                        continue;
+                    const long kk = cell_index(g, X[m], Y[m], Z[m]) * n2 + m;
+                    int dup = 0;
+                    for (int t = 1; t < found; t++)
+                        dup |= ks[t] == m;
+                    if (dup || (found == NF_PROJ_STARTS &&
+                                (d > bd[found - 1] || (d == bd[found - 1] && kk > key[found - 1]))))
                         continue;
                     int t = found < NF_PROJ_STARTS ? found++ : NF_PROJ_STARTS - 1;
-                    for (; t > 1 && bd[t - 1] > d; t--) {
+                    for (; t > 1 && (bd[t - 1] > d || (bd[t - 1] == d && key[t - 1] > kk)); t--) {
                         bd[t] = bd[t - 1];
                         ks[t] = ks[t - 1];
+                        key[t] = key[t - 1];
                     }
                     bd[t] = d;
-                    ks[t] = k;
+                    ks[t] = m;
+                    key[t] = kk;
                 }
             }
+        }
+    }
     return found;
 }
 
@@ -232,5 +338,8 @@ void cf_seedgrid_free(cf_seedgrid_t *g)
     free(g->pts);
     free(g->next);
     free(g->head);
+    free(g->sreach);
+    free(g->breach);
+    free(g->rreach);
     memset(g, 0, sizeof *g);
 }

@@ -7,7 +7,8 @@
  * the seed samples of nf_seed (a grid of surface points at uniform
  * parameters) binned into a uniform 3-D cell grid, the nearest sample to Q
  * found by searching cells in growing shells around Q's cell, and every
- * valley's start within reach of it. Host memory:
+ * valley's start within reach of it (each grid cell's own reach: a long
+ * chord at a stretched edge widens only the band there). Host memory:
  * fixed by the surface, never by the points. */
 #ifndef CF_SEEDGRID_H
 #define CF_SEEDGRID_H
@@ -27,6 +28,11 @@ typedef struct cf_seedgrid {
     int dim[3];
     double lo[3], cell;
     int *head, *next; /* per cell: first sample; per sample: next in its cell, -1 ends */
+    /* Reaches, rounded up to float (a cell grid of 4 M cells: 16 MB):
+     * per sample twice the longest chord of the grid cells at it, per cell
+     * the largest of its samples' (0: none), per row of cells along x
+     * (y, z) the largest of its cells'. */
+    float *sreach, *breach, *rreach;
 } cf_seedgrid_t;
 
 /* Samples of s (about `per_span` per knot span and direction, capped) and

@@ -9,10 +9,12 @@
 
 #include "cf_err.h"
 #include "cf_seedgrid.h"
+#include "cf_surf.h"
 #include "cf_test.h"
 #include "nf_err.h"
 #include "nf_project.h"
 #include "nf_quad.h"
+#include "nf_refine.h"
 #include "nf_surf.h"
 #include "ref_dense.h"
 #include <math.h>
@@ -437,12 +439,71 @@ static void test_edge_restart(void **state)
     free(mem);
 }
 
+/* The tolerance loop's next round (cf_fitjob): Boehm insertion keeps the
+ * surface, so the foot found on it is the start on the refined net, and
+ * Newton from there must end on the refined surface's true foot (brute
+ * force on the refined surface) at the same parameters, without a search. */
+static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
+                         unsigned long long seed)
+{
+    int nu, nv;
+    assert_int_equal(nf_refine_uniform_size(s, &nu, &nv), NF_OK);
+    nf_surf_t r;
+    assert_int_equal(cf_surf_alloc(&r, s->p, s->q, nu, nv), CF_OK);
+    assert_int_equal(nf_refine_uniform(s, &r), NF_OK);
+    assert_int_equal(nf_surf_check(&r), NF_OK);
+    brute_t b;
+    brute_init(&b, &r, bnu, bnv);
+    cf_seedgrid_t sg;
+    assert_int_equal(cf_seedgrid_init(&sg, s, 8), CF_OK);
+    ref_seed(seed);
+    double worst = 0.0, moved = 0.0;
+    long clamped = 0;
+    const int n = NPTS / 5;
+    for (int k = 0; k < n; k++) {
+        double Q[3], ub = 0, vb = 0, dint;
+        random_point(s, Q);
+        nf_proj_t f0, f1;
+        assert_int_equal(cf_seedgrid_project(&sg, Q, TOL, &f0), NF_OK);
+        assert_int_equal(nf_project(&r, Q, f0.u, f0.v, TOL, &f1), NF_OK);
+        const double db = brute(&b, Q, &ub, &vb, &dint), scale = fmax(1.0, db);
+        if (fabs(f1.dist) < db - 1e-9 * scale)
+            fail_msg("%s: brute force %.17g missed the foot %.17g", part, db, fabs(f1.dist));
+        worst = fmax(worst, (fabs(f1.dist) - db) / scale);
+        moved = fmax(moved, fmax(fabs(f1.u - f0.u), fabs(f1.v - f0.v)));
+        clamped += f1.clamped != 0;
+    }
+    print_message("%s refined %d x %d -> %d x %d: %d feet by Newton from the foot before "
+                  "insertion, %ld on the boundary, worst excess over brute force %.3g "
+                  "(relative), parameters moved by at most %.3g\n",
+                  part, s->nu, s->nv, nu, nv, n, clamped, worst, moved);
+    assert_true(worst <= TOL);
+    assert_true(moved <= 1e-7);
+    cf_seedgrid_free(&sg);
+    free(b.bc);
+    free(b.P);
+    cf_surf_free(&r);
+}
+
+static void test_refined_start(void **state)
+{
+    (void)state;
+    nf_surf_t s;
+    double *mem = make_twisted(&s);
+    refined_part("twisted strip", &s, 1001, 51, 1403);
+    free(mem);
+    mem = make_folded(&s);
+    refined_part("folded edge", &s, 401, 301, 1404);
+    free(mem);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_twisted_strip),
         cmocka_unit_test(test_folded_edge),
         cmocka_unit_test(test_edge_restart),
+        cmocka_unit_test(test_refined_start),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
