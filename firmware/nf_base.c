@@ -168,6 +168,12 @@ int nf_base_power(const double M0[6], double e[3][3], double lam[3])
     return iters;
 }
 
+/* Turn k of the axes: the angle, -45 degrees + 90 k / NF_BASE_ANGLES. */
+static double turn(int k)
+{
+    return (-0.25 + 0.5 * k / NF_BASE_ANGLES) * 3.14159265358979323846;
+}
+
 int nf_base_plane_axes(nf_base_plane_t *pl)
 {
     if (pl->n < 3)
@@ -194,6 +200,10 @@ int nf_base_plane_axes(nf_base_plane_t *pl)
     if (pl->e[2][2] < 0)
         for (int k = 0; k < 3; k++)
             pl->e[1][k] = -pl->e[1][k], pl->e[2][k] = -pl->e[2][k];
+    for (int k = 0; k < NF_BASE_ANGLES; k++) {
+        pl->rcs[k][0] = cos(turn(k));
+        pl->rcs[k][1] = sin(turn(k));
+    }
     pl->next = 0;
     return NF_OK;
 }
@@ -201,12 +211,23 @@ int nf_base_plane_axes(nf_base_plane_t *pl)
 void nf_base_plane_extent(nf_base_plane_t *pl, const double Q[3])
 {
     double d[3] = {Q[0] - pl->c[0], Q[1] - pl->c[1], Q[2] - pl->c[2]};
+    double x[2];
     for (int a = 0; a < 2; a++) {
-        double x = dot(d, pl->e[a]);
-        if (pl->next == 0 || x < pl->lo[a])
-            pl->lo[a] = x;
-        if (pl->next == 0 || x > pl->hi[a])
-            pl->hi[a] = x;
+        x[a] = dot(d, pl->e[a]);
+        if (pl->next == 0 || x[a] < pl->lo[a])
+            pl->lo[a] = x[a];
+        if (pl->next == 0 || x[a] > pl->hi[a])
+            pl->hi[a] = x[a];
+    }
+    for (int k = 0; k < NF_BASE_ANGLES; k++) {
+        double c = pl->rcs[k][0], s = pl->rcs[k][1];
+        double r[2] = {c * x[0] + s * x[1], -s * x[0] + c * x[1]};
+        for (int a = 0; a < 2; a++) {
+            if (pl->next == 0 || r[a] < pl->rlo[k][a])
+                pl->rlo[k][a] = r[a];
+            if (pl->next == 0 || r[a] > pl->rhi[k][a])
+                pl->rhi[k][a] = r[a];
+        }
     }
     pl->next++;
 }
@@ -230,11 +251,26 @@ int nf_base_plane_patch(const nf_base_plane_t *pl, double margin, nf_surf_t *out
         return NF_ENODATA;
     uniform_knots(out->U, out->nu, out->p);
     uniform_knots(out->V, out->nv, out->q);
-    double lo[2], hi[2];
+    /* The smallest rectangle of the turns; the axes' own unless one is 3 %
+     * smaller, so that a footprint the axes fit keeps them exactly. */
+    double area0 = (pl->hi[0] - pl->lo[0]) * (pl->hi[1] - pl->lo[1]), best = area0;
+    int kb = -1;
+    for (int k = 0; k < NF_BASE_ANGLES; k++) {
+        double area = (pl->rhi[k][0] - pl->rlo[k][0]) * (pl->rhi[k][1] - pl->rlo[k][1]);
+        if (area < 0.97 * area0 && area < best)
+            best = area, kb = k;
+    }
+    double e[2][3], lo[2], hi[2];
+    const double c = kb < 0 ? 1.0 : pl->rcs[kb][0], s = kb < 0 ? 0.0 : pl->rcs[kb][1];
+    for (int k = 0; k < 3; k++) {
+        e[0][k] = c * pl->e[0][k] + s * pl->e[1][k];
+        e[1][k] = -s * pl->e[0][k] + c * pl->e[1][k];
+    }
     for (int a = 0; a < 2; a++) {
-        double w = pl->hi[a] - pl->lo[a];
-        lo[a] = pl->lo[a] - margin * w;
-        hi[a] = pl->hi[a] + margin * w;
+        double l = kb < 0 ? pl->lo[a] : pl->rlo[kb][a], h = kb < 0 ? pl->hi[a] : pl->rhi[kb][a];
+        double w = h - l;
+        lo[a] = l - margin * w;
+        hi[a] = h + margin * w;
     }
     /* Greville placement: sum_i N_i(u) g_i = u, so S is affine in (u, v). */
     for (int j = 0; j < out->nv; j++) {
@@ -243,7 +279,7 @@ int nf_base_plane_patch(const nf_base_plane_t *pl, double margin, nf_surf_t *out
             double x = lo[0] + (hi[0] - lo[0]) * nf_greville(i, out->p, out->U);
             double *P = out->cp + 3 * (i + (long)j * out->nu);
             for (int k = 0; k < 3; k++)
-                P[k] = pl->c[k] + x * pl->e[0][k] + y * pl->e[1][k];
+                P[k] = pl->c[k] + x * e[0][k] + y * e[1][k];
             if (out->w)
                 out->w[i + (long)j * out->nu] = 1.0;
         }

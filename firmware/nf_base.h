@@ -7,7 +7,12 @@
  * pair of vectors (orthonormalised each step) so that it converges to the
  * two dominant directions: the plane on which the points spread most, its
  * normal their cross product. A second pass over the points gives their
- * extent in the plane; the patch is that rectangle, slightly enlarged so
+ * extent in the plane, along the two axes and along NF_BASE_ANGLES pairs of
+ * axes turned in the plane (issue 14: on a square footprint the two spreads
+ * are equal and the axes arbitrary; holes' came out at 45 degrees, its data
+ * a diamond over half the domain, knot lines across it); the patch is the
+ * smallest of those rectangles (the axes' own unless another is 3 %
+ * smaller), slightly enlarged so
  * that every point projects inside, with any degree and net (control
  * points at the Greville points: the parametrisation is affine). */
 #ifndef NF_BASE_H
@@ -15,17 +20,23 @@
 
 #include "nf_surf.h"
 
+#ifndef NF_BASE_ANGLES
+#define NF_BASE_ANGLES 45 /* turns of the axes tried, 2 degrees apart over [-45, 45) */
+#endif
+
 typedef struct nf_base_plane {
-    long n;              /* points accumulated */
-    double o[3];         /* shift (the first point), for a well-conditioned sum */
-    double s1[3];        /* sum of (Q - o) */
-    double s2[6];        /* sum of (Q - o)(Q - o)^T: xx xy xz yy yz zz */
-    double c[3];         /* centroid (nf_base_plane_axes) */
-    double e[3][3];      /* e[0], e[1]: in-plane axes, most spread first; e[2] normal */
-    double lam[3];       /* scatter along e[0], e[1], e[2] (per point) */
-    int iters;           /* power iterations taken */
-    long next;           /* points seen by nf_base_plane_extent */
-    double lo[2], hi[2]; /* extent along e[0] and e[1] */
+    long n;                        /* points accumulated */
+    double o[3];                   /* shift (the first point), for a well-conditioned sum */
+    double s1[3];                  /* sum of (Q - o) */
+    double s2[6];                  /* sum of (Q - o)(Q - o)^T: xx xy xz yy yz zz */
+    double c[3];                   /* centroid (nf_base_plane_axes) */
+    double e[3][3];                /* e[0], e[1]: in-plane axes, most spread first; e[2] normal */
+    double lam[3];                 /* scatter along e[0], e[1], e[2] (per point) */
+    int iters;                     /* power iterations taken */
+    long next;                     /* points seen by nf_base_plane_extent */
+    double lo[2], hi[2];           /* extent along e[0] and e[1] */
+    double rcs[NF_BASE_ANGLES][2]; /* cos, sin of each turn (nf_base_plane_axes) */
+    double rlo[NF_BASE_ANGLES][2], rhi[NF_BASE_ANGLES][2]; /* along the turned axes */
 } nf_base_plane_t;
 
 void nf_base_plane_init(nf_base_plane_t *pl);

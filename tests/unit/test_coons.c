@@ -645,6 +645,61 @@ static void test_power_closed_form(void **state)
     }
 }
 
+/* A square footprint (a 60 x 60 grid, equal spreads: the scatter's axes
+ * are arbitrary in the plane) turned 30 degrees in a tilted plane: the
+ * patch hugs it (issue 14: holes' base came out turned 45 degrees, the data
+ * a diamond over half the domain). Its edges are within 1 degree of the
+ * square's, so its area, margin aside, is at most (cos 1 + sin 1)^2 =
+ * 1.0355 times the square's; every point still projects inside. */
+static void test_plane_square_turned(void **state)
+{
+    (void)state;
+    double ax[3] = {0.6, -0.8, 0.0}, R[9];
+    rotation(ax, 0.4, R);
+    const double c0[3] = {10, 20, 5}, th = 30.0 * 3.14159265358979323846 / 180.0;
+    nf_base_plane_t pl;
+    nf_base_plane_init(&pl);
+    enum { G = 60, M = G * G };
+    double *pts = malloc(sizeof(double) * 3 * M);
+    for (int k = 0; k < M; k++) {
+        double a = 100.0 * (k % G) / (G - 1), b = 100.0 * (k / G) / (G - 1);
+        double x = cos(th) * a - sin(th) * b, y = sin(th) * a + cos(th) * b, *P = pts + 3 * k;
+        for (int i = 0; i < 3; i++)
+            P[i] = c0[i] + R[3 * i] * x + R[3 * i + 1] * y;
+        assert_int_equal(nf_base_plane_add(&pl, P), NF_OK);
+    }
+    assert_int_equal(nf_base_plane_axes(&pl), NF_OK);
+    for (int k = 0; k < M; k++)
+        nf_base_plane_extent(&pl, pts + 3 * k);
+    nf_surf_t s;
+    nf_surf_wire(&s, 3, 3, 4, 4, malloc(sizeof(double) * NF_SURF_DOUBLES(4, 4, 3, 3)));
+    const double m = 0.01;
+    assert_int_equal(nf_base_plane_patch(&pl, m, &s), NF_OK);
+    double S00[3], S10[3], S01[3], eu[3], ev[3], lu = 0, lv = 0;
+    nf_surf_eval(&s, 0, 0, S00);
+    nf_surf_eval(&s, 1, 0, S10);
+    nf_surf_eval(&s, 0, 1, S01);
+    for (int i = 0; i < 3; i++) {
+        eu[i] = S10[i] - S00[i];
+        ev[i] = S01[i] - S00[i];
+        lu += eu[i] * eu[i];
+        lv += ev[i] * ev[i];
+    }
+    double area = sqrt(lu) * sqrt(lv) / ((1 + 2 * m) * (1 + 2 * m));
+    assert_true(area <= 1.0355 * 100.0 * 100.0);
+    for (int k = 0; k < M; k++) {
+        const double *P = pts + 3 * k;
+        double a = 0, b = 0;
+        for (int i = 0; i < 3; i++) {
+            a += (P[i] - S00[i]) * eu[i] / lu;
+            b += (P[i] - S00[i]) * ev[i] / lv;
+        }
+        assert_true(a > 0 && a < 1 && b > 0 && b < 1);
+    }
+    free(s.U);
+    free(pts);
+}
+
 /* Points on a tilted plane (any spread in it): the plane comes back, the
  * patch lies in it, covers every point's projection and is affine. */
 static void test_plane_patch(void **state)
@@ -925,6 +980,7 @@ int main(void)
         cmocka_unit_test(test_bad_curves_refused),
         cmocka_unit_test(test_power_closed_form),
         cmocka_unit_test(test_plane_patch),
+        cmocka_unit_test(test_plane_square_turned),
         cmocka_unit_test(test_iges126_read_fixture),
         cmocka_unit_test(test_iges126_roundtrip),
         cmocka_unit_test(test_iges126_bad),
