@@ -156,6 +156,15 @@ static int ig_record(ig_rd_t *c, ig_rec_t *r)
             size_t k = 0, lim = in->len - in->pos;
             if (lim > (size_t)(80 - n))
                 lim = (size_t)(80 - n);
+            for (; k + 8 <= lim; k += 8) { /* 8 at a time: none below 0x20, none 0x7F */
+                uint64_t x, y;
+                memcpy(&x, b + k, 8);
+                y = x ^ UINT64_C(0x7F7F7F7F7F7F7F7F);
+                if (((x - UINT64_C(0x2020202020202020)) & ~x & UINT64_C(0x8080808080808080)) |
+                    ((y - UINT64_C(0x0101010101010101)) & ~y & UINT64_C(0x8080808080808080)))
+                    break;
+                blank &= x == UINT64_C(0x2020202020202020);
+            }
             while (k < lim && b[k] >= 0x20 && b[k] != 0x7F) {
                 blank &= b[k] == ' ';
                 k++;
