@@ -29,7 +29,9 @@ int nf_footprint_init(nf_footprint_t *fp, const nf_surf_t *s, void *mem, size_t 
  * the domain) times NF_FP_SUB plus the sub-cell within it. */
 static int cell_of(const double *K, int n, int p, double x)
 {
-    const int l = nf_find_span(n, p, x, K);
+    /* The uniform guess first (issue 20: the binary search was most of
+     * the footprint's cost, a pass over every point). */
+    const int l = nf_find_span_from(-1, n, p, x, K, (n - p + 1) / (K[n + 1] - K[p]));
     int sub = (int)(NF_FP_SUB * (x - K[l]) / (K[l + 1] - K[l]));
     sub = sub < 0 ? 0 : (sub >= NF_FP_SUB ? NF_FP_SUB - 1 : sub);
     return (l - p) * NF_FP_SUB + sub;

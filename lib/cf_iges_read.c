@@ -9,13 +9,16 @@
 #include "cf_err.h"
 #include "cf_fmt.h"
 #include "cf_iges.h"
+#include "cf_points_el.h"
 #include "cf_surf.h"
 #include "cf_trim.h"
 #include "nf_basis.h"
 #include "nf_err.h"
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -80,6 +83,7 @@ typedef struct ig_rd {
     int want_type; /* 128 (surface) or 126 (curve) */
     long nth;      /* entity_de = 0: take the nth (0-based) of want_type */
     int notfound;  /* CF_ENOTFOUND with msg already written */
+    int dir_only;  /* stop at the P section: the Directory is all we want */
     ig_par_t want[1 + IG_MAX_CHAIN];
     int nwant;
 } ig_rd_t;
@@ -146,6 +150,28 @@ static int ig_record(ig_rd_t *c, ig_rec_t *r)
         int n = 0, blank = 1, ch;
         r->line = in->line;
         for (;;) {
+            /* The run of plain printable bytes in the buffer, at once: every
+             * byte but the ends and the refused ones (a line's 80 at most). */
+            const unsigned char *b = in->buf + in->pos;
+            size_t k = 0, lim = in->len - in->pos;
+            if (lim > (size_t)(80 - n))
+                lim = (size_t)(80 - n);
+            for (; k + 8 <= lim; k += 8) { /* 8 at a time: none below 0x20, none 0x7F */
+                uint64_t x, y;
+                memcpy(&x, b + k, 8);
+                y = x ^ UINT64_C(0x7F7F7F7F7F7F7F7F);
+                if (((x - UINT64_C(0x2020202020202020)) & ~x & UINT64_C(0x8080808080808080)) |
+                    ((y - UINT64_C(0x0101010101010101)) & ~y & UINT64_C(0x8080808080808080)))
+                    break;
+                blank &= x == UINT64_C(0x2020202020202020);
+            }
+            while (k < lim && b[k] >= 0x20 && b[k] != 0x7F) {
+                blank &= b[k] == ' ';
+                k++;
+            }
+            memcpy(r->t + n, b, k);
+            n += (int)k;
+            in->pos += k;
             ch = ig_getc(in);
             if (ch == EOF)
                 break;
@@ -615,6 +641,8 @@ static int ig_scan(ig_rd_t *c, int entity_de)
                 return rc;
             if (s >= 3 && sect < 3 && (rc = ig_pick(c, entity_de, r.line)))
                 return rc;
+            if (s >= 3 && c->dir_only)
+                return CF_OK;
             if (s == 4 && sect < 3)
                 return ig_fail(c, CF_EPARSE, "line %ld: no Parameter Data (P) section", r.line);
             sect = s;
@@ -725,43 +753,90 @@ static int ig_pfail(ig_rd_t *c, const ig_par_t *p, size_t at, int err, const cha
 
 enum { IG_NUM_OK, IG_NUM_EMPTY, IG_NUM_BAD, IG_NUM_RANGE };
 
-/* IGES real: [+-] digits [. digits] [E|D [+-] digits]; Fortran D exponents. */
+/* x87 extended evaluation would round Clinger's operation twice. */
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0
+#define IG_FAST 0
+#else
+#define IG_FAST 1
+#endif
+
+/* 10^0..10^22: exact doubles (Clinger's fast path below). */
+static const double ig_p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                  1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                  1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+/* IGES real: [+-] digits [. digits] [E|D [+-] digits]; Fortran D exponents.
+ * Correctly rounded as strtod: Clinger's exact operation (m <= 2^53, |e10|
+ * <= 22), else the Eisel-Lemire decision (cf_points_el.c), else strtod. */
 static int ig_real(const ig_fld_t *f, double *v)
 {
-    char b[72];
-    size_t i = 0, n = f->n, digits = 0;
+    const char *b = f->s;
+    size_t i = 0, n = f->n, digits = 0, ex_at = 0;
+    uint64_t m = 0;
+    long e10 = 0, ex = 0;
+    int nd = 0, drop = 0, neg = 0, eneg = 0;
     if (n == 0)
         return IG_NUM_EMPTY;
-    if (n >= sizeof b)
+    if (n >= 72)
         return IG_NUM_BAD;
-    memcpy(b, f->s, n);
-    b[n] = '\0';
     if (b[i] == '+' || b[i] == '-')
-        i++;
-    for (; b[i] >= '0' && b[i] <= '9'; i++)
-        digits++;
-    if (b[i] == '.')
-        for (i++; b[i] >= '0' && b[i] <= '9'; i++)
-            digits++;
+        neg = b[i++] == '-';
+    /* m: the first 19 significant digits; drop: those after, e10 the scale */
+    for (; i < n && b[i] >= '0' && b[i] <= '9'; i++, digits++) {
+        if (nd < 19) {
+            m = m * 10 + (uint64_t)(b[i] - '0');
+            nd += m != 0;
+        } else {
+            e10++;
+            drop = 1;
+        }
+    }
+    if (i < n && b[i] == '.')
+        for (i++; i < n && b[i] >= '0' && b[i] <= '9'; i++, digits++) {
+            if (nd < 19) {
+                m = m * 10 + (uint64_t)(b[i] - '0');
+                nd += m != 0;
+                e10--;
+            } else {
+                drop = 1;
+            }
+        }
     if (!digits)
         return IG_NUM_BAD;
-    if (b[i] == 'E' || b[i] == 'e' || b[i] == 'D' || b[i] == 'd') {
-        b[i++] = 'E';
-        if (b[i] == '+' || b[i] == '-')
-            i++;
-        if (!(b[i] >= '0' && b[i] <= '9'))
+    if (i < n && (b[i] == 'E' || b[i] == 'e' || b[i] == 'D' || b[i] == 'd')) {
+        ex_at = i++;
+        if (i < n && (b[i] == '+' || b[i] == '-'))
+            eneg = b[i++] == '-';
+        if (!(i < n && b[i] >= '0' && b[i] <= '9'))
             return IG_NUM_BAD;
-        while (b[i] >= '0' && b[i] <= '9')
-            i++;
+        for (; i < n && b[i] >= '0' && b[i] <= '9'; i++)
+            if (ex < 100000)
+                ex = ex * 10 + (b[i] - '0');
     }
     if (i != n)
         return IG_NUM_BAD;
-    char *end;
-    *v = strtod(b, &end);
-    if (end != b + n)
-        return IG_NUM_BAD;
-    if (!isfinite(*v))
-        return IG_NUM_RANGE;
+    e10 += eneg ? -ex : ex;
+    double d;
+    if (m == 0) {
+        d = 0.0;
+    } else if (IG_FAST && !drop && m <= (UINT64_C(1) << 53) && e10 >= -22 && e10 <= 22) {
+        d = (double)m;
+        d = e10 < 0 ? d / ig_p10[-e10] : d * ig_p10[e10];
+    } else if (!IG_FAST || e10 < CF_PEL_QMIN || e10 > CF_PEL_QMAX ||
+               !(drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d))) {
+        char t[72];
+        memcpy(t, b, n);
+        t[n] = '\0';
+        if (ex_at)
+            t[ex_at] = 'E';
+        char *end;
+        d = strtod(t, &end);
+        if (end != t + n)
+            return IG_NUM_BAD;
+        *v = d;
+        return isfinite(d) ? IG_NUM_OK : IG_NUM_RANGE;
+    }
+    *v = neg ? -d : d;
     return IG_NUM_OK;
 }
 
@@ -1055,11 +1130,13 @@ static void ig_rd_free(ig_rd_t *c)
 }
 
 /* Read the file up to the wanted entity's parameter data and its
- * matrices (m, *nm); c must be freed with ig_rd_free whatever happens. */
-static int ig_load(ig_rd_t *c, const char *path, int type, int entity_de, long nth, char *msg,
-                   size_t msglen, double (*m)[12], int *nm)
+ * matrices (m, *nm), or (dir_only) up to the P section: the Directory and
+ * which entry is wanted; c must be freed with ig_rd_free whatever happens. */
+static int ig_load(ig_rd_t *c, const char *path, int type, int entity_de, long nth, int dir_only,
+                   char *msg, size_t msglen, double (*m)[12], int *nm)
 {
     memset(c, 0, sizeof *c);
+    c->dir_only = dir_only;
     c->unit_mm = 1.0;
     c->path = path;
     c->msg = msg;
@@ -1083,7 +1160,7 @@ static int ig_load(ig_rd_t *c, const char *path, int type, int entity_de, long n
         rc = ig_scan(c, entity_de);
     if (!rc && c->notfound)
         rc = c->notfound; /* its message is already in msg */
-    for (int i = 1; !rc && i < c->nwant; i++)
+    for (int i = 1; !rc && !dir_only && i < c->nwant; i++)
         rc = ig_matrix(c, &c->want[i], m[i - 1]);
     *nm = c->nwant > 0 ? c->nwant - 1 : 0;
     return rc;
@@ -1098,7 +1175,7 @@ int cf_iges_read(const char *path, int entity_de, nf_surf_t *out, char *msg, siz
     ig_rd_t c;
     double m[IG_MAX_CHAIN][12];
     int nm = 0;
-    int rc = ig_load(&c, path, 128, entity_de, 0, msg, msglen, m, &nm);
+    int rc = ig_load(&c, path, 128, entity_de, 0, 0, msg, msglen, m, &nm);
     if (!rc)
         rc = ig_surface(&c, &c.want[0], (const double(*)[12])m, nm, out);
     if (!rc && c.unit_mm != 1.0) /* model units to millimetres; knots are unitless */
@@ -1249,7 +1326,7 @@ int cf_iges_read_curve(const char *path, int entity_de, long nth, nf_curve_t *ou
     ig_rd_t c;
     double m[IG_MAX_CHAIN][12];
     int nm = 0;
-    int rc = ig_load(&c, path, 126, entity_de, nth, msg, msglen, m, &nm);
+    int rc = ig_load(&c, path, 126, entity_de, nth, 0, msg, msglen, m, &nm);
     if (!rc)
         rc = ig_curve(&c, &c.want[0], (const double(*)[12])m, nm, out);
     if (!rc && c.unit_mm != 1.0)
@@ -1273,7 +1350,7 @@ static int ig_ints(const char *path, int type, int de, long nth, long **v, long 
     double m[IG_MAX_CHAIN][12];
     int nm = 0;
     *v = NULL;
-    int rc = ig_load(&c, path, type, de, nth, msg, ml, m, &nm);
+    int rc = ig_load(&c, path, type, de, nth, 0, msg, ml, m, &nm);
     long nf = 0;
     if (!rc)
         rc = ig_count(&c, &c.want[0], &nf);
@@ -1311,7 +1388,7 @@ static int ig_pcurve(const char *path, long de, nf_curve_t *out, char *msg, size
     double m[IG_MAX_CHAIN][12];
     int nm = 0;
     memset(out, 0, sizeof *out);
-    int rc = ig_load(&c, path, 126, (int)de, 0, msg, ml, m, &nm);
+    int rc = ig_load(&c, path, 126, (int)de, 0, 0, msg, ml, m, &nm);
     if (!rc)
         rc = ig_curve(&c, &c.want[0], (const double(*)[12])m, nm, out);
     ig_rd_free(&c);
@@ -1379,15 +1456,19 @@ int cf_iges_read_trim(const char *path, int entity_de, cf_trim_t *out, char *msg
         return cf_fail(msg, msglen, CF_EARG, "cf_iges_read_trim: bad arguments");
     long surf_de = 0;
     {
-        /* Which 128 (its DE): the records scanned, its numbers not parsed. */
+        /* Which 128 (its DE), and is there a 144 at all: the Directory
+         * only (issue 20: the P section of a 10^5-point net is 8 MB, and
+         * a caller reads the surface itself with cf_iges_read). */
         ig_rd_t c;
         double m[IG_MAX_CHAIN][12];
-        int nm = 0;
-        int rc = ig_load(&c, path, 128, entity_de, 0, msg, msglen, m, &nm);
+        int nm = 0, any144 = 0;
+        int rc = ig_load(&c, path, 128, entity_de, 0, 1, msg, msglen, m, &nm);
         surf_de = c.nwant ? c.want[0].de : 0;
+        for (long k = 0; !rc && k < c.nde; k++)
+            any144 |= c.de[k].type == 144;
         ig_rd_free(&c);
-        if (rc)
-            return rc;
+        if (rc || !any144)
+            return rc; /* no 144: the surface is whole */
     }
     int rc = CF_OK;
     for (long nth = 0;; nth++) {

@@ -33,6 +33,13 @@ typedef struct ig_w {
     long de;  /* P lines: DE number of the entity they belong to (0: 1) */
 } ig_w_t;
 
+/* x right-aligned in the w columns ending before end (x >= 0 fits). */
+static void ig_rjust(char *end, int w, long x)
+{
+    for (int i = 0; i < w; i++, x /= 10)
+        end[-1 - i] = i > 0 && x == 0 ? ' ' : (char)('0' + x % 10);
+}
+
 static void ig_wline(ig_w_t *w, const char *data, size_t n)
 {
     char line[96];
@@ -41,9 +48,13 @@ static void ig_wline(ig_w_t *w, const char *data, size_t n)
         return;
     memset(line, ' ', 80);
     memcpy(line, data, n < 72 ? n : 72);
+    /* The same bytes as "%8ld" and "%c%7ld\n" (snprintf was a fifth of a
+     * 10^5-point write): P's back pointer to its DE, section, sequence. */
     if (w->sect == 'P')
-        snprintf(line + 64, 9, "%8ld", w->de ? w->de : 1L); /* back pointer to its DE */
-    snprintf(line + 72, sizeof line - 72, "%c%7ld\n", w->sect, w->seq);
+        ig_rjust(line + 72, 8, w->de ? w->de : 1L);
+    line[72] = w->sect;
+    ig_rjust(line + 80, 7, w->seq % 10000000L); /* > 7 digits: refused after */
+    line[80] = '\n';
     fwrite(line, 1, 81, w->f);
 }
 
@@ -183,6 +194,53 @@ static void ig_global_out(ig_w_t *w, double mx, const char *name, const char *fn
     ig_flush(w);
 }
 
+/* What every writer's S and G sections share: the sender's and the file's
+ * names (printable, at most 64 characters), the UTC date, the open file. */
+typedef struct ig_head {
+    char nm[65], fname[65], date[72];
+    cf_atomic_t aw;
+} ig_head_t;
+
+/* SOURCE_DATE_EPOCH when set (reproducible builds), else now. */
+static long long ig_now(void)
+{
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long t = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || t < 0)
+        t = (long long)time(NULL);
+    return t;
+}
+
+/* Fill h and open the temporary (cf_atomic); CF_OK or CF_EIO with msg. */
+static int ig_global(ig_head_t *h, const char *path, const char *name, const char *dflt,
+                     long long utc, char *msg, size_t msglen)
+{
+    const char *base = strrchr(path, '/');
+    char dfile[72];
+    snprintf(dfile, sizeof dfile, "%s.igs", dflt);
+    ig_clean(h->nm, name, 64, dflt);
+    ig_clean(h->fname, base ? base + 1 : path, 64, dfile);
+    time_t t = (time_t)utc;
+    struct tm tm;
+    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
+        t = 0;
+        gmtime_r(&t, &tm);
+    }
+    snprintf(h->date, sizeof h->date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
+             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    return cf_atomic_open(&h->aw, path, msg, msglen);
+}
+
+/* Write the 8-column field k (0-based) of the D line at offset at: the
+ * P pointers and counts known only once the P section is written. */
+static int ig_patch(FILE *f, long at, int k, long x)
+{
+    char b[8];
+    ig_rjust(b + 8, 8, x);
+    return fseek(f, at + 8L * k, SEEK_SET) || fwrite(b, 1, 8, f) != 8;
+}
+
 int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, long long utc,
                      char *msg, size_t msglen)
 {
@@ -192,53 +250,32 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     if (rc)
         return cf_fail(msg, msglen, rc, "%s: not written: invalid surface: %s", path,
                        nf_strerror(rc));
-    char nm[65], fname[65], date[72], text[160];
-    const char *base = strrchr(path, '/');
-    ig_clean(nm, name, 64, "surface");
-    ig_clean(fname, base ? base + 1 : path, 64, "surface.igs");
-    time_t t = (time_t)utc;
-    struct tm tm;
-    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
-        t = 0;
-        gmtime_r(&t, &tm);
-    }
-    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
-             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
     int poly = 1;
     for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
         poly &= s->w[i] == s->w[0];
-
-    ig_w_t w = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
-    ig_pdata(&w, s, poly); /* dry run: the D entry needs the line count */
-    long np = w.seq;
-    if (np > IG_MAX_SEQ)
-        return cf_fail(msg, msglen, CF_EUNSUPPORTED,
-                       "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence "
-                       "numbers",
-                       path, np);
-
-    cf_atomic_t aw;
-    int orc = cf_atomic_open(&aw, path, msg, msglen);
-    if (orc)
-        return orc;
-    FILE *f = aw.f;
-
+    ig_head_t h;
+    if ((rc = ig_global(&h, path, name, "surface", utc, msg, msglen)))
+        return rc;
+    FILE *f = h.aw.f;
+    char text[160];
     long cnt[4];
     ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
     int tl = snprintf(text, sizeof text,
-                      "cellfit: rational B-spline surface %s (IGES 5.3, one entity 128)", nm);
+                      "cellfit: rational B-spline surface %s (IGES 5.3, one entity 128)", h.nm);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
     cnt[0] = ws.seq;
 
     ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
-    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), nm, fname, date);
+    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), h.nm, h.fname, h.date);
     cnt[1] = wg.seq;
 
+    /* The D entry's P line count is patched in after the P section: no dry
+     * run formatting every number twice (issue 20). */
     char d[2][96];
     snprintf(d[0], sizeof d[0], "%8d%8d%8d%8d%8d%8d%8d%8d%8s%c%7d\n", 128, 1, 0, 0, 0, 0, 0, 0,
              "00000000", 'D', 1);
-    snprintf(d[1], sizeof d[1], "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", 128, 0, 0, np, 0, "", "",
+    snprintf(d[1], sizeof d[1], "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", 128, 0, 0, 0L, 0, "", "",
              "BSURF", 0, 'D', 2);
     fputs(d[0], f);
     fputs(d[1], f);
@@ -247,21 +284,25 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
     ig_pdata(&wp, s, poly);
     cnt[3] = wp.seq;
+    if (cnt[3] > IG_MAX_SEQ) {
+        cf_atomic_abort(&h.aw);
+        return cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                       "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence "
+                       "numbers",
+                       path, cnt[3]);
+    }
 
     fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
-
-    return cf_atomic_commit(&aw, 0, msg, msglen);
+    if (ig_patch(f, 81L * (cnt[0] + cnt[1] + 1), 3, cnt[3])) {
+        cf_atomic_abort(&h.aw);
+        return cf_fail(msg, msglen, CF_EIO, "%s: not written: %s", path, strerror(errno));
+    }
+    return cf_atomic_commit(&h.aw, 0, msg, msglen);
 }
 
 int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *msg, size_t msglen)
 {
-    /* SOURCE_DATE_EPOCH: the reproducible-builds convention for fixed timestamps. */
-    const char *e = getenv("SOURCE_DATE_EPOCH");
-    char *end;
-    long long t = e && *e ? strtoll(e, &end, 10) : 0;
-    if (!e || !*e || *end || t < 0)
-        t = (long long)time(NULL);
-    return cf_iges_write_at(path, s, name, t, msg, msglen);
+    return cf_iges_write_at(path, s, name, ig_now(), msg, msglen);
 }
 
 /* ------------------------------------------------- entity 126 output */
@@ -305,37 +346,21 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
                            nf_strerror(rc));
         mx = fmax(mx, ig_maxabs(c[k].cp, 3L * c[k].n));
     }
-    const char *e = getenv("SOURCE_DATE_EPOCH");
-    char *end;
-    long long utc = e && *e ? strtoll(e, &end, 10) : 0;
-    if (!e || !*e || *end || utc < 0)
-        utc = (long long)time(NULL);
-    char nm[65], fname[65], date[72], text[160];
-    const char *base = strrchr(path, '/');
-    ig_clean(nm, name, 64, "curves");
-    ig_clean(fname, base ? base + 1 : path, 64, "curves.igs");
-    time_t t = (time_t)utc;
-    struct tm tm;
-    if (!gmtime_r(&t, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
-        t = 0;
-        gmtime_r(&t, &tm);
-    }
-    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
-             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
-    cf_atomic_t aw;
-    int orc = cf_atomic_open(&aw, path, msg, msglen);
+    ig_head_t h;
+    int orc = ig_global(&h, path, name, "curves", ig_now(), msg, msglen);
     if (orc)
         return orc;
-    FILE *f = aw.f;
+    FILE *f = h.aw.f;
+    char text[160];
     long cnt[4];
     ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
     int tl = snprintf(text, sizeof text,
-                      "cellfit: %d rational B-spline curves %s (IGES 5.3, entity 126)", nc, nm);
+                      "cellfit: %d rational B-spline curves %s (IGES 5.3, entity 126)", nc, h.nm);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
     cnt[0] = ws.seq;
     ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
-    ig_global_out(&wg, mx, nm, fname, date);
+    ig_global_out(&wg, mx, h.nm, h.fname, h.date);
     cnt[1] = wg.seq;
     long pstart = 1;
     for (int k = 0; k < nc; k++) { /* D entries: each curve's P line count from a dry run */
@@ -355,7 +380,7 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
     }
     cnt[3] = wp.seq;
     fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
-    return cf_atomic_commit(&aw, 0, msg, msglen);
+    return cf_atomic_commit(&h.aw, 0, msg, msglen);
 }
 
 /* ------------------------------------------ trimmed surface output */
@@ -471,64 +496,61 @@ int cf_iges_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim
     int poly = 1;
     for (long i = 1; s->w && i < (long)s->nu * s->nv; i++)
         poly &= s->w[i] == s->w[0];
-    long ptot = 0;
-    for (int i = 0; i < ne; i++) { /* dry runs: each entity's P line count */
-        ig_w_t dry = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
-        ig_edata(&dry, &ents[i], s, poly);
-        dpl[i] = dry.seq;
-        ptot += dry.seq;
-    }
-    if (ptot > IG_MAX_SEQ) {
-        rc = cf_fail(msg, msglen, CF_EUNSUPPORTED,
-                     "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence numbers",
-                     path, ptot);
+    ig_head_t h;
+    if ((rc = ig_global(&h, path, name, "surface", utc, msg, msglen)))
         goto out;
-    }
-    char nm[65], fname[65], date[72], text[200];
-    const char *base = strrchr(path, '/');
-    ig_clean(nm, name, 64, "surface");
-    ig_clean(fname, base ? base + 1 : path, 64, "surface.igs");
-    time_t tt = (time_t)utc;
-    struct tm tm;
-    if (!gmtime_r(&tt, &tm) || tm.tm_year + 1900 > 9999 || tm.tm_year + 1900 < 0) {
-        tt = 0;
-        gmtime_r(&tt, &tm);
-    }
-    snprintf(date, sizeof date, "%04d%02d%02d.%02d%02d%02d", tm.tm_year + 1900, tm.tm_mon + 1,
-             tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
-    cf_atomic_t aw;
-    if ((rc = cf_atomic_open(&aw, path, msg, msglen)))
-        goto out;
-    FILE *f = aw.f;
+    FILE *f = h.aw.f;
+    char text[200];
     long cnt[4];
     ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
     int tl = snprintf(text, sizeof text,
                       "cellfit: trimmed rational B-spline surface %s (IGES 5.3, entity 144 over "
                       "128, %d boundaries)",
-                      nm, t->nloops);
+                      h.nm, t->nloops);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
     cnt[0] = ws.seq;
     ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
-    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), nm, fname, date);
+    ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), h.nm, h.fname, h.date);
     cnt[1] = wg.seq;
-    long pstart = 1;
+    /* P pointers and line counts patched in after the P section (no dry
+     * run of the 128's numbers). */
     for (int i = 0; i < ne; i++) {
-        fprintf(f, "%8d%8ld%8d%8d%8d%8d%8d%8d%8s%c%7d\n", ents[i].type, pstart, 0, 0, 0, 0, 0, 0,
+        fprintf(f, "%8d%8ld%8d%8d%8d%8d%8d%8d%8s%c%7d\n", ents[i].type, 0L, 0, 0, 0, 0, 0, 0,
                 ents[i].status, 'D', 2 * i + 1);
-        fprintf(f, "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", ents[i].type, 0, 0, dpl[i], 0, "", "",
+        fprintf(f, "%8d%8d%8d%8ld%8d%8s%8s%8.8s%8d%c%7d\n", ents[i].type, 0, 0, 0L, 0, "", "",
                 ents[i].label, 0, 'D', 2 * i + 2);
-        pstart += dpl[i];
     }
     cnt[2] = 2L * ne;
     ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
     for (int i = 0; i < ne; i++) {
+        long before = wp.seq;
         wp.de = 2L * i + 1;
         ig_edata(&wp, &ents[i], s, poly);
+        dpl[i] = wp.seq - before;
     }
     cnt[3] = wp.seq;
+    if (cnt[3] > IG_MAX_SEQ) {
+        cf_atomic_abort(&h.aw);
+        rc = cf_fail(msg, msglen, CF_EUNSUPPORTED,
+                     "%s: not written: %ld parameter lines exceed IGES's 7-digit sequence numbers",
+                     path, cnt[3]);
+        goto out;
+    }
     fprintf(f, "S%7ldG%7ldD%7ldP%7ld%40sT%7d\n", cnt[0], cnt[1], cnt[2], cnt[3], "", 1);
-    rc = cf_atomic_commit(&aw, 0, msg, msglen);
+    long d0 = 81L * (cnt[0] + cnt[1]), pstart = 1;
+    int bad = 0;
+    for (int i = 0; i < ne && !bad; i++) {
+        bad = ig_patch(f, d0 + 81L * 2 * i, 1, pstart) ||
+              ig_patch(f, d0 + 81L * (2 * i + 1), 3, dpl[i]);
+        pstart += dpl[i];
+    }
+    if (bad) {
+        cf_atomic_abort(&h.aw);
+        rc = cf_fail(msg, msglen, CF_EIO, "%s: not written: %s", path, strerror(errno));
+        goto out;
+    }
+    rc = cf_atomic_commit(&h.aw, 0, msg, msglen);
 out:
     for (long i = 0; e3 && i < ncurves; i++)
         cf_curve_free(&e3[i]);

@@ -3,10 +3,14 @@
  * one v (a scanner's raster; any order works). The v row's basis N(v) is
  * computed once per row, and each control column's sum over it,
  * C_i = sum_b N_b(v) P_(i, k-q+b) (a curve in u), once per row and column
- * when a point first needs it; a point then costs its span, N(u) from the
- * span's reciprocals (no division) and (p+1) x 3 multiply-adds. Same
- * surface point as nf_surf_eval up to rounding (sums regrouped). Rational
- * surfaces (weights not all equal) go to nf_surf_eval. Memory: 4 doubles per control column. */
+ * when a point first needs it. On a u span the row's curve is one
+ * polynomial: its power coefficients about the span's middle (the span's
+ * basis in power form, computed once per span at init, times the p+1
+ * columns) once per row and span, and a point costs its span and Horner's
+ * rule, p x 3 multiply-adds (issue 20: 289 instructions a point before,
+ * N(u) per point). Same surface point as nf_surf_eval up to rounding (sums
+ * regrouped). Rational surfaces (weights not all equal) go to
+ * nf_surf_eval. Memory: 4 + (p+1)^2 doubles per control column. */
 #ifndef CF_SURFROW_H
 #define CF_SURFROW_H
 
@@ -18,13 +22,18 @@ typedef struct cf_surfrow {
     const nf_surf_t *s;
     double *C;   /* 3 nu: the curve of the current row */
     long *stamp; /* nu: the row each C_i was computed for */
+    double *M;   /* (p+1)^2 per u span l (at l - p): N_(l-p+a)(u) = sum_j M[j][a] t^j */
     long row;    /* rows seen (stamps) */
     double v;    /* the current row's v (clamped) */
     int k;       /* its v span */
     double Nv[NF_MAX_ORDER];
-    int l; /* the u span of the cached reciprocals, -1 none */
-    double recip[NF_RECIP_LEN];
-    double hu, hv; /* spans per unit parameter (the uniform guess) */
+    int l;                         /* the u span of the last point, -1 none */
+    int al;                        /* the u span of A, -1 none */
+    long arow;                     /* the row of A */
+    double A[3 * NF_MAX_ORDER];    /* the row's curve on span al: x y z per power of t */
+    double lo, hi, mid;            /* span l: [lo, hi) (hi included on the last), middle */
+    double umin, umax, vmin, vmax; /* the domain */
+    double hu, hv;                 /* spans per unit parameter (the uniform guess) */
 } cf_surfrow_t;
 
 /* CF_OK or CF_ENOMEM. s must outlive e and keep its net. */

@@ -13,6 +13,7 @@
 #include "nf_err.h"
 #include "nf_surf.h"
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -731,6 +732,82 @@ static char *params_128(int K, int M)
     return b;
 }
 
+/* Number text of class k for a random double-ish value r in [0, 1). */
+static void num_text(char *b, size_t bl, int k, double r, unsigned long long bits)
+{
+    double x;
+    switch (k % 12) {
+    case 0: snprintf(b, bl, "%.17g", (r - 0.5) * 400.0); break; /* what writers write */
+    case 1: snprintf(b, bl, "%.15E", (r - 0.5) * 1e5); break;   /* CAD style, E */
+    case 2:                                                     /* Fortran D */
+        snprintf(b, bl, "%.16E", r * 1e-3);
+        *strchr(b, 'E') = 'D';
+        break;
+    case 3: snprintf(b, bl, "%.30f", r * 10.0); break;                    /* > 19 digits */
+    case 4: snprintf(b, bl, "0.0000000%llu%llu", bits, bits >> 7); break; /* leading zeros, long */
+    case 5: snprintf(b, bl, "%.6e", r * 1e300); break;                    /* huge */
+    case 6: snprintf(b, bl, "%.17e", r * 1e-300); break;                  /* tiny */
+    case 7: snprintf(b, bl, "%.3e", ldexp(r, -1060)); break;              /* subnormal */
+    case 8: /* a midpoint between two doubles near 2^53 and 2^60, exactly or just off */
+        x = ldexp(1.0, 53 + (int)(bits % 8));
+        snprintf(b, bl, "%.0f%s", x + (double)(bits >> 40 & 0xFF) * 2.0,
+                 bits & 1   ? ".5"
+                 : bits & 2 ? ".50000000000000000000001"
+                            : ".49999999999999999999");
+        break;
+    case 9: snprintf(b, bl, "%s%llu.", bits & 1 ? "-" : "+", bits >> 1); break; /* 19-20 digits */
+    case 10: snprintf(b, bl, ".%llu", bits % 100000000000ULL); break; /* no integer part */
+    default: snprintf(b, bl, "%lluE-%d", bits % 10000000ULL, (int)(bits >> 50) % 40); break;
+    }
+}
+
+/* Every real the reader parses equals strtod's value of the same text (its
+ * Fortran D read as E): bit for bit, over formats writers use and the hard
+ * cases (long mantissas, midpoints, huge, tiny, subnormal). */
+static void test_numbers_as_strtod(void **state)
+{
+    (void)state;
+    enum { K = 9, N = (K + 1) * (K + 1), ROUNDS = 8 };
+    unsigned long long st = 0x9E3779B97F4A7C15ULL;
+    char path[600];
+    tmp_path(path, sizeof path, "num.igs");
+    for (int round = 0; round < ROUNDS; round++) {
+        static char params[N * 3 * 80 + 4096];
+        static char text[N * 3][72];
+        char *e = params;
+        e += sprintf(e, "128,%d,%d,1,1,0,0,1,0,0", K, K);
+        for (int d = 0; d < 2; d++)
+            for (int i = 0; i < K + 3; i++)
+                e += sprintf(e, ",%d.", i == 0 ? 0 : i > K ? K : i - 1);
+        for (int i = 0; i < N; i++)
+            e += sprintf(e, ",1.");
+        for (int i = 0; i < 3 * N; i++) {
+            st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+            num_text(text[i], sizeof text[i], i + round, (double)(st >> 11) / 9007199254740992.0,
+                     st);
+            e += sprintf(e, ",%s", text[i]);
+        }
+        sprintf(e, ";");
+        write_one(path, params);
+        nf_surf_t s;
+        int rc = cf_iges_read(path, 0, &s, msg, sizeof msg);
+        if (rc)
+            fail_msg("round %d: %s", round, msg);
+        for (int i = 0; i < 3 * N; i++) {
+            char t[72];
+            memcpy(t, text[i], sizeof t);
+            char *dd = strchr(t, 'D');
+            if (dd)
+                *dd = 'E';
+            double want = strtod(t, NULL);
+            if (memcmp(&want, &s.cp[i], sizeof want))
+                fail_msg("'%s': read %.17g, strtod %.17g", text[i], s.cp[i], want);
+        }
+        cf_surf_free(&s);
+    }
+    remove(path);
+}
+
 static void test_counts(void **state)
 {
     (void)state;
@@ -904,6 +981,7 @@ int main(void)
         cmocka_unit_test(test_write_failures_leave_nothing),
         cmocka_unit_test(test_garbled_number),
         cmocka_unit_test(test_invalid_surfaces),
+        cmocka_unit_test(test_numbers_as_strtod),
         cmocka_unit_test(test_counts),
         cmocka_unit_test(test_damaged_files),
         cmocka_unit_test(test_binary_input),
