@@ -10,7 +10,9 @@
 # RSS); prints Markdown tables and keeps the JSON lines in
 # BUILD/bench/scan.jsonl and scan_cmd.jsonl. Measures, asserts nothing. Environment:
 # SCAN_RATE (frames/s asked of the profiler, 20), SCAN_WIDTH (2048),
-# SCAN_HEIGHT (64). The fake camera takes port 3956 on 127.0.0.1: one
+# SCAN_HEIGHT (64), SCAN_OTF_PERIOD_US (the on-the-fly trigger period over
+# Modbus TCP, 25 us: 40,000 points/s offered; the points/s is 1/period, so
+# the simulated rig's trigger is what bounds it). The fake camera takes port 3956 on 127.0.0.1: one
 # profiler per machine at a time.
 set -u
 B=$1
@@ -46,13 +48,14 @@ sim_stop() { kill -TERM "$spid" 2>/dev/null; wait "$spid" 2>/dev/null; spid=""; 
 for n in 100000 1000000; do
     timeout 300 "$B/scan-bench" otf $n | tee -a "$J"
 done
-# Over cellsim's Modbus TCP: 3 rows at 100 mm/s, triggers every 50 us (20 kHz).
+# Over cellsim's Modbus TCP: 3 rows at 100 mm/s, triggers every SCAN_OTF_PERIOD_US.
 "$B/cellsim" --tcp 0 --homed --speed 100 >"$T/mb.out" 2>"$T/mb.err" &
 spid=$!
 i=0
 while ! grep -q '^cellsim: ready' "$T/mb.out" && [ $i -lt 100 ]; do sleep 0.1; i=$((i + 1)); done
 P=$(sed -n 's/^cellsim: tcp 127.0.0.1 //p' "$T/mb.out")
-timeout 300 "$B/scan-bench" otf-rig "tcp:127.0.0.1:$P:1" "tcp:127.0.0.1:$P:2" 3 50 0.002 | tee -a "$J"
+timeout 300 "$B/scan-bench" otf-rig "tcp:127.0.0.1:$P:1" "tcp:127.0.0.1:$P:2" 3 "${SCAN_OTF_PERIOD_US:-25}" 0.002 |
+    tee -a "$J"
 kill -TERM "$spid" 2>/dev/null; wait "$spid" 2>/dev/null; spid=""
 sim_start 0
 for n in 1000000 10000000; do
