@@ -3,7 +3,9 @@
 #include "cf_atomic.h"
 #include "cf_err.h"
 #include <errno.h>
+#include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 int cf_atomic_open(cf_atomic_t *a, const char *path, char *msg, size_t ml)
@@ -44,4 +46,14 @@ void cf_atomic_abort(cf_atomic_t *a)
         fclose(a->f);
     a->f = NULL;
     remove(a->tmp);
+}
+
+long long cf_atomic_stamp(void)
+{
+    const char *e = getenv("SOURCE_DATE_EPOCH");
+    char *end;
+    long long t = e && *e ? strtoll(e, &end, 10) : 0;
+    if (!e || !*e || *end || t < 0)
+        t = (long long)time(NULL);
+    return t;
 }

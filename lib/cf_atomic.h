@@ -25,4 +25,9 @@ int cf_atomic_commit(cf_atomic_t *a, int sync, char *msg, size_t ml);
 /* Give up: close and remove the temporary. */
 void cf_atomic_abort(cf_atomic_t *a);
 
+/* The time (Unix seconds) a written file states in its header: the
+ * environment's SOURCE_DATE_EPOCH when set (the reproducible-builds
+ * convention), else now. One rule for the IGES and STEP writers. */
+long long cf_atomic_stamp(void);
+
 #endif

@@ -201,17 +201,6 @@ typedef struct ig_head {
     cf_atomic_t aw;
 } ig_head_t;
 
-/* SOURCE_DATE_EPOCH when set (reproducible builds), else now. */
-static long long ig_now(void)
-{
-    const char *e = getenv("SOURCE_DATE_EPOCH");
-    char *end;
-    long long t = e && *e ? strtoll(e, &end, 10) : 0;
-    if (!e || !*e || *end || t < 0)
-        t = (long long)time(NULL);
-    return t;
-}
-
 /* Fill h and open the temporary (cf_atomic); CF_OK or CF_EIO with msg. */
 static int ig_global(ig_head_t *h, const char *path, const char *name, const char *dflt,
                      long long utc, char *msg, size_t msglen)
@@ -302,7 +291,7 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
 
 int cf_iges_write(const char *path, const nf_surf_t *s, const char *name, char *msg, size_t msglen)
 {
-    return cf_iges_write_at(path, s, name, ig_now(), msg, msglen);
+    return cf_iges_write_at(path, s, name, cf_atomic_stamp(), msg, msglen);
 }
 
 /* ------------------------------------------------- entity 126 output */
@@ -347,7 +336,7 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
         mx = fmax(mx, ig_maxabs(c[k].cp, 3L * c[k].n));
     }
     ig_head_t h;
-    int orc = ig_global(&h, path, name, "curves", ig_now(), msg, msglen);
+    int orc = ig_global(&h, path, name, "curves", cf_atomic_stamp(), msg, msglen);
     if (orc)
         return orc;
     FILE *f = h.aw.f;

@@ -2,6 +2,7 @@
 /* cf_step_write.c: an nf_surf_t as a STEP AP242 file (ISO 10303-21): the
  * surface as the one face of an open shell, with the product structure and
  * the millimetre unit context CAD systems look for (see cf_step.h). */
+#include "cf_atomic.h"
 #include "cf_err.h"
 #include "cf_fmt.h"
 #include "cf_iges.h"
@@ -483,11 +484,5 @@ int cf_step_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim
 int cf_step_write(const char *path, const nf_surf_t *s, const char *name, const char *version,
                   char *msg, size_t msglen)
 {
-    /* SOURCE_DATE_EPOCH: the reproducible-builds convention, as cf_iges_write. */
-    const char *e = getenv("SOURCE_DATE_EPOCH");
-    char *end;
-    long long t = e && *e ? strtoll(e, &end, 10) : 0;
-    if (!e || !*e || *end || t < 0)
-        t = (long long)time(NULL);
-    return cf_step_write_at(path, s, name, version, t, msg, msglen);
+    return cf_step_write_at(path, s, name, version, cf_atomic_stamp(), msg, msglen);
 }

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* cf_surfio.c: surface read and write dispatched on the file's extension. */
 #include "cf_surfio.h"
+#include "cf_atomic.h"
 #include "cf_err.h"
 #include "cf_iges.h"
 #include "cf_step.h"
@@ -96,17 +97,6 @@ int cf_surfio_read_trim(const char *path, long which, cf_trim_t *t, char *msg, s
     return cf_iges_read_trim(path, (int)which, t, msg, msglen);
 }
 
-static long long write_time(void)
-{
-    /* SOURCE_DATE_EPOCH: the reproducible-builds convention, as the writers. */
-    const char *e = getenv("SOURCE_DATE_EPOCH");
-    char *end;
-    long long t = e && *e ? strtoll(e, &end, 10) : 0;
-    if (!e || !*e || *end || t < 0)
-        t = (long long)time(NULL);
-    return t;
-}
-
 int cf_surfio_write_trimmed(const char *path, const nf_surf_t *s, const cf_trim_t *t,
                             const char *name, const char *version, double *edge_err, char *msg,
                             size_t msglen)
@@ -124,7 +114,7 @@ int cf_surfio_write_trimmed(const char *path, const nf_surf_t *s, const cf_trim_
         return cf_fail(msg, msglen, CF_EARG, "%s: not written: %s", path, why);
     cf_surfio_fmt_t fmt = cf_surfio_format(path);
     if (fmt == CF_SURFIO_STEP)
-        return cf_step_write_trimmed_at(path, s, t, name, version, write_time(), edge_err, msg,
+        return cf_step_write_trimmed_at(path, s, t, name, version, cf_atomic_stamp(), edge_err, msg,
                                         msglen);
-    return cf_iges_write_trimmed_at(path, s, t, name, write_time(), edge_err, msg, msglen);
+    return cf_iges_write_trimmed_at(path, s, t, name, cf_atomic_stamp(), edge_err, msg, msglen);
 }

@@ -645,6 +645,33 @@ static void test_power_closed_form(void **state)
     }
 }
 
+/* Every point projects strictly inside the affine patch s: its
+ * coordinates along the patch's edges are in (0, 1). Returns the area of
+ * the patch's parallelogram. */
+static double assert_projects_inside(const nf_surf_t *s, const double *pts, int m)
+{
+    double S00[3], S10[3], S01[3], eu[3], ev[3], lu = 0, lv = 0;
+    nf_surf_eval(s, 0, 0, S00);
+    nf_surf_eval(s, 1, 0, S10);
+    nf_surf_eval(s, 0, 1, S01);
+    for (int i = 0; i < 3; i++) {
+        eu[i] = S10[i] - S00[i];
+        ev[i] = S01[i] - S00[i];
+        lu += eu[i] * eu[i];
+        lv += ev[i] * ev[i];
+    }
+    for (int k = 0; k < m; k++) {
+        const double *P = pts + 3 * k;
+        double a = 0, b = 0;
+        for (int i = 0; i < 3; i++) {
+            a += (P[i] - S00[i]) * eu[i] / lu;
+            b += (P[i] - S00[i]) * ev[i] / lv;
+        }
+        assert_true(a > 0 && a < 1 && b > 0 && b < 1);
+    }
+    return sqrt(lu) * sqrt(lv);
+}
+
 /* A square footprint (a 60 x 60 grid, equal spreads: the scatter's axes
  * are arbitrary in the plane) turned 30 degrees in a tilted plane: the
  * patch hugs it (issue 14: holes' base came out turned 45 degrees, the data
@@ -675,27 +702,8 @@ static void test_plane_square_turned(void **state)
     nf_surf_wire(&s, 3, 3, 4, 4, malloc(sizeof(double) * NF_SURF_DOUBLES(4, 4, 3, 3)));
     const double m = 0.01;
     assert_int_equal(nf_base_plane_patch(&pl, m, &s), NF_OK);
-    double S00[3], S10[3], S01[3], eu[3], ev[3], lu = 0, lv = 0;
-    nf_surf_eval(&s, 0, 0, S00);
-    nf_surf_eval(&s, 1, 0, S10);
-    nf_surf_eval(&s, 0, 1, S01);
-    for (int i = 0; i < 3; i++) {
-        eu[i] = S10[i] - S00[i];
-        ev[i] = S01[i] - S00[i];
-        lu += eu[i] * eu[i];
-        lv += ev[i] * ev[i];
-    }
-    double area = sqrt(lu) * sqrt(lv) / ((1 + 2 * m) * (1 + 2 * m));
+    double area = assert_projects_inside(&s, pts, M) / ((1 + 2 * m) * (1 + 2 * m));
     assert_true(area <= 1.0355 * 100.0 * 100.0);
-    for (int k = 0; k < M; k++) {
-        const double *P = pts + 3 * k;
-        double a = 0, b = 0;
-        for (int i = 0; i < 3; i++) {
-            a += (P[i] - S00[i]) * eu[i] / lu;
-            b += (P[i] - S00[i]) * ev[i] / lv;
-        }
-        assert_true(a > 0 && a < 1 && b > 0 && b < 1);
-    }
     free(s.U);
     free(pts);
 }
@@ -747,24 +755,7 @@ static void test_plane_patch(void **state)
             A[i] = S00[i] + u * (S10[i] - S00[i]) + v * (S01[i] - S00[i]);
         assert_true(d3(S, A) <= 1e-10);
     }
-    /* Every point projects strictly inside: its coordinates along the
-     * patch's edges are in (0, 1). */
-    double eu[3], ev[3], lu = 0, lv = 0;
-    for (int i = 0; i < 3; i++) {
-        eu[i] = S10[i] - S00[i];
-        ev[i] = S01[i] - S00[i];
-        lu += eu[i] * eu[i];
-        lv += ev[i] * ev[i];
-    }
-    for (int k = 0; k < M; k++) {
-        const double *P = pts + 3 * k;
-        double a = 0, b = 0;
-        for (int i = 0; i < 3; i++) {
-            a += (P[i] - S00[i]) * eu[i] / lu;
-            b += (P[i] - S00[i]) * ev[i] / lv;
-        }
-        assert_true(a > 0 && a < 1 && b > 0 && b < 1);
-    }
+    (void)assert_projects_inside(&s, pts, M);
     /* Points on a line give no plane; two points are too few. */
     nf_base_plane_init(&pl);
     for (int k = 0; k < 10; k++) {
