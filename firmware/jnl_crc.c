@@ -18,33 +18,7 @@
 #define BOARD_JNL_CRC_SLICE8 0
 #endif
 
-#if BOARD_JNL_CRC_SLICE8
-/* Slicing-by-8 (8 KiB of tables): eight bytes a step, from eight
- * independent lookups, about 3 times the byte table's rate on the 80-byte
- * records; the CRC was still 11.5 % of a 10^6-point profiler scan with the
- * fit (issue 19). Byte order independent: words are assembled from bytes. */
-#include "jnl_crc8.h"
-
-static uint32_t le32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-uint32_t jnl_crc32(uint32_t crc, const void *buf, size_t n)
-{
-    const uint8_t *p = buf;
-    crc = ~crc;
-    for (; n >= 8; p += 8, n -= 8) {
-        uint32_t a = le32(p) ^ crc, b = le32(p + 4);
-        crc = crc_t8[7][a & 0xFFu] ^ crc_t8[6][(a >> 8) & 0xFFu] ^ crc_t8[5][(a >> 16) & 0xFFu] ^
-              crc_t8[4][a >> 24] ^ crc_t8[3][b & 0xFFu] ^ crc_t8[2][(b >> 8) & 0xFFu] ^
-              crc_t8[1][(b >> 16) & 0xFFu] ^ crc_t8[0][b >> 24];
-    }
-    for (; n; p++, n--)
-        crc = (crc >> 8) ^ crc_t8[0][(crc ^ *p) & 0xFFu];
-    return ~crc;
-}
-#elif BOARD_JNL_CRC_TABLE256
+#if BOARD_JNL_CRC_TABLE256 || BOARD_JNL_CRC_SLICE8
 /* crc_tab[i] = CRC register after shifting the byte i through 8 steps. */
 static const uint32_t crc_tab[256] = {
     0x00000000u, 0x77073096u, 0xEE0E612Cu, 0x990951BAu, 0x076DC419u, 0x706AF48Fu, 0xE963A535u,
@@ -86,6 +60,33 @@ static const uint32_t crc_tab[256] = {
     0xB40BBE37u, 0xC30C8EA1u, 0x5A05DF1Bu, 0x2D02EF8Du,
 };
 
+#if BOARD_JNL_CRC_SLICE8
+/* Slicing-by-8 (7 KiB more of tables): eight bytes a step, from eight
+ * independent lookups, about 3 times the byte table's rate on the 80-byte
+ * records; the CRC was still 11.5 % of a 10^6-point profiler scan with the
+ * fit (issue 19). Byte order independent: words are assembled from bytes. */
+#include "jnl_crc8.h"
+
+static uint32_t le32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+uint32_t jnl_crc32(uint32_t crc, const void *buf, size_t n)
+{
+    const uint8_t *p = buf;
+    crc = ~crc;
+    for (; n >= 8; p += 8, n -= 8) {
+        uint32_t a = le32(p) ^ crc, b = le32(p + 4);
+        crc = crc_t8[6][a & 0xFFu] ^ crc_t8[5][(a >> 8) & 0xFFu] ^ crc_t8[4][(a >> 16) & 0xFFu] ^
+              crc_t8[3][a >> 24] ^ crc_t8[2][b & 0xFFu] ^ crc_t8[1][(b >> 8) & 0xFFu] ^
+              crc_t8[0][(b >> 16) & 0xFFu] ^ crc_tab[b >> 24];
+    }
+    for (; n; p++, n--)
+        crc = (crc >> 8) ^ crc_tab[(crc ^ *p) & 0xFFu];
+    return ~crc;
+}
+#else
 uint32_t jnl_crc32(uint32_t crc, const void *buf, size_t n)
 {
     const uint8_t *p = buf;
@@ -94,6 +95,7 @@ uint32_t jnl_crc32(uint32_t crc, const void *buf, size_t n)
         crc = (crc >> 8) ^ crc_tab[(crc ^ p[i]) & 0xFFu];
     return ~crc;
 }
+#endif
 #else
 /* crc_tab[i] = CRC register after shifting the nibble i through 4 steps. */
 static const uint32_t crc_tab[16] = {0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu,
