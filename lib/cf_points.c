@@ -19,7 +19,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CP_BUF (1L << 20)
+/* The read buffer: 1 MiB; the fuzz build takes a small one (mk/fuzz.mk), so
+ * that lines cross refills often and an open costs little. */
+#ifndef CF_POINTS_BUF
+#define CF_POINTS_BUF (1L << 20)
+#endif
+#define CP_BUF ((long)CF_POINTS_BUF)
+_Static_assert(CF_POINTS_BUF >= 2 * CF_POINTS_MAX_LINE + 2,
+               "the buffer holds a longest line twice");
 #define CP_PAD 8 /* bytes after the buffer's NUL: cp_digits loads 8 at a time */
 #define CP_MAX_PROPS 32
 #define CP_MAX_ELEMS 16
