@@ -38,6 +38,21 @@ stop_all() { # reverse order: TERM, wait a little, KILL
 # in $pids and stop them with a longer wait (serve stops its cellsim child).
 # stop_servers [TENTHS]: TERM to each, then up to TENTHS x 0.1 s (50) before
 # KILL; by PID only.
+# same_surface A.igs B.igs UV: 0 when the two surfaces agree within 1e-6 mm
+# at every (u, v) of the file UV (cellfit eval of each, side by side).
+same_surface() {
+    "$CF" eval "$1" "$3" >"$T/same_a" && "$CF" eval "$2" "$3" >"$T/same_b" &&
+        paste "$T/same_a" "$T/same_b" |
+        awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
+            END { exit !(NR > 0 && m < 1e-6) }'
+}
+
+# fit_ready_s SERVE.LOG: the seconds from the last row to the streamed fit
+# that serve logged ("fit: points from memory, ready S s after ..."), or "".
+fit_ready_s() {
+    sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$1" | head -1
+}
+
 stop_servers() {
     for p in ${pids:-}; do kill -TERM "$p" 2>/dev/null; done
     for p in ${pids:-}; do

@@ -42,10 +42,7 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
         no "journal: $(cat "$T/info.json"); log: $(grep 'scan by the profiler' "$T/p.log")"
     [ "$pts" = "$np" ] && ok "POINTS $np = the journal's points" || no "POINTS $np, journal $pts"
     if "$CF" journal fit "$jnl" --nominal "$T/part/nominal.igs" --out "$T/replay.igs" >/dev/null 2>&1; then
-        "$CF" eval "$d/fitted.igs" "$T/part/check.uv" >"$T/e1"
-        "$CF" eval "$T/replay.igs" "$T/part/check.uv" >"$T/e2"
-        paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
-            END { exit !(NR > 0 && m < 1e-6) }' && ok "profiler SCAN_FIT: exported fit = the journal replayed" ||
+        same_surface "$d/fitted.igs" "$T/replay.igs" "$T/part/check.uv" && ok "profiler SCAN_FIT: exported fit = the journal replayed" ||
             no "profiler SCAN_FIT: exported fit differs from the replayed journal"
     else
         no "cellfit journal fit on the profiler's journal"
@@ -53,7 +50,7 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
 else
     no "no journal from the profiler's SCAN_FIT ($jnl)"
 fi
-r=$(sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$T/p.log" | head -1)
+r=$(fit_ready_s "$T/p.log")
 [ -n "$r" ] && ok "log: the profiler's points streamed, from memory, fit ready $r s after the last row" ||
     no "log lacks the profiler SCAN_FIT's streamed fit"
 if grep -E "Sanitizer|runtime error" "$T"/*.log >/dev/null; then

@@ -44,10 +44,7 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/info.json"; then
     # (alpha, beta as float32 in the registers: equal to 1e-6 mm).
     d=$(sed -n 1p "$T/cycle.out")
     if "$CF" journal fit "$jnl" --nominal "$T/part/nominal.igs" --out "$T/replay.igs" >/dev/null 2>&1; then
-        "$CF" eval "$d/fitted.igs" "$T/part/check.uv" >"$T/e1"
-        "$CF" eval "$T/replay.igs" "$T/part/check.uv" >"$T/e2"
-        paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
-            END { exit !(NR > 0 && m < 1e-6) }' && ok "exported fit = the journal replayed by cellfit journal fit" ||
+        same_surface "$d/fitted.igs" "$T/replay.igs" "$T/part/check.uv" && ok "exported fit = the journal replayed by cellfit journal fit" ||
             no "exported fit differs from the replayed journal"
     else
         no "cellfit journal fit on the cell's journal"
@@ -58,7 +55,7 @@ fi
 # SCAN_FIT streamed (issue 19): the points went into the fit as they
 # arrived and the passes after the scan read them from memory (the fit equal
 # to the journal's replay above); the time from the last row to the fit.
-r=$(sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$T/a.log" | head -1)
+r=$(fit_ready_s "$T/a.log")
 [ -n "$r" ] && ok "log: SCAN_FIT's points from memory, fit ready $r s after the last row" ||
     no "log lacks the streamed fit's source and time"
 # SCAN_FIT to a tolerance, robustly, on a cell configured so (fit_to_tol,
@@ -76,10 +73,7 @@ d=$(sed -n 1p "$T/tol.out"); jnl=$(sed -n 2p "$T/tol.out")
 if [ -f "$jnl" ] && "$CF" journal export "$jnl" --out "$T/tol.xyz" &&
     "$CF" fit --base "$T/coarse/nominal.igs" --points "$T/tol.xyz" --tol 0.01 --within 99 --robust --refine auto \
         --out "$T/tol_shell.igs" >/dev/null; then
-    "$CF" eval "$d/fitted.igs" "$T/coarse/check.uv" >"$T/e1"
-    "$CF" eval "$T/tol_shell.igs" "$T/coarse/check.uv" >"$T/e2"
-    paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
-        END { exit !(NR > 0 && m < 1e-6) }' && ok "SCAN_FIT to tolerance = cellfit fit --tol --robust on the journal" ||
+    same_surface "$d/fitted.igs" "$T/tol_shell.igs" "$T/coarse/check.uv" && ok "SCAN_FIT to tolerance = cellfit fit --tol --robust on the journal" ||
         no "the cell's fit to tolerance differs from the shell's"
 else
     no "no journal or shell fit from the tolerance SCAN_FIT ($jnl)"
@@ -103,15 +97,12 @@ if [ -f "$jnl" ] && "$CF" journal info "$jnl" --json >"$T/oinfo.json" &&
     "$CF" journal fit "$jnl" --nominal "$T/part/nominal.igs" --out "$T/oreplay.igs" >/dev/null 2>&1; then
     [ "$(json "$T/oinfo.json" points)" = "$np" ] && ok "otf SCAN_FIT: POINTS $np = the journal's points" ||
         no "otf SCAN_FIT: POINTS $np, journal $(json "$T/oinfo.json" points)"
-    "$CF" eval "$d/fitted.igs" "$T/part/check.uv" >"$T/e1"
-    "$CF" eval "$T/oreplay.igs" "$T/part/check.uv" >"$T/e2"
-    paste "$T/e1" "$T/e2" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (d > m) m = d } }
-        END { exit !(NR > 0 && m < 1e-6) }' && ok "otf SCAN_FIT streamed: exported fit = the journal replayed" ||
+    same_surface "$d/fitted.igs" "$T/oreplay.igs" "$T/part/check.uv" && ok "otf SCAN_FIT streamed: exported fit = the journal replayed" ||
         no "otf SCAN_FIT: exported fit differs from the replayed journal"
 else
     no "no journal or replay from the otf SCAN_FIT ($jnl)"
 fi
-r=$(sed -n 's/.*fit: points from memory, ready \([0-9.]*\) s after the last row.*/\1/p' "$T/o.log" | head -1)
+r=$(fit_ready_s "$T/o.log")
 [ -n "$r" ] && ok "log: otf SCAN_FIT's points from memory, fit ready $r s after the last row" ||
     no "log lacks the otf SCAN_FIT's streamed fit"
 kill -TERM "$pid"; wait "$pid"
