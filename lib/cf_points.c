@@ -18,6 +18,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* The read buffer: 1 MiB; the fuzz build takes a small one (mk/fuzz.mk), so
  * that lines cross refills often and an open costs little. */
@@ -90,7 +92,17 @@ struct cf_points {
     int pending; /* the line [ps, pe) was looked at by open, not yet returned */
     char *ps, *pe;
     int err;
+    long errline;     /* the error's line, counted from this reader's first (0: none) */
+    char errtxt[400]; /* the error without "name:line: " (a rebase words it again) */
     char errmsg[720];
+    /* Two halves (cf_points_split): path to open the file again; the first
+     * half reads no byte at or past end (-1: to the end of the file); the
+     * second starts lbase lines (raw: points) into the file. */
+    char *path;
+    long long end;
+    long lbase;
+    int part2;       /* 1: a second half (reads on its caller's thread) */
+    cf_points_t *r2; /* the first half's second (closed with it) */
     /* PLY */
     cp_elem_t elem[CP_MAX_ELEMS];
     int nelem, velem, ply_ready;
@@ -106,18 +118,25 @@ struct cf_points {
 static int cp_err(cf_points_t *r, int code, long line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
+/* The kept error in words, its line counted from the file's start. */
+static void cp_errword(cf_points_t *r)
+{
+    if (r->errline > 0)
+        snprintf(r->errmsg, sizeof r->errmsg, "%s:%ld: %s", r->name, r->lbase + r->errline,
+                 r->errtxt);
+    else
+        snprintf(r->errmsg, sizeof r->errmsg, "%s: %s", r->name, r->errtxt);
+}
+
 /* "name:line: text", kept so that later reads repeat it. */
 static int cp_err(cf_points_t *r, int code, long line, const char *fmt, ...)
 {
-    char tmp[400];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(tmp, sizeof tmp, fmt, ap);
+    vsnprintf(r->errtxt, sizeof r->errtxt, fmt, ap);
     va_end(ap);
-    if (line > 0)
-        snprintf(r->errmsg, sizeof r->errmsg, "%s:%ld: %s", r->name, line, tmp);
-    else
-        snprintf(r->errmsg, sizeof r->errmsg, "%s: %s", r->name, tmp);
+    r->errline = line;
+    cp_errword(r);
     r->err = code;
     return code;
 }
@@ -134,7 +153,10 @@ static int cp_fill(cf_points_t *r)
         r->pos = 0;
         r->len = keep;
     }
-    size_t got = fread(r->buf + r->len, 1, (size_t)CP_BUF - r->len, r->f);
+    size_t room = (size_t)CP_BUF - r->len;
+    if (r->end >= 0 && (long long)room > r->end - (r->boff + (long long)r->len))
+        room = (size_t)(r->end - (r->boff + (long long)r->len)); /* a first half ends there */
+    size_t got = room ? fread(r->buf + r->len, 1, room, r->f) : 0;
     r->len += got;
     if (got == 0) {
         if (ferror(r->f))
@@ -987,7 +1009,7 @@ static long cp_raw_read(cf_points_t *r, double *out, long max)
                 if (avail && !k) /* the whole points first, the error next call */
                     return cp_err(r, CF_EPARSE, 0,
                                   "file ends inside point %lld (%zu stray bytes; %zu per point)",
-                                  r->vdone + 1, avail, rec);
+                                  r->lbase + r->vdone + 1, avail, rec);
                 break;
             }
             int rc = cp_fill(r);
@@ -1009,7 +1031,7 @@ static long cp_raw_read(cf_points_t *r, double *out, long max)
         for (size_t i = 0; i < nv; i++)
             if (!isfinite(o[i]))
                 return cp_err(r, CF_EPARSE, 0, "point %lld: non-finite value",
-                              r->vdone + 1 + (long long)(i / (size_t)r->cols));
+                              r->lbase + r->vdone + 1 + (long long)(i / (size_t)r->cols));
         r->pos += nv * sizeof(double);
         r->vdone += take;
         k += take;
@@ -1037,7 +1059,9 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
     r->is_stdin = !strcmp(path, "-");
     snprintf(r->name, sizeof r->name, "%s", r->is_stdin ? "<stdin>" : path);
     r->want = r->cols = want_cols;
-    if (!r->buf) {
+    r->end = -1;
+    r->path = strdup(path);
+    if (!r->buf || !r->path) {
         cf_points_close(r);
         return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", path);
     }
@@ -1125,8 +1149,9 @@ int cf_points_thread(cf_points_t *r)
         return CF_OK; /* on already (r is the thread's now: not even r->last) */
     if (r->last)
         return CF_EARG;
-    if (r->fmt == CP_RAW || r->fmt == CP_PLY_BIN || r->cols <= 0 || r->err)
-        return CF_OK; /* memory speed already, or nothing to read */
+    if (r->fmt == CP_RAW || r->fmt == CP_PLY_BIN || r->cols <= 0 || r->err || r->part2 ||
+        r->end >= 0)
+        return CF_OK; /* memory speed already, nothing to read, or a half (its own thread) */
     return cf_pmt_start(&r->mt, r->cols, CP_MT_BLOCK, CP_MT_NBLK, cp_fill_block, r);
 }
 
@@ -1157,7 +1182,109 @@ long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, siz
 
 long cf_points_line(const cf_points_t *r)
 {
-    return !r ? 0 : r->mt ? cf_pmt_line(r->mt) : r->last;
+    return !r ? 0 : r->mt ? cf_pmt_line(r->mt) : r->last ? r->lbase + r->last : 0;
+}
+
+long cf_points_lines(const cf_points_t *r)
+{
+    return !r ? 0 : r->lbase + (r->fmt == CP_RAW ? (long)r->vdone : r->line);
+}
+
+static int cp_rewind(cf_points_t *r);
+
+/* The first line start at or after the middle of the data (the end of the
+ * file when none follows), by pread: the reader's position stays. A
+ * middle inside a line longer than any point line: CF_EUNSUPPORTED (one
+ * reader names it). */
+static int cp_split_text(cf_points_t *r, long long size, long long *at)
+{
+    const long long d = r->data_off;
+    *at = size;
+    if (size - d < 2)
+        return CF_OK;
+    const long long mid = d + (size - d) / 2; /* > d: mid - 1 is data */
+    char b[CF_POINTS_MAX_LINE + 2];
+    ssize_t n = pread(fileno(r->f), b, sizeof b, (off_t)(mid - 1));
+    if (n <= 0)
+        return CF_EIO;
+    const char *nl = memchr(b, '\n', (size_t)n);
+    if (nl)
+        *at = mid + (nl - b);
+    else if (mid - 1 + n < size)
+        return CF_EUNSUPPORTED;
+    return CF_OK;
+}
+
+int cf_points_split(cf_points_t *r, cf_points_t **r2p, char *msg, size_t msglen)
+{
+    if (!r || !r2p)
+        return cf_fail(msg, msglen, CF_EARG, "cf_points_split: bad arguments");
+    *r2p = NULL;
+    struct stat st;
+    if (r->is_stdin || r->part2 || (r->fmt != CP_ASCII && r->fmt != CP_RAW) || r->cols <= 0 ||
+        fstat(fileno(r->f), &st) || !S_ISREG(st.st_mode))
+        return cf_fail(msg, msglen, CF_EUNSUPPORTED, "%s: not a file of ASCII or raw points",
+                       r->name);
+    cf_pmt_stop(r->mt); /* the halves read on their callers' threads */
+    r->mt = NULL;
+    if (!r->r2) {
+        long long at = st.st_size;
+        long base = 0;
+        if (r->fmt == CP_RAW) { /* a record boundary; stray bytes stay at the end */
+            long long rec = 8LL * r->cols, n = (st.st_size - r->data_off) / rec;
+            n = n > 0 ? n : 0;
+            at = r->data_off + n / 2 * rec;
+            base = (long)(n / 2);
+        } else {
+            int rc = cp_split_text(r, (long long)st.st_size, &at);
+            if (rc)
+                return cf_fail(msg, msglen, rc, "%s: no line start near the middle", r->name);
+        }
+        cf_points_t *b = calloc(1, sizeof *b);
+        if (!b)
+            return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", r->name);
+        memcpy(b, r, sizeof *b); /* format, columns, the CSV header's map, the PLY-free state */
+        b->buf = malloc((size_t)CP_BUF + 1 + CP_PAD);
+        b->path = strdup(r->path);
+        b->f = b->buf && b->path ? fopen(r->path, "rb") : NULL;
+        b->r2 = NULL;
+        if (!b->f) {
+            free(b->buf);
+            free(b->path);
+            free(b);
+            return cf_fail(msg, msglen, CF_EIO, "%s: cannot open a second time", r->name);
+        }
+        memset(b->buf, ' ', (size_t)CP_BUF + 1 + CP_PAD); /* resident now, as at open */
+        (void)posix_fadvise(fileno(b->f), 0, 0, POSIX_FADV_SEQUENTIAL);
+        b->part2 = 1;
+        b->data_off = at;
+        b->data_line = 0;
+        b->lbase = base;
+        b->end = -1;
+        r->r2 = b;
+    }
+    r->end = r->r2->data_off;
+    if (cp_rewind(r) || cp_rewind(r->r2))
+        return cf_fail(msg, msglen, CF_EIO, "%s: cannot seek", r->name);
+    *r2p = r->r2;
+    return CF_OK;
+}
+
+int cf_points_whole(cf_points_t *r)
+{
+    if (!r)
+        return CF_EARG;
+    r->end = -1;
+    return cf_points_rewind(r);
+}
+
+void cf_points_rebase(cf_points_t *r2, long lines)
+{
+    if (!r2 || !r2->part2 || r2->fmt == CP_RAW)
+        return; /* raw: known at the split */
+    r2->lbase = lines;
+    if (r2->err)
+        cp_errword(r2);
 }
 
 static int cp_rewind(cf_points_t *r)
@@ -1172,6 +1299,7 @@ static int cp_rewind(cf_points_t *r)
     r->last = 0;
     r->pending = 0;
     r->err = 0;
+    r->errline = 0;
     r->errmsg[0] = '\0';
     r->ply_ready = 0;
     r->vdone = 0;
@@ -1199,8 +1327,10 @@ void cf_points_close(cf_points_t *r)
     if (!r)
         return;
     cf_pmt_stop(r->mt);
+    cf_points_close(r->r2);
     if (r->f && !r->is_stdin)
         fclose(r->f);
     free(r->buf);
+    free(r->path);
     free(r);
 }

@@ -52,6 +52,32 @@ int cf_points_rewind(cf_points_t *r);
  * one thread, working. cf_points_close stops the thread. */
 int cf_points_thread(cf_points_t *r);
 
+/* Two halves for two threads: r from its first point up to the first line
+ * start at or after the middle of the data (after a CSV header; raw: a
+ * record boundary, half the whole records), *r2 from there to the end
+ * (empty when the file has no second line start). r2 is a second reader
+ * of the file, r's (cf_points_close(r) closes it; a later split rewinds and
+ * returns it again). Both read on their callers' threads (no
+ * cf_points_thread) and each keeps its own errors; r's lines and messages
+ * are the file's, r2's count from the split until cf_points_rebase (raw:
+ * its point numbers are the file's already). Regular ASCII and raw files
+ * only: CF_EUNSUPPORTED otherwise (stdin, PLY, a middle inside a line
+ * longer than CF_POINTS_MAX_LINE) and r unchanged but rewound; CF_ENOMEM,
+ * CF_EIO. */
+int cf_points_split(cf_points_t *r, cf_points_t **r2, char *msg, size_t msglen);
+
+/* r reads the whole file again (after a split), from its first point. */
+int cf_points_whole(cf_points_t *r);
+
+/* Lines (raw: points) before the next point, counted from the file's
+ * start: after a first half was read to its end, the second's base. */
+long cf_points_lines(const cf_points_t *r);
+
+/* A second half's lines (and the error it keeps) counted from the file's
+ * start: lines before its first (cf_points_lines of the first half read to
+ * its end). */
+void cf_points_rebase(cf_points_t *r2, long lines);
+
 void cf_points_close(cf_points_t *r);
 
 #endif

@@ -21,6 +21,8 @@
 #include "nf_robust.h"
 #include "rig_err.h"
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -41,6 +43,8 @@ struct cf_fitjob {
     long *src; /* per kept row, its index in the batch (for messages) */
     long cap;  /* rows buf holds */
     long rcap; /* rows rows and src hold: cap when projecting or weighting, else 1 (issue 20) */
+    int two;   /* the round's fit passes may read in halves: a second accumulator in mem */
+    int used2; /* some pass read in halves */
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
     struct pass *lp;
@@ -69,6 +73,7 @@ void cf_fitjob_defaults(cf_fitjob_opts_t *o)
     o->max_iter = 20000;
     o->probe = 1;
     o->threads = 1;
+    o->cores = 1;
     o->within = 100.0;
     o->max_cp = NF_MAX_CP;
     o->max_rounds = 12;
@@ -349,13 +354,13 @@ static double dist_at(const nf_surf_t *s, const double *q)
 }
 
 static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf_surf_t *proj,
-                      const weigh_t *wt, const char *name, char *msg, size_t ml)
+                      const weigh_t *wt, int threads, const char *name, char *msg, size_t ml)
 {
     memset(ps, 0, sizeof *ps);
     ps->proj = proj;
     ps->wt = wt;
     int rc = cf_fitpass_begin(&ps->fp, j->mem, (size_t)j->need, cur, j->o.alpha, j->o.beta,
-                              j->o.solver, j->o.threads, name, msg, ml);
+                              j->o.solver, threads, name, msg, ml);
     if (rc)
         return rc;
     ps->pj.s = proj;
@@ -500,7 +505,8 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
             j->mem = malloc((size_t)j->need);
         if (!j->lp || !j->mem || buffers(j, 1, 1))
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
-        if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, "live points", msg, ml)))
+        if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, j->o.threads, "live points", msg,
+                             ml)))
             return rc;
         j->live = 1;
     }
@@ -544,19 +550,208 @@ static int rewind_src(const run_t *r)
     return r->src->rewind(r->src->ctx, r->msg, r->ml);
 }
 
+/* Room for a pass in halves on cur's net (opts.cores): a second
+ * accumulator of at most CF_FITJOB_SHARD_MAX bytes within the board's
+ * arena, for a source that may split (given parameters). */
+static int halves_room(const cf_fitjob_t *j, const run_t *r, const nf_surf_t *cur)
+{
+    if (j->o.cores < 2 || j->o.threads > 1 || !r->src->split || r->src->cols != 5)
+        return 0;
+    long sh = nf_fit_shard_bytes(cur->nu, cur->nv, cur->p, cur->q),
+         need = cf_fitpass_bytes(cur, j->o.solver, 2);
+    return sh >= 0 && sh <= CF_FITJOB_SHARD_MAX && need > 0 && need <= NF_ARENA_BYTES;
+}
+
+/* The source in two halves for two threads (opts.cores): 1 and half[],
+ * else 0 (one reader; nothing changed but the position, every pass
+ * rewinds). */
+static int halves(const run_t *r, cf_fitsrc_t half[2])
+{
+    char m[256];
+    return r->j->o.cores > 1 && r->src->split && r->src->cols == 5 && r->j->cap >= 2 &&
+           !r->src->split(r->src->ctx, half, m, sizeof m);
+}
+
+/* One half of a pass on its thread (the first on the caller's: progress
+ * and the stop request there). The first half's error wins (file order):
+ * it halts the second. */
+typedef struct half {
+    const run_t *r; /* the first half only */
+    const cf_fitsrc_t *src;
+    double *buf;
+    long cap;
+    atomic_int *halt;
+    int rc, rd; /* the error; rd 1: from reading (its message in msg) */
+    long n;     /* points done */
+    char msg[1024];
+    /* fit */
+    nf_fit_t *f;
+    cf_edges_t *ed;
+    long bad; /* the half's index of the row the fitter refused */
+    double row[5];
+    /* measure */
+    const nf_surf_t *s;
+    double tol, cut;
+    int want_hist;
+    struct resid *res;
+} half_t;
+
+/* The next rows of a half: the count, 0 at its end or on a halt. */
+static long half_read(half_t *h)
+{
+    if (atomic_load(h->halt))
+        return 0;
+    long got = h->src->read(h->src->ctx, h->buf, h->cap, h->msg, sizeof h->msg);
+    if (got < 0) {
+        h->rc = (int)got;
+        h->rd = 1;
+        return 0;
+    }
+    if (h->r && got && stopped(h->r)) {
+        h->rc = RIG_EABORTED;
+        return 0;
+    }
+    return got;
+}
+
+static void half_end(half_t *h)
+{
+    if (h->r && h->rc)
+        atomic_store(h->halt, 1);
+}
+
+static void *fit_half(void *arg)
+{
+    half_t *h = arg;
+    long got;
+    while ((got = half_read(h)) > 0) {
+        long b = -1;
+        int rc = nf_fit_add_rows(h->f, h->buf, got, &b);
+        if (rc) {
+            h->rc = rc;
+            h->bad = h->n + (b >= 0 ? b : 0);
+            memcpy(h->row, h->buf + 5 * (b >= 0 ? b : 0), sizeof h->row);
+            break;
+        }
+        for (long k = 0; h->ed->mem && k < got; k++)
+            cf_edges_add(h->ed, h->buf[5 * k], h->buf[5 * k + 1]);
+        h->n += got;
+        if (h->r)
+            progress(h->r, 2 * h->n);
+    }
+    half_end(h);
+    return NULL;
+}
+
+/* Run fn on two halves, the second on a new thread (without one, after
+ * the first on this). Then, when the first read to its end, the second's
+ * lines count from the file's start (join). */
+static void two_halves(const run_t *r, half_t h[2], void *(*fn)(void *))
+{
+    pthread_t th;
+    int on = !pthread_create(&th, NULL, fn, &h[1]);
+    fn(&h[0]);
+    if (on)
+        pthread_join(th, NULL);
+    else
+        fn(&h[1]);
+    if (!h[0].rc && r->src->join)
+        r->src->join(r->src->ctx);
+}
+
+/* The error of two halves as one reader would give it: the first's, else
+ * the second's with its true line (join done). 0 when neither failed. */
+static int halves_error(const run_t *r, const cf_fitsrc_t half[2], half_t h[2])
+{
+    half_t *e = h[0].rc ? &h[0] : h[1].rc ? &h[1] : NULL;
+    if (!e)
+        return 0;
+    const cf_fitsrc_t *hs = &half[e - h];
+    if (e->rd) { /* the reader repeats its error, now with the file's line */
+        double row[5];
+        return (int)hs->read(hs->ctx, row, 0, r->msg, r->ml);
+    }
+    return e->rc;
+}
+
+/* Footprint counts of the second half into the first's (cf_edges_add of
+ * every row: the same counts as one thread's, saturating alike). */
+static void edges_merge(cf_edges_t *a, const cf_edges_t *b)
+{
+    if (!a->mem || !b->mem)
+        return;
+    long n = (long)a->fp.cu * a->fp.cv;
+    for (long i = 0; i < n; i++) {
+        uint64_t c = (uint64_t)a->fp.count[i] + b->fp.count[i];
+        a->fp.count[i] = c > UINT32_MAX ? UINT32_MAX : (uint32_t)c;
+    }
+    a->fp.points += b->fp.points;
+}
+
+/* A pass of given parameters read in halves: the first into the job's
+ * fitter and footprint, the second into the shard and a footprint of its
+ * own, merged (the solve merges the shard). */
+static int fit_halves(run_t *r, const nf_surf_t *cur, const cf_fitsrc_t half[2], pass_t *ps)
+{
+    cf_fitjob_t *j = r->j;
+    cf_edges_t ed1;
+    memset(&ed1, 0, sizeof ed1);
+    int rc;
+    if (ps->ed.mem && (rc = cf_edges_begin(&ed1, cur)))
+        return cf_fail(r->msg, r->ml, rc, "data footprint: %s", cf_strerror(rc));
+    atomic_int halt;
+    atomic_init(&halt, 0);
+    const long c = j->cap / 2;
+    half_t h[2] = {{.r = r,
+                    .src = &half[0],
+                    .buf = j->buf,
+                    .cap = c,
+                    .halt = &halt,
+                    .f = &ps->fp.f,
+                    .ed = &ps->ed},
+                   {.src = &half[1],
+                    .buf = j->buf + 5 * c,
+                    .cap = c,
+                    .halt = &halt,
+                    .f = ps->fp.sh,
+                    .ed = &ed1}};
+    double t = cli_now();
+    two_halves(r, h, fit_half);
+    ps->fp.t_rows += cli_now() - t;
+    ps->points = h[0].n + h[1].n;
+    edges_merge(&ps->ed, &ed1);
+    cf_edges_free(&ed1);
+    rc = halves_error(r, half, h);
+    const half_t *e = &h[h[0].rc ? 0 : 1];
+    if (rc && rc != RIG_EABORTED && !e->rd) { /* the fitter's refusal */
+        char at[4200];
+        half[e - h].where(half[e - h].ctx, e->bad, at, sizeof at);
+        cf_fitpass_row_error(&ps->fp, rc, e->row, at, r->msg, r->ml);
+    }
+    return rc;
+}
+
 /* One fit pass from the source into out (cur's shape). */
 static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const weigh_t *wt,
                     int feet, nf_surf_t *out, pass_t *ps)
 {
     cf_fitjob_t *j = r->j;
     const cf_fitsrc_t *s = r->src;
-    int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, s->name, r->msg, r->ml);
+    cf_fitsrc_t half[2];
+    /* Given parameters, unweighted, the second accumulator in the arena:
+     * each half read and accumulated on its own core (issue 20). */
+    const int two = j->two && !wt && halves(r, half);
+    int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, two ? 2 : j->o.threads, s->name,
+                        r->msg, r->ml);
     if (feet && ps->proj)
         ps->nin = j->nfeet;
-    if (!rc)
+    if (two && !rc) {
+        j->used2 = 1;
+        rc = fit_halves(r, cur, half, ps);
+    } else if (!rc)
         rc = rewind_src(r);
     long got;
-    while (!rc && (got = s->read(s->ctx, j->buf, j->cap, r->msg, r->ml)) != 0) {
+    while (!two && !rc && (got = s->read(s->ctx, j->buf, j->cap, r->msg, r->ml)) != 0) {
         if (got < 0) {
             rc = (int)got;
             break;
@@ -618,6 +813,97 @@ typedef struct check {
  * clamped to the boundary, and (if st) the signed normal deviations. The
  * |d| histogram (a log10 per point) only if want_hist: only the robust
  * scale reads it (issue 20). */
+/* The distance of one row (u v x y z) to s at its parameters into the
+ * sums: measure's, on either thread. */
+static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, double tol,
+                               double cut, int want_hist)
+{
+    double P[3];
+    cf_surfrow_eval(ev, q[0], q[1], P);
+    double d = sqrt((q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
+                    (q[4] - P[2]) * (q[4] - P[2]));
+    out->ss += d * d;
+    out->mx = d > out->mx ? d : out->mx;
+    out->n++;
+    out->within += tol > 0 && d <= tol;
+    if (want_hist)
+        nf_rhist_add(&out->hist, d);
+    out->outliers += cut > 0 && d >= cut;
+    return d;
+}
+
+static void *measure_half(void *arg)
+{
+    half_t *h = arg;
+    cf_surfrow_t ev;
+    if (cf_surfrow_init(&ev, h->s)) {
+        h->rc = CF_ENOMEM;
+        snprintf(h->msg, sizeof h->msg, "out of memory");
+        half_end(h);
+        return NULL;
+    }
+    long got;
+    while ((got = half_read(h)) > 0) {
+        for (long k = 0; k < got; k++)
+            resid_add(h->res, &ev, h->buf + 5 * k, h->tol, h->cut, h->want_hist);
+        h->n += got;
+        if (h->r)
+            progress(h->r, 2 * h->n);
+    }
+    cf_surfrow_free(&ev);
+    half_end(h);
+    return NULL;
+}
+
+/* measure of given parameters with nothing per span, in halves: the sums
+ * of each merged (the histogram by its bins). */
+static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2], double cut,
+                          resid_t *out, int want_hist)
+{
+    cf_fitjob_t *j = r->j;
+    resid_t b;
+    memset(&b, 0, sizeof b);
+    nf_rhist_init(&b.hist);
+    atomic_int halt;
+    atomic_init(&halt, 0);
+    const long c = j->cap / 2;
+    half_t h[2] = {{.r = r,
+                    .src = &half[0],
+                    .buf = j->buf,
+                    .cap = c,
+                    .halt = &halt,
+                    .s = s,
+                    .tol = j->o.tol,
+                    .cut = cut,
+                    .want_hist = want_hist,
+                    .res = out},
+                   {.src = &half[1],
+                    .buf = j->buf + 5 * c,
+                    .cap = c,
+                    .halt = &halt,
+                    .s = s,
+                    .tol = j->o.tol,
+                    .cut = cut,
+                    .want_hist = want_hist,
+                    .res = &b}};
+    two_halves(r, h, measure_half);
+    out->ss += b.ss;
+    out->mx = b.mx > out->mx ? b.mx : out->mx;
+    out->n += b.n;
+    out->within += b.within;
+    out->outliers += b.outliers;
+    out->hist.n += b.hist.n;
+    out->hist.zero += b.hist.zero;
+    out->hist.over += b.hist.over;
+    out->hist.max = b.hist.max > out->hist.max ? b.hist.max : out->hist.max;
+    for (int i = 0; i < NF_RHIST_BINS; i++)
+        out->hist.bin[i] += b.hist.bin[i];
+    int rc = halves_error(r, half, h);
+    if (rc == CF_ENOMEM)
+        return cf_fail(r->msg, r->ml, rc, "out of memory");
+    return rc;
+}
+
 static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, resid_t *out,
                    cf_stats_t *st, int want_hist)
 {
@@ -635,6 +921,12 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     const int keep = ck && !uv && j->o.loop;
     if (keep)
         j->nfeet = 0;
+    /* Given parameters and only the sums: each half on its own core. */
+    cf_fitsrc_t half[2];
+    if (uv && !st && !(ck && (ck->sr || ck->ks || ck->kr || ck->fp)) && halves(r, half)) {
+        j->used2 = 1;
+        return measure_halves(r, s, half, cut, out, want_hist);
+    }
     cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
     if (cf_surfrow_init(&ev, s))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
@@ -664,21 +956,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 if (!uv)
                     q[0] = pr.u, q[1] = pr.v, q[2] = Q[0], q[3] = Q[1], q[4] = Q[2];
             }
-            double P[3];
-            cf_surfrow_eval(&ev, q[0], q[1], P);
-            double d = sqrt((q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
-                            (q[4] - P[2]) * (q[4] - P[2]));
-            out->ss += d * d;
-            out->mx = d > out->mx ? d : out->mx;
-            out->n++;
-            out->within += tol > 0 && d <= tol;
-            if (want_hist)
-                nf_rhist_add(&out->hist, d);
-            if (cut > 0 && d >= cut) {
-                out->outliers++;
-                if (sr)
-                    nf_spanres_add_rejected(sr, q[0], q[1], d);
-            } else if (sr)
+            double d = resid_add(out, &ev, q, tol, cut, want_hist);
+            if (sr && cut > 0 && d >= cut)
+                nf_spanres_add_rejected(sr, q[0], q[1], d);
+            else if (sr)
                 nf_spanres_add(sr, q[0], q[1], d);
             /* A point the robust pass rejected is data, not misfit (NaN):
              * a spike is not a shape. (nf_spanres_fold's rescue of a
@@ -767,7 +1048,8 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     int npass = (int)(o->reparam + 1 + (o->robust ? 2 * o->robust_iters : 0) + 1), ip = 0;
     /* Round k fits in the space of cur with P0 = cur's net: the base
      * first, then the previous fit refined (Section 2.2). */
-    j->need = cf_fitpass_bytes(&S->cur, o->solver, o->threads);
+    j->two = !(k == 0 && j->live) && halves_room(j, r, &S->cur);
+    j->need = cf_fitpass_bytes(&S->cur, o->solver, j->two ? 2 : o->threads);
     if (!(k == 0 && j->live)) {
         free(j->mem);
         j->mem = malloc((size_t)j->need);
@@ -988,8 +1270,9 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
      * no journal verified and read back (issue 19), the same points in the
      * same order, so the same fit as the journal's replay. */
     held_t hc = {j, 0};
-    cf_fitsrc_t hs = {3,          j->nhold, src ? src->name : "live points", held_rewind, held_read,
-                      held_where, &hc};
+    cf_fitsrc_t hs = {3,           j->nhold,  src ? src->name : "live points",
+                      held_rewind, held_read, held_where,
+                      &hc,         NULL,      NULL};
     if (cf_fitjob_held(j))
         src = &hs;
     run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml};
@@ -1052,6 +1335,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->solve = po.fp.st;
             out->store_bytes = cf_fitpass_store_bytes(&po.fp);
             out->bytes = j->need;
+            out->threads = j->used2 ? 2 : 1;
             out->pinned = po.ed.pinned;
             if (ck.fp) {
                 nf_footprint_stats_t fs;

@@ -60,6 +60,12 @@ typedef enum cf_fitjob_status {
     CF_FITJOB_NOT_MET_NO_PROGRESS = 4 /* rounds stopped gaining (auto), or max_rounds used up */
 } cf_fitjob_status_t;
 
+/* The largest second accumulator (nf_fit_shard_bytes) a pass read in
+ * halves takes (opts.cores): a few MiB, N up to about 1.8e4 control
+ * points at degree 3 x 3; beyond, one reader, so memory does not grow
+ * with the second core. */
+#define CF_FITJOB_SHARD_MAX (4L << 20)
+
 typedef struct cf_fitjob_opts {
     double alpha, beta; /* Eq. 7's weights */
     nf_solver_t solver;
@@ -68,6 +74,10 @@ typedef struct cf_fitjob_opts {
     int probe;        /* 1: the iterative solvers check that the data determine the net */
     int threads;      /* accumulating cores: 1, or 2 (a second accumulator, cf_accum; its
                        * bytes checked at open and per pass, not by the loop's max_cp) */
+    int cores;        /* 2: a pass of given parameters (u v x y z) over a points file read
+                       * in halves on two threads, each its reader and (fit) its
+                       * accumulator, when that second accumulator is small
+                       * (CF_FITJOB_SHARD_MAX); 1: the present one reader */
     int net_u, net_v; /* 0: the base's net; else the base refined to it first */
     long reparam;     /* reprojection passes per round (Section 2.2) */
     double far;       /* projected points farther than this are counted (mm; 0: 5 % of the net) */
@@ -113,7 +123,8 @@ typedef struct cf_fitjob_result {
     double sigma;                    /* robust scale of the best round (0: none) */
     long outliers;                   /* robust: points of weight 0 in its last pass */
     nf_solve_stats_t solve;
-    long bytes; /* fitter memory of the best round */
+    long bytes;  /* fitter memory of the best round */
+    int threads; /* 2: some pass read its halves on two threads (opts.cores) */
     cf_round_t rounds[CF_FITJOB_MAX_ROUNDS];
     int nrounds;
     double seconds, t_acc, t_solve;

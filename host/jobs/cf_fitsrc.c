@@ -6,10 +6,16 @@
 #include <stdio.h>
 #include <string.h>
 
+/* The whole file from its first point (after a split too); a text file
+ * is parsed on a second thread while the job accumulates (or evaluates)
+ * the rows it has: the same rows, lines and errors (cf_points.h). Without
+ * a thread it reads on this one. */
 static int pts_rewind(void *ctx, char *msg, size_t ml)
 {
     cf_fitsrc_points_t *p = ctx;
-    int rc = cf_points_rewind(p->r);
+    int rc = cf_points_whole(p->r);
+    if (!rc)
+        (void)cf_points_thread(p->r);
     return rc ? cf_fail(msg, ml, rc, "%s: cannot read the points again", p->path) : 0;
 }
 
@@ -19,33 +25,92 @@ static long pts_read(void *ctx, double *rows, long max, char *msg, size_t ml)
     return cf_points_read(p->r, rows, max, msg, ml);
 }
 
-/* The line of point k, read again one point at a time (error path only). */
-static void pts_where(void *ctx, long k, char *buf, size_t n)
+static long part_read(void *ctx, double *rows, long max, char *msg, size_t ml)
 {
-    cf_fitsrc_points_t *p = ctx;
+    return cf_points_read(((cf_fitsrc_part_t *)ctx)->r, rows, max, msg, ml);
+}
+
+/* A half from its first point (the split stays). */
+static int part_rewind(void *ctx, char *msg, size_t ml)
+{
+    cf_fitsrc_part_t *p = ctx;
+    int rc = cf_points_rewind(p->r);
+    return rc ? cf_fail(msg, ml, rc, "%s: cannot read the points again", p->path) : 0;
+}
+
+/* The line of point k of r, read again one point at a time (error path
+ * only; a half's rewind keeps the split). */
+static void where_in(cf_points_t *r, const char *path, long k, char *buf, size_t n)
+{
     double row[8];
     char msg[16];
     long line = -1;
-    if (!cf_points_rewind(p->r)) {
+    if (!cf_points_rewind(r)) {
         long i = 0;
-        while (i <= k && cf_points_read(p->r, row, 1, msg, sizeof msg) == 1)
+        while (i <= k && cf_points_read(r, row, 1, msg, sizeof msg) == 1)
             i++;
         if (i > k)
-            line = cf_points_line(p->r);
+            line = cf_points_line(r);
     }
-    snprintf(buf, n, "%s:%ld", p->path, line);
+    snprintf(buf, n, "%s:%ld", path, line);
+}
+
+static void pts_where(void *ctx, long k, char *buf, size_t n)
+{
+    cf_fitsrc_points_t *p = ctx;
+    where_in(p->r, p->path, k, buf, n);
+}
+
+static void part_where(void *ctx, long k, char *buf, size_t n)
+{
+    cf_fitsrc_part_t *p = ctx;
+    where_in(p->r, p->path, k, buf, n);
+}
+
+static int pts_split(void *ctx, cf_fitsrc_t *half, char *msg, size_t ml)
+{
+    cf_fitsrc_points_t *p = ctx;
+    cf_points_t *r2 = NULL;
+    int rc = cf_points_split(p->r, &r2, msg, ml);
+    if (rc)
+        return rc;
+    p->part[0] = (cf_fitsrc_part_t){p->r, p->path};
+    p->part[1] = (cf_fitsrc_part_t){r2, p->path};
+    for (int i = 0; i < 2; i++)
+        half[i] = (cf_fitsrc_t){cf_points_cols(p->r) == 5 ? 5 : 3,
+                                -1,
+                                p->path,
+                                part_rewind,
+                                part_read,
+                                part_where,
+                                &p->part[i],
+                                NULL,
+                                NULL};
+    return 0;
+}
+
+static void pts_join(void *ctx)
+{
+    cf_fitsrc_points_t *p = ctx;
+    cf_points_rebase(p->part[1].r, cf_points_lines(p->part[0].r));
 }
 
 void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, const char *path)
 {
+    memset(ctx, 0, sizeof *ctx);
     ctx->r = r;
     ctx->path = path;
-    /* A text file is parsed on a second thread while the job accumulates
-     * (or evaluates) the rows it has; the same rows, lines and errors
-     * (cf_points.h). Without a thread it reads on this one. */
-    (void)cf_points_thread(r);
-    *s = (cf_fitsrc_t){
-        cf_points_cols(r) == 5 ? 5 : 3, -1, path, pts_rewind, pts_read, pts_where, ctx};
+    /* The parse thread starts at the first rewind: a job that reads the
+     * file in halves never starts it (the job rewinds before every pass). */
+    *s = (cf_fitsrc_t){cf_points_cols(r) == 5 ? 5 : 3,
+                       -1,
+                       path,
+                       pts_rewind,
+                       pts_read,
+                       pts_where,
+                       ctx,
+                       pts_split,
+                       pts_join};
 }
 
 int cf_fitsrc_jnl_valid(const jnl_rec_t *r)
@@ -98,7 +163,7 @@ void cf_fitsrc_journal(cf_fitsrc_t *s, cf_fitsrc_jnl_t *ctx, jnl_reader_t *rd, c
 {
     ctx->rd = rd;
     ctx->path = path;
-    *s = (cf_fitsrc_t){3, points, path, jnl_rewind_, jnl_read_, jnl_where_, ctx};
+    *s = (cf_fitsrc_t){3, points, path, jnl_rewind_, jnl_read_, jnl_where_, ctx, NULL, NULL};
 }
 
 int cf_fitsrc_nominal_id(const char *path, uint64_t *hash, char name[JNL_NAME_LEN])

@@ -25,12 +25,28 @@ typedef struct cf_fitsrc {
     /* "FILE:LINE" or "FILE: record N" of point k (0-based), for messages. */
     void (*where)(void *ctx, long k, char *buf, size_t n);
     void *ctx;
+    /* Optional (NULL: one reader only). The points in two halves, one per
+     * thread: half[0] the first, half[1] the rest, each a source of its own
+     * (no split). 0, or a negative code: read the whole on one thread. */
+    int (*split)(void *ctx, struct cf_fitsrc *half, char *msg, size_t ml);
+    /* After half[0] was read to its end with no error: half[1]'s lines (in
+     * its errors and where) counted from the file's start from now on. */
+    void (*join)(void *ctx);
 } cf_fitsrc_t;
 
-/* An open points file (cf_points_open; its column count decides cols). */
+/* One half of a points file (cf_points_split). */
+typedef struct cf_fitsrc_part {
+    cf_points_t *r;
+    const char *path;
+} cf_fitsrc_part_t;
+
+/* An open points file (cf_points_open; its column count decides cols). A
+ * regular ASCII or raw file splits into halves (part; their readers are
+ * r's, closed with it). */
 typedef struct cf_fitsrc_points {
     cf_points_t *r;
     const char *path;
+    cf_fitsrc_part_t part[2];
 } cf_fitsrc_points_t;
 void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, const char *path);
 

@@ -70,4 +70,6 @@ void cf_holdout_src(cf_fitsrc_t *s, cf_holdout_t *ctx, const cf_fitsrc_t *in, lo
     s->read = ho_read;
     s->where = ho_where;
     s->ctx = ctx;
+    s->split = NULL; /* every k-th row of the whole: one reader */
+    s->join = NULL;
 }

@@ -44,9 +44,21 @@ fit() { # fit NAME POINTS [--uv]
         --out "$T/$n.igs" --json
     cp "$T/out" "$T/$n.json"
 }
-fit ta "$T/points.uvxyz" --uv
-fit tb "$T/p.uvxyz.bin" --uv
+# One reader each: one order of summation (two threads split the text at a
+# line start near its middle byte, the raw file at half its points: other
+# groupings, the same sums to rounding, checked after).
+fit ta "$T/points.uvxyz" --uv --threads 1
+fit tb "$T/p.uvxyz.bin" --uv --threads 1
 same ta tb "given parameters"
+fit t2a "$T/points.uvxyz" --uv --threads 2
+fit t2b "$T/p.uvxyz.bin" --uv --threads 2
+for n in t2a t2b; do
+    [ "$(json "$T/$n.json" threads)" = 2 ] && ok "$n: two threads" || no "$n: threads $(json "$T/$n.json" threads)"
+done
+for n in t2a t2b; do
+    same_surface "$T/ta.igs" "$T/$n.igs" "$T/check.uv" && ok "$n: the one-thread surface" ||
+        no "$n: differs from one thread's"
+done
 fit xa "$T/points.xyz"
 fit xb "$T/p.xyz.bin"
 same xa xb "projected"
