@@ -1225,8 +1225,6 @@ int cf_points_split(cf_points_t *r, cf_points_t **r2p, char *msg, size_t msglen)
         fstat(fileno(r->f), &st) || !S_ISREG(st.st_mode))
         return cf_fail(msg, msglen, CF_EUNSUPPORTED, "%s: not a file of ASCII or raw points",
                        r->name);
-    cf_pmt_stop(r->mt); /* the halves read on their callers' threads */
-    r->mt = NULL;
     if (!r->r2) {
         long long at = st.st_size;
         long base = 0;
@@ -1243,11 +1241,18 @@ int cf_points_split(cf_points_t *r, cf_points_t **r2p, char *msg, size_t msglen)
         cf_points_t *b = calloc(1, sizeof *b);
         if (!b)
             return cf_fail(msg, msglen, CF_ENOMEM, "%s: out of memory", r->name);
-        memcpy(b, r, sizeof *b); /* format, columns, the CSV header's map, the PLY-free state */
+        /* What open settled, fixed since (r's parse thread may run):
+         * format, columns, the CSV header's map, the name. */
+        b->want = r->want;
+        b->cols = r->cols;
+        b->fmt = r->fmt;
+        b->hdr = r->hdr;
+        b->hcols = r->hcols;
+        memcpy(b->map, r->map, sizeof b->map);
+        memcpy(b->name, r->name, sizeof b->name);
         b->buf = malloc((size_t)CP_BUF + 1 + CP_PAD);
         b->path = strdup(r->path);
         b->f = b->buf && b->path ? fopen(r->path, "rb") : NULL;
-        b->r2 = NULL;
         if (!b->f) {
             free(b->buf);
             free(b->path);
@@ -1263,6 +1268,8 @@ int cf_points_split(cf_points_t *r, cf_points_t **r2p, char *msg, size_t msglen)
         b->end = -1;
         r->r2 = b;
     }
+    cf_pmt_stop(r->mt); /* the halves read on their callers' threads */
+    r->mt = NULL;
     r->end = r->r2->data_off;
     if (cp_rewind(r) || cp_rewind(r->r2))
         return cf_fail(msg, msglen, CF_EIO, "%s: cannot seek", r->name);

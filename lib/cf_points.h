@@ -62,8 +62,7 @@ int cf_points_thread(cf_points_t *r);
  * are the file's, r2's count from the split until cf_points_rebase (raw:
  * its point numbers are the file's already). Regular ASCII and raw files
  * only: CF_EUNSUPPORTED otherwise (stdin, PLY, a middle inside a line
- * longer than CF_POINTS_MAX_LINE) and r unchanged but rewound; CF_ENOMEM,
- * CF_EIO. */
+ * longer than CF_POINTS_MAX_LINE), CF_ENOMEM, CF_EIO: r unchanged. */
 int cf_points_split(cf_points_t *r, cf_points_t **r2, char *msg, size_t msglen);
 
 /* r reads the whole file again (after a split), from its first point. */

@@ -20,15 +20,15 @@
 
 #define FZ_CHUNK 64
 
-/* Read to the end: the number of points, a checksum of their bits. */
-static long pass(cf_points_t *r, const char *path, uint64_t *sum)
+/* Read to the end: the number of points, a checksum of their bits, the
+ * refusal in msg (-1). */
+static long pass_msg(cf_points_t *r, const char *path, uint64_t *sum, char *msg, size_t ml)
 {
     double buf[FZ_CHUNK * CF_POINTS_MAX_COLS];
-    char msg[1024];
     long total = 0, k;
     int cols = cf_points_cols(r);
     *sum = 0;
-    while ((k = cf_points_read(r, buf, FZ_CHUNK, msg, sizeof msg)) > 0) {
+    while ((k = cf_points_read(r, buf, FZ_CHUNK, msg, ml)) > 0) {
         for (long i = 0; i < k * cols; i++) {
             uint64_t b;
             if (!isfinite(buf[i])) {
@@ -46,6 +46,52 @@ static long pass(cf_points_t *r, const char *path, uint64_t *sum)
         return -1;
     }
     return total;
+}
+
+static long pass(cf_points_t *r, const char *path, uint64_t *sum)
+{
+    char msg[1024];
+    return pass_msg(r, path, sum, msg, sizeof msg);
+}
+
+/* The checksum of a run of n values after one of sum a: a * P^n + b. */
+static uint64_t chain(uint64_t a, uint64_t b, long n)
+{
+    uint64_t p = 1, q = 1099511628211u;
+    for (; n > 0; n >>= 1, q *= q)
+        if (n & 1)
+            p *= q;
+    return a * p + b;
+}
+
+/* Two halves (cf_points_split; ASCII and raw files only), the second read
+ * first, rebased after the first: the whole's points and, in file order,
+ * its refusal with the same line. */
+static void halves(cf_points_t *r, const char *path, long nw, uint64_t sw, const char *mw)
+{
+    cf_points_t *r2;
+    char m1[1024], m2[1024];
+    if (cf_points_split(r, &r2, m1, sizeof m1) != CF_OK)
+        return;
+    uint64_t s1, s2;
+    long b = pass_msg(r2, path, &s2, m2, sizeof m2), a = pass_msg(r, path, &s1, m1, sizeof m1);
+    const char *m = m1;
+    if (a >= 0) {
+        cf_points_rebase(r2, cf_points_lines(r));
+        double row[CF_POINTS_MAX_COLS];
+        if (b < 0 && cf_points_read(r2, row, 0, m2, sizeof m2) >= 0) {
+            fprintf(stderr, "fuzz_points: a second half forgot its error\n");
+            abort();
+        }
+        m = m2;
+    }
+    long n = a < 0 || b < 0 ? -1 : a + b;
+    if (n != nw || (n >= 0 && chain(s1, s2, b * cf_points_cols(r)) != sw) ||
+        (n < 0 && strcmp(m, mw))) {
+        fprintf(stderr, "fuzz_points: halves differ: %ld (%ld + %ld) vs %ld points; '%s' vs '%s'\n",
+                n, a, b, nw, n < 0 ? m : "", nw < 0 ? mw : "");
+        abort();
+    }
 }
 
 static void against_strtod(const uint8_t *data, size_t size)
@@ -120,11 +166,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     uint64_t s1, s2;
     long n1 = pass(r, path, &s1);
     if (cf_points_rewind(r) == CF_OK) {
-        long n2 = pass(r, path, &s2);
+        long n2 = pass_msg(r, path, &s2, msg, sizeof msg);
         if (n1 != n2 || (n1 >= 0 && s1 != s2)) {
             fprintf(stderr, "fuzz_points: second pass differs (%ld vs %ld points)\n", n1, n2);
             abort();
         }
+        halves(r, path, n2, s2, msg);
     }
     cf_points_close(r);
     return 0;
