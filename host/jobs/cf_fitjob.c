@@ -3,6 +3,7 @@
  * into the stripes (Eq. 7), reprojection, robust reweighting, the check of
  * each round and the tolerance loop of Section 2.2; the best round kept. */
 #include "cf_fitjob.h"
+#include "cf_bigmem.h"
 #include "cf_cli.h"
 #include "cf_edges.h"
 #include "cf_err.h"
@@ -235,10 +236,10 @@ static int buffers(cf_fitjob_t *j, long n, int proj)
         return 0;
     n = n > j->cap ? n : j->cap;
     rn = proj || j->o.robust ? n : rn > j->rcap ? rn : j->rcap;
-    free(j->buf), free(j->rows), free(j->src);
-    j->buf = malloc(sizeof(double) * 5 * (size_t)n);
+    cf_bigmem_free(j->buf), cf_bigmem_free(j->rows), free(j->src);
+    j->buf = cf_bigmem_alloc(sizeof(double) * 5 * (size_t)n);
     size_t cols = j->o.robust ? 6 : 5; /* u v x y z, and w for robust passes */
-    j->rows = malloc(sizeof(double) * cols * (size_t)rn);
+    j->rows = cf_bigmem_alloc(sizeof(double) * cols * (size_t)rn);
     j->src = malloc(sizeof(long) * (size_t)rn);
     j->cap = j->buf && j->rows && j->src ? n : 0;
     j->rcap = j->cap ? rn : 0;
@@ -497,7 +498,7 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
                 memset(j->lp, 0, sz);
         }
         if (!j->mem)
-            j->mem = malloc((size_t)j->need);
+            j->mem = cf_bigmem_alloc((size_t)j->need);
         if (!j->lp || !j->mem || buffers(j, 1, 1))
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
         if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, "live points", msg, ml)))
@@ -769,8 +770,8 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
      * first, then the previous fit refined (Section 2.2). */
     j->need = cf_fitpass_bytes(&S->cur, o->solver, o->threads);
     if (!(k == 0 && j->live)) {
-        free(j->mem);
-        j->mem = malloc((size_t)j->need);
+        cf_bigmem_free(j->mem);
+        j->mem = cf_bigmem_alloc((size_t)j->need);
     }
     if (!j->mem || replace_copy(&S->fit, &S->cur) || replace_copy(&S->prev, &S->cur))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
@@ -1169,9 +1170,9 @@ void cf_fitjob_close(cf_fitjob_t *j)
     if (j->lp)
         pass_free(j->lp);
     free(j->lp);
-    free(j->mem);
-    free(j->buf);
-    free(j->rows);
+    cf_bigmem_free(j->mem);
+    cf_bigmem_free(j->buf);
+    cf_bigmem_free(j->rows);
     free(j->src);
     free(j->hold);
     free(j->feet);
