@@ -731,7 +731,8 @@ static char *warning(cf_fitjob_result_t *res)
 /* The surfaces of a run. */
 typedef struct surfs {
     nf_surf_t cur, fit, prev, nxt;
-    cf_stats_t *st; /* the round's deviations (swapped with the best's) */
+    int cur_is_base; /* round 0 fits in the job's base itself: no copy of it */
+    cf_stats_t *st;  /* the round's deviations (swapped with the best's) */
     double *srmem;
     void *fpmem;       /* auto: the footprint's cells */
     double *krmem;     /* auto + robust: kr's spans */
@@ -744,7 +745,8 @@ typedef struct surfs {
 
 static void surfs_free(surfs_t *s)
 {
-    cf_surf_free(&s->cur);
+    if (!s->cur_is_base)
+        cf_surf_free(&s->cur);
     cf_surf_free(&s->fit);
     cf_surf_free(&s->prev);
     cf_surf_free(&s->nxt);
@@ -773,7 +775,12 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         cf_bigmem_free(j->mem);
         j->mem = cf_bigmem_alloc((size_t)j->need);
     }
-    if (!j->mem || replace_copy(&S->fit, &S->cur) || replace_copy(&S->prev, &S->cur))
+    /* prev: the surface projected onto and the robust weights' fit; a plain
+     * fit at given parameters needs neither (issue 20: one net less). */
+    const int want_prev = !uv || o->robust;
+    if (!want_prev)
+        cf_surf_free(&S->prev);
+    if (!j->mem || replace_copy(&S->fit, &S->cur) || (want_prev && replace_copy(&S->prev, &S->cur)))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
     /* Pass 0 takes parameters from the source or from projection onto cur;
      * each reparam pass projects onto the previous fit and refits in the
@@ -804,7 +811,9 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         out->t_solve += po->fp.t_solve;
         out->t_rows += po->fp.t_rows;
         out->t_merge += po->fp.t_merge;
-        memcpy(S->prev.cp, S->fit.cp, sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
+        if (want_prev)
+            memcpy(S->prev.cp, S->fit.cp,
+                   sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
     }
     /* Robust passes: the MAD of the residuals to the last fit sets the
      * scale, floored by the probe's noise or a share of tol (nf_robust:
@@ -1007,7 +1016,11 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (buffers(j, src->total, src->cols != 5) || cf_surf_copy(&S.cur, &j->base)) {
+    /* Round 0 fits in the base's space from its net, which no round
+     * changes: it is read in place, not copied (issue 20). */
+    S.cur = j->base;
+    S.cur_is_base = 1;
+    if (buffers(j, src->total, src->cols != 5)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }
@@ -1038,7 +1051,11 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         rd->seconds = cli_now() - tr;
         /* Keep the best fit: most points within tolerance, then lowest rms. */
         if (rd->within_pct > best_within || (rd->within_pct == best_within && rd->rms < best_rms)) {
-            if (replace_copy(&out->surf, &S.fit)) {
+            if (!o->loop) { /* the only round: its fit is the result, moved */
+                cf_surf_free(&out->surf);
+                out->surf = S.fit;
+                memset(&S.fit, 0, sizeof S.fit);
+            } else if (replace_copy(&out->surf, &S.fit)) {
                 rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
                 goto fail;
             }
@@ -1128,7 +1145,9 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->why[nl - 1] = ' ';
             break;
         }
-        cf_surf_free(&S.cur);
+        if (!S.cur_is_base)
+            cf_surf_free(&S.cur);
+        S.cur_is_base = 0;
         S.cur = S.nxt;
         memset(&S.nxt, 0, sizeof S.nxt);
     }
