@@ -325,9 +325,10 @@ def e2e(out):
            "scipy CG s / MiB", "CHOLMOD s / MiB", "ratio ASCII", "ratio binary"], rows)
     long = [d for d in good if d.get("points", 0) > 10**6]
     if long:
-        print("\nLong runs (`BENCH_LONG=1`): 10^8 points = the 10^6-point raster above "
-              "written 100 times into one `.uvxyz.bin` (4 GB, streamed, deleted after); "
-              "N = 10^6 from 10^7 points (`cellfit gen`). One run each.\n")
+        print("\nLong runs: 10^8 points = the 10^6-point raster above "
+              "written 100 times into one `.uvxyz.bin` (4 GB, streamed, deleted after), "
+              "onto N = 10^4 (and with `BENCH_LONG=1` onto N = 10^5, and N = 10^6 from 10^7 "
+              "points of `cellfit gen`). One run each.\n")
         one = {k: v[0] for k, v in b.items()}
         lrows = []
         for d in sorted(long, key=lambda x: (x["points"], x["control_points"])):
@@ -424,6 +425,60 @@ def targets(out):
                      "%s M/s (lowest, N = %s, %s), max error %.1e" %
                      (mps(lo["points_per_s"]), "{:,}".format(lo["control_points"]), lo["order"],
                       err), verdict(ok)])
+    table(["target", "goal", "measured", ""], rows)
+    e2e_targets(out, verdict)
+
+
+def e2e_targets(out, verdict):
+    """Issue 20's targets from the e2e section: the best wall time of each
+    (N, input) at 10^6 points, the ratio to the better peer, the 10^8 run."""
+    peers, _ = load(out, "e2e_peers")
+    allrun, _ = load(out, "e2e")
+    one = best([d for d in allrun if d.get("points") == 10**6],
+               lambda d: (d["control_points"], d.get("input", "ascii")), "wall_seconds")
+    if not one:
+        return
+    w = {k: v[0]["wall_seconds"] for k, v in one.items()}
+    cg = {d["control_points"]: d["seconds"] for d in peers if d.get("peer") == "scipy_cg"}
+    asm = {d["control_points"]: d["assembly_seconds"] for d in peers
+           if d.get("peer") == "cholmod_assembly"}
+    ch = {d["control_points"]: d["seconds"] for d in peers
+          if d.get("e2e") and d.get("bench") == "cholmod"}
+    rows = []
+    for inp, small, lim in (("ascii", 0.2, 0.5), ("bin", 0.08, None)):
+        c = [(t, n) for (n, i), t in w.items() if i == inp and n <= 10**4]
+        if c:
+            t, n = max(c)
+            rows.append(["%s, 10^6 points, N <= 10^4" % inp, "<= %g s" % small,
+                         "%s s (slowest, N = %s)" % (sec(t), "{:,}".format(n)),
+                         verdict(t <= small)])
+        c = [t for (n, i), t in w.items() if i == inp and decade(n) == 10**5]
+        if c and lim:
+            rows.append(["%s, 10^6 points, N = 10^5" % inp, "<= %g s" % lim,
+                         "%s s" % sec(c[0]), verdict(c[0] <= lim)])
+        rat = []
+        for (n, i), t in w.items():
+            pe = [cg[n]] if n in cg else []
+            if n in asm and n in ch:
+                pe.append(asm[n] + ch[n])
+            if i == inp and pe:
+                rat.append((min(pe) / t, n))
+        if rat:
+            r, n = min(rat)
+            rows.append(["%s: >= 10x the better of scipy CG and CHOLMOD, every N" % inp, ">= 10x",
+                         "%.1fx (lowest, N = %s)" % (r, "{:,}".format(n)), verdict(r >= 10)])
+    big = [d for d in allrun if d.get("points") == 10**8 and d.get("input") == "bin"
+           and decade(d["control_points"]) == 10**4]
+    ref = one.get((10000, "bin"))
+    if big:
+        d = big[0]
+        rss = d["peak_rss_bytes"] / ref[0]["peak_rss_bytes"] if ref else None
+        rows.append(["10^8 binary points onto N = 10^4", "<= 8 s, peak RSS within 10 % of 10^6",
+                     "%s s, RSS %.0f MiB (%s of the 10^6 run)" % (
+                         sec(d["wall_seconds"]), d["peak_rss_bytes"] / 2**20,
+                         "-" if rss is None else "%.2fx" % rss),
+                     verdict(d["wall_seconds"] <= 8 and rss is not None and rss <= 1.10)])
+    print("\n## Targets (issue 20)\n")
     table(["target", "goal", "measured", ""], rows)
 
 

@@ -630,6 +630,11 @@ int nf_fit_solve(nf_fit_t *f, nf_solver_t solver, const nf_solve_opts_t *opt, nf
     nf_solve_opts_t o = NF_SOLVE_OPTS_DEFAULT;
     if (opt)
         o = *opt;
+    /* beta > 0 put beta I into A (nf_fit_finish, Eq. 7): A >= beta I is
+     * positive definite, so the probe has no null space to find, and its
+     * homogeneous solve cost twice the solve itself (issue 20). */
+    if (f->prm.beta > 0.0)
+        o.probe = 0;
     nf_solve_stats_t tmp;
     if (!st)
         st = &tmp;

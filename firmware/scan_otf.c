@@ -204,8 +204,8 @@ static int near_xy(const scan_otf_t *o, double x, double y, const double at[2])
            at[1] - y <= o->end_tol;
 }
 
-/* The start phase ends (at the first number that is not a position at the
- * row's start): the last position held there is settled first. */
+/* The start phase ends (at the first position latched away from the row's
+ * start): the last position held there is settled first. */
 static int start_done(scan_otf_t *o)
 {
     int rc = RIG_OK;
@@ -215,22 +215,51 @@ static int start_done(scan_otf_t *o)
     return rc;
 }
 
+/* A later position at the row's start is known: the one held back is not
+ * the last there. Its pair is dropped (before_start); a position whose
+ * reading never came is a loss as anywhere (settled now, in number order). */
+static int stash_drop(scan_otf_t *o)
+{
+    int rc = RIG_OK;
+    if (o->st_have && o->stash.state == (HAVE_POS | HAVE_RD))
+        o->c.trig--, o->c.read--, o->c.before_start += 2;
+    else if (o->st_have)
+        rc = settle(o, &o->stash, o->stash.num);
+    o->st_have = 0;
+    return rc;
+}
+
+/* Number base came without a position while the row is starting: does the
+ * stage still stand at the start? The first position after it in the
+ * window says so (the stage stands, then moves, never back); none there
+ * yet (a window of losses): taken as moved. */
+static int still_standing(const scan_otf_t *o)
+{
+    for (uint64_t k = o->base + 1; k < o->base + SCAN_OTF_WINDOW; k++) {
+        const scan_otf_slot_t *s = &o->slot[k & (SCAN_OTF_WINDOW - 1)];
+        if ((s->state & HAVE_POS) && s->num == k)
+            return near_xy(o, s->x, s->y, o->start_xy);
+    }
+    return 0;
+}
+
 /* Settle the slot of number base and move the window on by one. While the
  * row is starting, a position at its start is held back instead, and the
- * one it replaces dropped (the stage stood there: only the last counts). */
+ * one it replaces dropped (the stage stood there: only the last counts); a
+ * number lost there is a loss and does not end the start. */
 static int retire_one(scan_otf_t *o)
 {
     scan_otf_slot_t *s = &o->slot[o->base & (SCAN_OTF_WINDOW - 1)];
     int rc = RIG_OK;
-    if (o->has_start && (s->state & HAVE_POS) && s->num == o->base &&
-        near_xy(o, s->x, s->y, o->start_xy)) {
-        if (o->st_have) {
-            o->c.trig--, o->c.before_start++;
-            if (o->stash.state & HAVE_RD)
-                o->c.read--, o->c.before_start++;
+    int pos = (s->state & HAVE_POS) && s->num == o->base;
+    if (o->has_start && pos && near_xy(o, s->x, s->y, o->start_xy)) {
+        if ((rc = stash_drop(o)) == RIG_OK) {
+            o->stash = *s;
+            o->st_have = 1;
         }
-        o->stash = *s;
-        o->st_have = 1;
+    } else if (o->has_start && !pos && still_standing(o)) {
+        if ((rc = stash_drop(o)) == RIG_OK)
+            rc = settle(o, s, o->base);
     } else if ((rc = start_done(o)) == RIG_OK)
         rc = settle(o, s, o->base);
     s->state = 0;

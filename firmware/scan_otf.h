@@ -16,12 +16,12 @@
  *   a row ended by a stage fault           -> rows_cut
  *   an event numbered after the trigger that
  *   latched the row's end position          -> past_end (dropped)
- *   a position at the row's start before
- *   the last one there                       -> before_start (dropped)
+ *   a pair at the row's start before the
+ *   last position there                      -> before_start (dropped)
  * so that, once a row is ended, trig = paired + nosurf + errors +
  * trig_no_read and read = paired + nosurf + errors + read_no_trig, and every
  * number below the row's end is in exactly one of paired, nosurf, errors,
- * trig_no_read, read_no_trig, both_lost.
+ * trig_no_read, read_no_trig, both_lost, or a pair dropped as before_start.
  *
  * Numbers are 16 bits on the wire; each stream is unwrapped against its own
  * highest number so far (a jump of 32768 or more cannot be told from a
@@ -138,10 +138,13 @@ int scan_otf_row_end_at(scan_otf_t *o, double x, double y, double tol);
 /* The row starts at stage position (x, y) (within scan_otf_row_end_at's
  * tol; after it, before any event): the box is armed before the stage
  * moves, so the triggers fire first at a standing stage; of the
- * positions latched there only the last is the row's first point, those
- * before it (and their readings) dropped and counted as before_start. The
- * start ends at the first number that is not a position there (a loss
- * too), so a row's point count does not depend on how long it stood. */
+ * positions latched there only the last is the row's first point, the
+ * pairs before it dropped and counted as before_start (each side). A
+ * number lost there is a loss of its kind as anywhere, and does not end
+ * the start: a number without a position is taken as standing when the
+ * next position in the window is at the start. The start ends at the first
+ * position away from it (or a window of numbers without one), so a row's
+ * point count does not depend on how long it stood, nor on its losses. */
 int scan_otf_row_start_at(scan_otf_t *o, double x, double y);
 
 /* 1 once the row's end position has been latched (the triggers can stop). */

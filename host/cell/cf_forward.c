@@ -8,6 +8,7 @@
 #include "cf_log.h"
 #include "cf_resdb.h"
 #include "cf_resfmt.h"
+#include "cf_thread.h"
 #include <libpq-fe.h>
 #include <math.h>
 #include <mosquitto.h>
@@ -575,11 +576,7 @@ int cf_forward_start(const cf_forward_opts_t *o, cf_forward_t **out, char *msg, 
     if (!rc && o->mqtt && mq_setup(f, msg, ml))
         rc = -1;
     if (!rc) {
-        sigset_t all, old;
-        sigfillset(&all);
-        pthread_sigmask(SIG_SETMASK, &all, &old);
-        rc = pthread_create(&f->th, NULL, fwd_main, f);
-        pthread_sigmask(SIG_SETMASK, &old, NULL);
+        rc = cf_thread_start(&f->th, fwd_main, f); /* signals stay with the main thread */
         if (rc)
             snprintf(msg, ml, "forwarder: cannot start its thread");
     }

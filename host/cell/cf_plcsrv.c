@@ -9,6 +9,7 @@
 #include "cf_plcsrv.h"
 #include "cf_log.h"
 #include "cf_portfile.h"
+#include "cf_thread.h"
 #include "plc_mbap.h"
 #include "rig_err.h"
 #include <arpa/inet.h>
@@ -151,11 +152,7 @@ static void act(srv_t *s, plc_action_t a)
         atomic_store(&s->stop_job, 0);
         atomic_store(&s->job_ended, 0);
         /* The worker takes no signals: SIGTERM interrupts the select loop. */
-        sigset_t all, old;
-        sigfillset(&all);
-        pthread_sigmask(SIG_SETMASK, &all, &old);
-        int rc = pthread_create(&s->worker, NULL, worker_main, s);
-        pthread_sigmask(SIG_SETMASK, &old, NULL);
+        int rc = cf_thread_start(&s->worker, worker_main, s);
         if (rc) {
             cf_log(CF_LOG_ERROR, "cannot start the job thread: %s", strerror(rc));
             pthread_mutex_lock(&s->mu);

@@ -3,7 +3,7 @@
  * (cf_plcstats.h). */
 #include "cf_plcstats.h"
 #include "cf_log.h"
-#include <signal.h>
+#include "cf_thread.h"
 #include <stdatomic.h>
 #include <string.h>
 #include <time.h>
@@ -77,12 +77,7 @@ int cf_plcstats_start(cf_plcstats_t *ps, const cf_plcrun_t *rr, const char *db_p
 #else
     if (!db_path)
         return 0;
-    sigset_t all, old; /* signals stay with the main thread */
-    sigfillset(&all);
-    pthread_sigmask(SIG_SETMASK, &all, &old);
-    int rc = pthread_create(&ps->th, NULL, reader_main, ps);
-    pthread_sigmask(SIG_SETMASK, &old, NULL);
-    if (rc) {
+    if (cf_thread_start(&ps->th, reader_main, ps)) { /* signals stay with the main thread */
         cf_log(CF_LOG_WARN, "outbox registers: cannot start their thread (left at 0)");
         return -1;
     }

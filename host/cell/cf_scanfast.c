@@ -153,6 +153,12 @@ static void otf_counts(const scan_otf_t *o, unsigned long dropped, cf_scanfast_r
     res->dropped_by_probe = (long)dropped;
 }
 
+/* Where otf_stream_row is in a row: the stage running with the triggers
+ * armed; the row's end latched, the triggers stopped, the stage's BUSY
+ * awaited; the stage stopped (BUSY clear or a fault), the stream drained;
+ * or stopped by the caller (ABORT, the watchdog), drained likewise. */
+typedef enum { OTF_RUN, OTF_SETTLE, OTF_DRAIN, OTF_STOPPED } otf_phase_t;
+
 /* The stream's entries while the stage runs the row, then the stop and
  * the drain. The triggers are stopped at the first of: the row's end
  * position latched (scan_otf_end_seen), the stage's BUSY cleared, a fault;
@@ -173,7 +179,8 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
      * standing at its start, and the pairing keeps the last of them
      * (scan_otf_row_start_at), so no trigger of the travel is missed
      * however long the move command takes. */
-    int moving = 1, armed = 1, rc = hal_probe_stream_start(&rig->pr, (uint32_t)lround(period_us));
+    otf_phase_t ph = OTF_RUN;
+    int rc = hal_probe_stream_start(&rig->pr, (uint32_t)lround(period_us));
     if (rc) {
         *where = SCAN_AT_PROBE;
         return rc;
@@ -184,12 +191,17 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
         return rc;
     }
     t_start = t_entry = cli_now();
-    int stopped = 0, skip = 0;
     double t_poll = cli_now();
     while (!rc) {
         rig_reading_t rd[256];
         rig_trig_event_t pos[256];
         size_t n = 0;
+        /* The Modbus FIFO holds entries in number order, all after the
+         * row's end once it is latched, and the next arming empties it:
+         * not read then (a host that was held up would spend seconds on
+         * them). The ASCII stream is read to its end line, which must not
+         * be left. */
+        int skip = rig->pr.modbus && scan_otf_end_seen(o);
         if (!skip && (rc = hal_probe_stream_read(&rig->pr, rd, pos, 256, &n, dropped)) != 0) {
             *where = SCAN_AT_PROBE;
             break;
@@ -205,32 +217,28 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
             break;
         }
         if (scan_otf_end_seen(o)) {
-            if (armed) { /* the row's end latched: no trigger after it is wanted */
-                armed = 0;
+            if (ph == OTF_RUN) { /* the row's end latched: no trigger after it is wanted */
+                ph = OTF_SETTLE;
                 if ((rc = hal_probe_stream_stop(&rig->pr)) != 0) {
                     *where = SCAN_AT_PROBE;
                     break;
                 }
             }
-            /* The Modbus FIFO holds entries in number order, all after the
-             * end now, and the next arming empties it: not read (a host
-             * that was held up would spend seconds on them). The ASCII
-             * stream is read to its end line, which must not be left. */
             skip = rig->pr.modbus;
         }
-        if (!moving && !armed && (skip || (!n && !rig->pr.streaming)))
+        if (ph >= OTF_DRAIN && (skip || (!n && !rig->pr.streaming)))
             break;
         double t_now = cli_now();
         if (n)
             t_entry = t_now;
-        if (!moving && !armed && !n && t_now - t_entry > 2.0) {
+        if (ph >= OTF_DRAIN && !n && t_now - t_entry > 2.0) {
             rc = RIG_ETIMEOUT;
             *where = SCAN_AT_PROBE;
             snprintf(rig->pr.err, sizeof rig->pr.err,
                      "probe stream: stopped, but its end did not come within 2 s");
             break;
         }
-        if (moving && t_now - t_start > t_max) {
+        if (ph <= OTF_SETTLE && t_now - t_start > t_max) {
             rig->stage.ops->stop(rig->stage.ctx);
             rc = RIG_ETIMEOUT;
             *where = SCAN_AT_STAGE;
@@ -238,21 +246,19 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
                      "stage: the row's move did not end within %.1f s (still busy)", t_max);
             break;
         }
-        if ((moving || armed) && !stopped && stop_asked(cb)) {
+        if (ph <= OTF_SETTLE && stop_asked(cb)) {
             /* ABORT or the watchdog: the stage first, then the stream. */
             rig->stage.ops->stop(rig->stage.ctx);
-            stopped = 1;
-            moving = 0;
-            if (armed)
+            if (ph == OTF_RUN)
                 rc = hal_probe_stream_stop(&rig->pr);
-            armed = 0;
+            ph = OTF_STOPPED;
             continue;
         }
         /* The stage's status when the FIFO is drained, and at least every
          * 20 ms while it is not (a host behind the stream still sees the
          * row end and a fault within the row). */
         double t = cli_now();
-        if (moving && (n < 256 || t - t_poll >= 0.02)) {
+        if (ph <= OTF_SETTLE && (n < 256 || t - t_poll >= 0.02)) {
             t_poll = t;
             uint32_t st = 0;
             if ((rc = rig->stage.ops->status(rig->stage.ctx, &st)) != 0) {
@@ -262,16 +268,16 @@ static int otf_stream_row(hal_rig_t *rig, scan_otf_t *o, const cf_scanfast_cb_t 
             if (st & (RIG_ST_FAULT | RIG_ST_ESTOP))
                 *fault = st & RIG_ST_ESTOP ? RIG_EESTOP : RIG_EFAULT;
             if (*fault || !(st & RIG_ST_BUSY)) {
-                moving = 0; /* the row's end (or its fault): stop the triggers, drain */
-                if (armed && (rc = hal_probe_stream_stop(&rig->pr)) != 0)
+                /* the row's end (or its fault): stop the triggers, drain */
+                if (ph == OTF_RUN && (rc = hal_probe_stream_stop(&rig->pr)) != 0)
                     *where = SCAN_AT_PROBE;
-                armed = 0;
+                ph = OTF_DRAIN;
             }
         }
     }
     if (rc && rig->pr.streaming)
         hal_probe_stream_stop(&rig->pr);
-    if (!rc && stopped)
+    if (!rc && ph == OTF_STOPPED)
         rc = RIG_EABORTED;
     return rc;
 }

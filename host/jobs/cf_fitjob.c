@@ -3,6 +3,7 @@
  * into the stripes (Eq. 7), reprojection, robust reweighting, the check of
  * each round and the tolerance loop of Section 2.2; the best round kept. */
 #include "cf_fitjob.h"
+#include "cf_bigmem.h"
 #include "cf_cli.h"
 #include "cf_edges.h"
 #include "cf_err.h"
@@ -240,10 +241,10 @@ static int buffers(cf_fitjob_t *j, long n, int proj)
         return 0;
     n = n > j->cap ? n : j->cap;
     rn = proj || j->o.robust ? n : rn > j->rcap ? rn : j->rcap;
-    free(j->buf), free(j->rows), free(j->src);
-    j->buf = malloc(sizeof(double) * 5 * (size_t)n);
+    cf_bigmem_free(j->buf), cf_bigmem_free(j->rows), free(j->src);
+    j->buf = cf_bigmem_alloc(sizeof(double) * 5 * (size_t)n);
     size_t cols = j->o.robust ? 6 : 5; /* u v x y z, and w for robust passes */
-    j->rows = malloc(sizeof(double) * cols * (size_t)rn);
+    j->rows = cf_bigmem_alloc(sizeof(double) * cols * (size_t)rn);
     j->src = malloc(sizeof(long) * (size_t)rn);
     j->cap = j->buf && j->rows && j->src ? n : 0;
     j->rcap = j->cap ? rn : 0;
@@ -502,7 +503,7 @@ int cf_fitjob_add(cf_fitjob_t *j, const double xyz[3], char *msg, size_t ml)
                 memset(j->lp, 0, sz);
         }
         if (!j->mem)
-            j->mem = malloc((size_t)j->need);
+            j->mem = cf_bigmem_alloc((size_t)j->need);
         if (!j->lp || !j->mem || buffers(j, 1, 1))
             return cf_fail(msg, ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
         if ((rc = pass_begin(j, j->lp, &j->base, &j->base, NULL, j->o.threads, "live points", msg,
@@ -1011,7 +1012,8 @@ static char *warning(cf_fitjob_result_t *res)
 /* The surfaces of a run. */
 typedef struct surfs {
     nf_surf_t cur, fit, prev, nxt;
-    cf_stats_t *st; /* the round's deviations (swapped with the best's) */
+    int cur_is_base; /* round 0 fits in the job's base itself: no copy of it */
+    cf_stats_t *st;  /* the round's deviations (swapped with the best's) */
     double *srmem;
     void *fpmem;       /* auto: the footprint's cells */
     double *krmem;     /* auto + robust: kr's spans */
@@ -1024,7 +1026,8 @@ typedef struct surfs {
 
 static void surfs_free(surfs_t *s)
 {
-    cf_surf_free(&s->cur);
+    if (!s->cur_is_base)
+        cf_surf_free(&s->cur);
     cf_surf_free(&s->fit);
     cf_surf_free(&s->prev);
     cf_surf_free(&s->nxt);
@@ -1051,10 +1054,15 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     j->two = !(k == 0 && j->live) && halves_room(j, r, &S->cur);
     j->need = cf_fitpass_bytes(&S->cur, o->solver, j->two ? 2 : o->threads);
     if (!(k == 0 && j->live)) {
-        free(j->mem);
-        j->mem = malloc((size_t)j->need);
+        cf_bigmem_free(j->mem);
+        j->mem = cf_bigmem_alloc((size_t)j->need);
     }
-    if (!j->mem || replace_copy(&S->fit, &S->cur) || replace_copy(&S->prev, &S->cur))
+    /* prev: the surface projected onto and the robust weights' fit; a plain
+     * fit at given parameters needs neither (issue 20: one net less). */
+    const int want_prev = !uv || o->robust;
+    if (!want_prev)
+        cf_surf_free(&S->prev);
+    if (!j->mem || replace_copy(&S->fit, &S->cur) || (want_prev && replace_copy(&S->prev, &S->cur)))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "cannot allocate %ld bytes", j->need);
     /* Pass 0 takes parameters from the source or from projection onto cur;
      * each reparam pass projects onto the previous fit and refits in the
@@ -1085,7 +1093,9 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         out->t_solve += po->fp.t_solve;
         out->t_rows += po->fp.t_rows;
         out->t_merge += po->fp.t_merge;
-        memcpy(S->prev.cp, S->fit.cp, sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
+        if (want_prev)
+            memcpy(S->prev.cp, S->fit.cp,
+                   sizeof(double) * 3 * (size_t)S->cur.nu * (size_t)S->cur.nv);
     }
     /* Robust passes: the MAD of the residuals to the last fit sets the
      * scale, floored by the probe's noise or a share of tol (nf_robust:
@@ -1289,7 +1299,11 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         return cf_fail(msg, ml, CF_ENOMEM, "out of memory");
     }
     int rc = 0;
-    if (buffers(j, src->total, src->cols != 5) || cf_surf_copy(&S.cur, &j->base)) {
+    /* Round 0 fits in the base's space from its net, which no round
+     * changes: it is read in place, not copied (issue 20). */
+    S.cur = j->base;
+    S.cur_is_base = 1;
+    if (buffers(j, src->total, src->cols != 5)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }
@@ -1320,7 +1334,11 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         rd->seconds = cli_now() - tr;
         /* Keep the best fit: most points within tolerance, then lowest rms. */
         if (rd->within_pct > best_within || (rd->within_pct == best_within && rd->rms < best_rms)) {
-            if (replace_copy(&out->surf, &S.fit)) {
+            if (!o->loop) { /* the only round: its fit is the result, moved */
+                cf_surf_free(&out->surf);
+                out->surf = S.fit;
+                memset(&S.fit, 0, sizeof S.fit);
+            } else if (replace_copy(&out->surf, &S.fit)) {
                 rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
                 goto fail;
             }
@@ -1411,7 +1429,9 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             out->why[nl - 1] = ' ';
             break;
         }
-        cf_surf_free(&S.cur);
+        if (!S.cur_is_base)
+            cf_surf_free(&S.cur);
+        S.cur_is_base = 0;
         S.cur = S.nxt;
         memset(&S.nxt, 0, sizeof S.nxt);
     }
@@ -1453,9 +1473,9 @@ void cf_fitjob_close(cf_fitjob_t *j)
     if (j->lp)
         pass_free(j->lp);
     free(j->lp);
-    free(j->mem);
-    free(j->buf);
-    free(j->rows);
+    cf_bigmem_free(j->mem);
+    cf_bigmem_free(j->buf);
+    cf_bigmem_free(j->rows);
     free(j->src);
     free(j->hold);
     free(j->feet);

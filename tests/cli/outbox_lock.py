@@ -17,8 +17,8 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import plc_cycle as pc  # noqa: E402  (the register map and the client)
 from plc_cycle import check  # noqa: E402
+from plc_regs import outbox_regs, wait_outbox  # noqa: E402
 
-OUTBOX_PG = 160
 BOUND = 0.5  # s: the slowest Modbus answer allowed while the database is locked
 
 # The lockers, each in a process of its own (POSIX locks are per process):
@@ -39,21 +39,6 @@ fcntl.lockf(fd, fcntl.LOCK_EX, 7, 121, os.SEEK_SET)  # CKPT, RECOVER, READ(0..4)
 print("locked", flush=True)
 time.sleep(float(sys.argv[2]))
 """
-
-
-def regs(c):
-    r = c.read(OUTBOX_PG, 8)
-    return {"pg": c.u32(r[0:2]), "mqtt": c.u32(r[2:4]), "age": c.u32(r[4:6]),
-            "dropped": c.u32(r[6:8])}
-
-
-def wait_regs(c, cond, limit):
-    t = time.time()
-    r = regs(c)
-    while time.time() - t < limit and not cond(r):
-        time.sleep(0.1)
-        r = regs(c)
-    return r, time.time() - t
 
 
 def enqueue(db, uuid, targets, age):
@@ -78,7 +63,7 @@ def polled_while(c, code, db, secs, what):
             t = time.time()
             try:
                 c.read(pc.STATUS, 8)
-                regs(c)
+                outbox_regs(c)
             except RuntimeError as e:  # no answer within the client's 5 s
                 err = ", then no answer: %s" % e
             worst = max(worst, time.time() - t)
@@ -96,17 +81,17 @@ def main(port, db):
     c = pc.Cell(port)
     enqueue(db, "lock-1", ("pg", "mqtt"), 100)
     enqueue(db, "lock-2", ("pg",), 50)
-    r, dt = wait_regs(c, lambda r: r["pg"] == 2 and r["mqtt"] == 1, 5)
+    r, dt = wait_outbox(c, lambda r: r["pg"] == 2 and r["mqtt"] == 1, 5)
     check(r["pg"] == 2 and r["mqtt"] == 1 and 99 <= r["age"] <= 110 and r["dropped"] == 0,
           "3 entries written by sqlite3: OUTBOX_PG 2, OUTBOX_MQTT 1, OUTBOX_AGE 100 s "
           "(%s, after %.1f s)" % (r, dt))
     polled_while(c, SQL_LOCK, db, 4, "BEGIN EXCLUSIVE held 4 s")
     polled_while(c, SHM_LOCK, db, 8, "WAL-index read locks held 8 s")
     c = pc.Cell(port)  # a new connection, should the last one have timed out
-    r = regs(c)
+    r = outbox_regs(c)
     check(r["pg"] == 2 and r["mqtt"] == 1, "the figures kept meanwhile (%s)" % r)
     enqueue(db, "lock-3", ("mqtt",), 0)
-    r, dt = wait_regs(c, lambda r: r["mqtt"] == 2, 5)
+    r, dt = wait_outbox(c, lambda r: r["mqtt"] == 2, 5)
     check(r["pg"] == 2 and r["mqtt"] == 2,
           "after the locks: a new entry shows within %.1f s (%s)" % (dt, r))
 

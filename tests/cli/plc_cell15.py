@@ -18,6 +18,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import plc_cycle as pc  # noqa: E402  (the Cell class, register addresses, check)
 from plc_cycle import check, Cell  # noqa: E402
+from plc_regs import outbox_regs, wait_outbox  # noqa: E402
 
 HOME, SCAN, ABORT = 1, 2, 5
 REGION = 72
@@ -100,15 +101,9 @@ def nospace(port, code):
           % (s["state"], s["progress"]))
 
 
-OUTBOX_PG, SCAN_TRIGGERS, FIT_TOL, FIT_REFINE = 160, 168, 82, 88
+SCAN_TRIGGERS, FIT_TOL, FIT_REFINE = 168, 82, 88
 SCAN_NAMES = ("triggers", "dropped", "no_reading", "no_trigger", "both_lost", "duplicates",
               "overruns")
-
-
-def outbox_regs(c):
-    r = c.read(OUTBOX_PG, 8)
-    return {"pg": c.u32(r[0:2]), "mqtt": c.u32(r[2:4]), "age": c.u32(r[4:6]),
-            "dropped": c.u32(r[6:8])}
 
 
 def outbox_cli(cf, db):
@@ -129,24 +124,14 @@ def same_outbox(c, cf, db, what):
     return r
 
 
-def wait_outbox(c, cond, limit):
-    t = time.time()
-    r = outbox_regs(c)
-    while time.time() - t < limit and not cond(r):
-        time.sleep(0.2)
-        r = outbox_regs(c)
-    return r
-
-
 def outbox(port, cf, db, phase):
     """OUTBOX_* while the broker is down (a job waits, its age grows), then
     (phase up, once the script has started mosquitto) drained."""
     c = Cell(port)
     if phase == "up":
-        t0 = time.time()
-        r = wait_outbox(c, lambda r: r["mqtt"] == 0 and r["age"] == 0, 30)
+        r, dt = wait_outbox(c, lambda r: r["mqtt"] == 0 and r["age"] == 0, 30)
         check(r["mqtt"] == 0 and r["age"] == 0,
-              "outbox: broker up: drained to 0 within %.1f s (%s)" % (time.time() - t0, r))
+              "outbox: broker up: drained to 0 within %.1f s (%s)" % (dt, r))
         same_outbox(c, cf, db, "drained")
         return
     r = outbox_regs(c)
@@ -156,7 +141,7 @@ def outbox(port, cf, db, phase):
     check(s.get("result") == 0, "outbox: FIT accepted")
     c.wait_done(c.seq)
     c.command(8)  # ACK_RESULTS
-    r = wait_outbox(c, lambda r: r["mqtt"] >= 1 and r["age"] >= 2, 10)
+    r, _ = wait_outbox(c, lambda r: r["mqtt"] >= 1 and r["age"] >= 2, 10)
     check(r["mqtt"] == 1 and r["pg"] == 0 and r["age"] >= 2,
           "outbox: broker down: OUTBOX_MQTT 1, OUTBOX_PG 0, OUTBOX_AGE %d s growing (%s)"
           % (r["age"], r))

@@ -396,6 +396,46 @@ static void test_refuse_rank_deficient(void **state)
     ref_surf_free(&s);
 }
 
+/* The same data with beta > 0: A = R^T R + beta I is positive definite,
+ * every control point is determined (the unseen combinations by P0), and
+ * the iterative solvers give the dense solution: no determinacy probe
+ * refuses it (nf_fit_solve skips the probe when beta > 0). */
+static void test_beta_determines_rank_deficient(void **state)
+{
+    (void)state;
+    ref_seed(52);
+    nf_surf_t s;
+    ref_surf_random(&s, 2, 1, 6, 3, 0, 1, 0, 1, 1, 1);
+    s.V[0] = s.V[1] = 0.0;
+    s.V[2] = 0.5;
+    s.V[3] = s.V[4] = 1.0;
+    long M = 400;
+    double *pts = sample(&s, M, 0.01);
+    for (long k = 0; k < M; k++)
+        pts[5 * k + 1] = (k % 2) ? 0.25 : 0.75;
+    double *A, *b, x[3 * 18];
+    ref_eq7(&s, pts, M, 0.0, 1e-3, &A, &b);
+    assert_int_equal(ref_solve(A, b, 18, x), 0);
+    const nf_solver_t which[] = {NF_SOLVER_CHOL, NF_SOLVER_PCG, NF_SOLVER_GS};
+    for (int w = 0; w < 3; w++) {
+        job_t j;
+        assert_int_equal(job_start(&j, &s, 0.0, 1e-3, which[w]), NF_OK);
+        assert_int_equal(nf_fit_add_rows(&j.f, pts, M, NULL), NF_OK);
+        assert_int_equal(nf_fit_finish(&j.f), NF_OK);
+        nf_solve_opts_t o = {1e-13, 200000, 1}; /* the probe asked for */
+        int rc = nf_fit_solve(&j.f, which[w], &o, NULL);
+        if (rc != NF_OK)
+            fail_msg("solver %s returned %s", nf_solver_name(which[w]), nf_strerror(rc));
+        for (long i = 0; i < 3 * 18; i++)
+            assert_near(j.f.P[i], x[i], 1e-7 * (1.0 + fabs(x[i])));
+        job_end(&j);
+    }
+    free(A);
+    free(b);
+    free(pts);
+    ref_surf_free(&s);
+}
+
 static void test_domain_and_nonfinite(void **state)
 {
     (void)state;
@@ -490,6 +530,7 @@ int main(void)
         cmocka_unit_test(test_alpha_linear_precision),
         cmocka_unit_test(test_refuse_no_data),
         cmocka_unit_test(test_refuse_rank_deficient),
+        cmocka_unit_test(test_beta_determines_rank_deficient),
         cmocka_unit_test(test_domain_and_nonfinite),
         cmocka_unit_test(test_budget_refusal),
         cmocka_unit_test(test_formula_covers_use),
