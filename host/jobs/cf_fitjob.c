@@ -12,6 +12,7 @@
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "cf_surfrow.h"
+#include "cf_thread.h"
 #include "nf_err.h"
 #include "nf_footprint.h"
 #include "nf_knots.h"
@@ -650,7 +651,7 @@ static void *fit_half(void *arg)
 static void two_halves(const run_t *r, half_t h[2], void *(*fn)(void *))
 {
     pthread_t th;
-    int on = !pthread_create(&th, NULL, fn, &h[1]);
+    int on = !cf_thread_start(&th, fn, &h[1]); /* signals stay the caller's */
     fn(&h[0]);
     if (on)
         pthread_join(th, NULL);
