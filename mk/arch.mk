@@ -27,7 +27,7 @@ endif
 # $(shell)), and no umockdev testbed (GLib of the build machine).
 ifneq ($(TARGET),)
 HAL_CFLAGS = $(shell PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR) pkg-config --cflags $(HAL_PKGS) 2>/dev/null)
-HAL_LIBS = $(if $(HAL_SRC),$(shell PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR) pkg-config --libs $(HAL_PKGS) 2>/dev/null))
+HAL_LIBS = $(if $(HAL_SRC),$(shell PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR) pkg-config --libs $(HAL_LINK_PKGS) 2>/dev/null))
 override UMOCK_HAVE :=
 endif
 
