@@ -21,6 +21,7 @@ $(DL_OBJ): override CFLAGS += -I$(BUILD)/gen
 
 # dlopen is in glibc's libc since 2.34; an older toolchain needs -ldl. Tried
 # once per make run, at the first link.
-DL_LDLIBS = $(eval DL_LDLIBS := $(shell printf '\#include <dlfcn.h>\nint main(void) { return !dlopen("x", RTLD_NOW); }\n' | \
+DL_HASH := \#
+DL_LDLIBS = $(eval DL_LDLIBS := $(shell printf '$(DL_HASH)include <dlfcn.h>\nint main(void) { return !dlopen("x", RTLD_NOW); }\n' | \
 	$(CC) -x c -o /dev/null - 2>/dev/null || echo -ldl))$(DL_LDLIBS)
 LIBS += $(DL_LDLIBS)
