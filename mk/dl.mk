@@ -8,7 +8,10 @@
 # An install lists them as dependencies itself (dist/debian-depends: shlib
 # tools see no dlopen).
 DL_HDR := $(BUILD)/gen/hal_dl_libs.h
-DL_LIST := ARAVIS=aravis-0.8 USB=libusb-1.0 SQLITE3=sqlite3 PQ=libpq MOSQUITTO=libmosquitto
+# Those this build compiles against (mk/gev.mk, mk/plant.mk decide; read
+# when the recipe runs, after them): its header, install and tests follow.
+DL_LIST = USB=libusb-1.0 $(if $(GEV_HAVE),ARAVIS=aravis-0.8) \
+	$(if $(PLANT_HAVE),SQLITE3=sqlite3 PQ=libpq MOSQUITTO=libmosquitto)
 DL_OBJ := $(BUILD)/hal/hal_gev.o $(BUILD)/hal/hal_usb.o $(BUILD)/host/cell/cf_forward.o \
 	$(BUILD)/host/cell/cf_resdb.o
 
