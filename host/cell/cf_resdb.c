@@ -65,6 +65,7 @@ const char *cf_resdb_strerror(int err)
     case CF_RESDB_EIO: return "results database statement failed";
     case CF_RESDB_ENOTFOUND: return "no such job";
     case CF_RESDB_ENOTDB: return "not a cellfit results database";
+    case CF_RESDB_ENOLIB: return "the SQLite library cannot be loaded";
     default: return "unknown results database error";
     }
 }
@@ -176,7 +177,7 @@ int cf_resdb_check(const char *path, char *msg, size_t ml)
     sqlite3_stmt *st = NULL;
     int rc = CF_RESDB_OK, jobs = 0, v = 0;
     if (sq_ready(path, msg, ml))
-        return CF_RESDB_EOPEN;
+        return CF_RESDB_ENOLIB;
     if (sq.sqlite3_open_v2(path, &db, SQLITE_OPEN_READONLY, NULL) != SQLITE_OK) {
         snprintf(msg, ml, "%s: %s", path, db ? sq.sqlite3_errmsg(db) : "cannot open");
         rc = CF_RESDB_EOPEN;
@@ -221,7 +222,7 @@ int cf_resdb_open(const char *path, cf_resdb_t **out, char *msg, size_t ml)
 {
     *out = NULL;
     if (sq_ready(path, msg, ml))
-        return CF_RESDB_EOPEN;
+        return CF_RESDB_ENOLIB;
     cf_resdb_t *d = calloc(1, sizeof *d);
     if (!d)
         return snprintf(msg, ml, "%s: out of memory", path), CF_RESDB_EOPEN;
