@@ -70,12 +70,14 @@ TEST_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 TESTLIB_SRC := $(sort $(wildcard tests/unit/ref_*.c))
 TESTLIB_OBJ := $(patsubst tests/unit/%.c,$(BUILD)/tests/%.o,$(TESTLIB_SRC))
 # hal/: transports to real devices (libmodbus, libserialport, libusb), host
-# builds only; firmware/ never sees them.
+# builds only; firmware/ never sees them. libusb is loaded at first use
+# (hal/hal_dl.h, mk/dl.mk): its headers only, not its library, at build time.
 HAL_SRC := $(sort $(wildcard hal/*.c))
 HAL_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(HAL_SRC))
 HAL_PKGS := libmodbus libserialport libusb-1.0
+HAL_LINK_PKGS := libmodbus libserialport
 HAL_CFLAGS = $(shell pkg-config --cflags $(HAL_PKGS) 2>/dev/null)
-HAL_LIBS = $(if $(HAL_SRC),$(shell pkg-config --libs $(HAL_PKGS) 2>/dev/null))
+HAL_LIBS = $(if $(HAL_SRC),$(shell pkg-config --libs $(HAL_LINK_PKGS) 2>/dev/null))
 # sim/: cellsim, the simulated rig (its own main), on the same wire protocols.
 SIM_SRC := $(sort $(wildcard sim/*.c))
 SIM_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(SIM_SRC))

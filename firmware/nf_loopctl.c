@@ -51,6 +51,10 @@ void nf_loopctl_init(nf_loopctl_t *c)
     c->last_pct = -1.0;
     c->last_cp = 0;
     c->last_add = 0;
+    c->gain = 0.0;
+    c->ref_add = 0;
+    c->fine = 0;
+    c->was_fine = 0;
 }
 
 void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp)
@@ -61,20 +65,34 @@ void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp)
     c->gain = c->last_pct >= 0.0 ? within_pct - c->last_pct : 0.0;
     c->last_pct = within_pct;
     c->last_cp = cp;
+    /* A fine step (see nf_loopctl_budget) is a trial, not the step size
+     * the rounds go on from. */
+    c->was_fine = c->fine;
+    c->fine = 0;
+    if (!c->was_fine)
+        c->ref_add = c->last_add;
 }
 
-long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line)
+long nf_loopctl_budget(nf_loopctl_t *c, double need_pct, long min_line)
 {
+    c->fine = 0;
     if (c->last_add <= 0)
         return 0;
     const double added = (double)c->last_add, missing = need_pct - c->last_pct;
-    double b = 2.0 * added;
+    /* After a fine step that did not meet the goal, the step before it
+     * caps the round (a fine step's gain says little about a larger one). */
+    const double ref = c->was_fine && c->ref_add > added ? (double)c->ref_add : added;
+    double b = 2.0 * ref;
     if (c->gain > 0.0) {
         const double est = added * missing / c->gain;
         b = est < b ? est : b;
-        b = b < 0.5 * added ? 0.5 * added : b;
+        /* FITPACK's floor of half the last step keeps early rounds from
+         * crawling; near the goal it makes the last round overshoot. */
+        if (missing > NF_LOOPCTL_FINE_GAP)
+            b = b < 0.5 * added ? 0.5 * added : b;
     }
     b = b < (double)min_line ? (double)min_line : b;
+    c->fine = b < 0.5 * added;
     return (long)ceil(b);
 }
 

@@ -61,6 +61,9 @@ typedef struct nf_loopctl {
     long last_cp;    /* its control points */
     long last_add;   /* control points the last round had more than the one before (0: none) */
     double gain;     /* points of share it gained over the one before */
+    long ref_add;    /* the last step that was not a fine one (nf_loopctl_budget) */
+    int fine;        /* the budget last given is a fine step: under half the last step */
+    int was_fine;    /* the round last recorded was a fine step */
 } nf_loopctl_t;
 
 /* Before the first round. */
@@ -77,16 +80,24 @@ int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, doub
                        int round, int max_rounds, int chooser_status);
 
 /* Control points the next round may add (nf_knotsel_opts_t.max_add), from
- * the last round's gain, after nf_loopctl_verdict of a round with cp
- * control points: FITPACK's way of sizing the next step (fpcurf/fpsurf
- * extrapolate how many knots will bring the residual to s from what the
- * last ones brought; Dierckx 1993, 5.2.2): est = added (need - within) /
- * gained, then at least half and at most twice what the last round added
- * (twice when it gained nothing), and never less than min_line (one knot
- * line: min(Nu, Nv)). 0 (no limit) before two rounds have been seen.
- * Near the target this keeps the last round from adding several times the
- * control points the missing share needs. */
-long nf_loopctl_budget(const nf_loopctl_t *c, double need_pct, long min_line);
+ * the last round's gain, after nf_loopctl_record of a round: FITPACK's way
+ * of sizing the next step (fpcurf/fpsurf extrapolate how many knots will
+ * bring the residual to s from what the last ones brought; Dierckx 1993,
+ * 5.2.2): est = added (need - within) / gained, at most twice the step
+ * (twice when it gained nothing), at least half of it, and never less than
+ * min_line (one knot line: min(Nu, Nv)). 0 (no limit) before two rounds
+ * have been seen. Near the target this keeps the last round from adding
+ * several times the control points the missing share needs.
+ * Once at most NF_LOOPCTL_FINE_GAP points are missing the half-step floor
+ * is dropped (a fine step: a step that gained over twice what is missing
+ * says a step under half its size may do; cliffs at 4,047 points took 2
+ * lines, 216 control points and 99.41 %, where 1 line, 204, gives
+ * 99.33 %). After a fine step the cap is twice the last step that was not
+ * one: a fine step's gain says little about a larger step, and a robust
+ * fit whose last rounds gain 0.01 points each otherwise crawled a line or
+ * two a round into the no-progress stop. Sets c->fine. */
+#define NF_LOOPCTL_FINE_GAP 5.0
+long nf_loopctl_budget(nf_loopctl_t *c, double need_pct, long min_line);
 
 /* Knots a span may get in the next round (nf_knotsel_opts_t.per_span):
  * while more than NF_LOOPCTL_SIDES_GAP points of the share are missing,

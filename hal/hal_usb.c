@@ -4,11 +4,36 @@
  * transport's timeout. A device gone (NO_DEVICE) is looked for again and
  * reopened for up to opts.reconnect_ms, then reported as RIG_EDISCONNECT. */
 #include "hal_usb.h"
+#include "hal_dl.h"
+#include "hal_dl_libs.h"
 #include <libusb.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+/* libusb, loaded by the first usb: open (hal_dl.h): cellfit maps it only
+ * for a rig with USB parts. */
+/* clang-format off */
+#define USB_SYMS(X) \
+    X(libusb_init) \
+    X(libusb_exit) \
+    X(libusb_get_device_list) \
+    X(libusb_free_device_list) \
+    X(libusb_get_device_descriptor) \
+    X(libusb_open) \
+    X(libusb_close) \
+    X(libusb_get_string_descriptor_ascii) \
+    X(libusb_claim_interface) \
+    X(libusb_release_interface) \
+    X(libusb_clear_halt) \
+    X(libusb_control_transfer) \
+    X(libusb_bulk_transfer) \
+    X(libusb_error_name) \
+    X(libusb_strerror)
+/* clang-format on */
+HAL_DL_TABLE(usb, USB_SYMS)
+static hal_dl_t usb_lib = HAL_DL_LIB(usb, HAL_DL_SONAME_USB, HAL_DL_PACKAGE_USB, "a usb: device");
 
 typedef struct hal_usb {
     struct hal base;
@@ -40,7 +65,7 @@ int hal_usb_err(int e)
 static int fail(struct hal *h, const char *what, int e)
 {
     snprintf(h->err, sizeof h->err, "usb %04x:%04x %s: %s (%s)", h->uri.vid, h->uri.pid, what,
-             libusb_error_name(e), libusb_strerror((enum libusb_error)e));
+             usb.libusb_error_name(e), usb.libusb_strerror((enum libusb_error)e));
     return hal_usb_err(e);
 }
 
@@ -60,8 +85,8 @@ static double now_ms(void)
 static void drop(hal_usb_t *s)
 {
     if (s->dev) {
-        libusb_release_interface(s->dev, 0);
-        libusb_close(s->dev);
+        usb.libusb_release_interface(s->dev, 0);
+        usb.libusb_close(s->dev);
         s->dev = NULL;
     }
 }
@@ -75,7 +100,7 @@ static int serial_matches(libusb_device_handle *d, const struct libusb_device_de
         return 1;
     if (!dd->iSerialNumber)
         return 0;
-    int n = libusb_get_string_descriptor_ascii(d, dd->iSerialNumber, sn, sizeof sn);
+    int n = usb.libusb_get_string_descriptor_ascii(d, dd->iSerialNumber, sn, sizeof sn);
     return n >= 0 && (size_t)n == strlen(want) && !memcmp(sn, want, (size_t)n);
 }
 
@@ -88,33 +113,33 @@ static int attach(hal_usb_t *s)
         snprintf(h->err, sizeof h->err, "usb: no libusb context");
         return RIG_EOPEN;
     }
-    ssize_t n = libusb_get_device_list(s->ctx, &list);
+    ssize_t n = usb.libusb_get_device_list(s->ctx, &list);
     if (n < 0)
         return fail(h, "list devices", (int)n);
     int rc = LIBUSB_ERROR_NOT_FOUND, seen = 0;
     for (ssize_t i = 0; i < n && !s->dev; i++) {
         struct libusb_device_descriptor dd;
-        if (libusb_get_device_descriptor(list[i], &dd) || dd.idVendor != h->uri.vid ||
+        if (usb.libusb_get_device_descriptor(list[i], &dd) || dd.idVendor != h->uri.vid ||
             dd.idProduct != h->uri.pid)
             continue;
         seen++;
         libusb_device_handle *d = NULL;
-        rc = libusb_open(list[i], &d);
+        rc = usb.libusb_open(list[i], &d);
         if (rc)
             continue;
         if (!serial_matches(d, &dd, h->uri.serial)) {
-            libusb_close(d);
+            usb.libusb_close(d);
             rc = LIBUSB_ERROR_NOT_FOUND;
             continue;
         }
-        rc = libusb_claim_interface(d, 0);
+        rc = usb.libusb_claim_interface(d, 0);
         if (rc) {
-            libusb_close(d);
+            usb.libusb_close(d);
             continue;
         }
         s->dev = d;
     }
-    libusb_free_device_list(list, 1);
+    usb.libusb_free_device_list(list, 1);
     if (s->dev)
         return RIG_OK;
     if (rc == LIBUSB_ERROR_NOT_FOUND) {
@@ -139,9 +164,9 @@ static int usb_reconnect(hal_t *h)
         /* A fresh context scans the bus again: the old one's device list
          * may still hold the device that left (or miss the one that came
          * back) when hotplug events do not arrive. */
-        libusb_exit(s->ctx);
+        usb.libusb_exit(s->ctx);
         s->ctx = NULL;
-        int e = libusb_init(&s->ctx);
+        int e = usb.libusb_init(&s->ctx);
         if (e) {
             s->ctx = NULL;
             fail(h, "init", e);
@@ -182,7 +207,7 @@ static int after_error(hal_usb_t *s, const char *what, int e, uint8_t ep)
         return RIG_EDISCONNECT;
     }
     if (e == LIBUSB_ERROR_PIPE && ep)
-        libusb_clear_halt(s->dev, ep);
+        usb.libusb_clear_halt(s->dev, ep);
     return rc;
 }
 
@@ -199,8 +224,8 @@ static int usb_control(hal_t *h, uint8_t req_type, uint8_t req, uint16_t val, ui
     for (int a = 0; a <= h->opts.retries; a++) {
         if (a)
             h->retries++;
-        e = libusb_control_transfer(s->dev, req_type, req, val, idx, (unsigned char *)data, len,
-                                    (unsigned)h->opts.timeout_ms);
+        e = usb.libusb_control_transfer(s->dev, req_type, req, val, idx, (unsigned char *)data, len,
+                                        (unsigned)h->opts.timeout_ms);
         if (e >= 0) {
             if (got)
                 *got = (size_t)e;
@@ -224,8 +249,8 @@ static int usb_bulk(hal_t *h, uint8_t ep, void *data, size_t len, size_t *got)
         return RIG_EARG;
     if (!s->dev && usb_reconnect(h))
         return RIG_EDISCONNECT;
-    int e = libusb_bulk_transfer(s->dev, ep, (unsigned char *)data, (int)len, &done,
-                                 (unsigned)h->opts.timeout_ms);
+    int e = usb.libusb_bulk_transfer(s->dev, ep, (unsigned char *)data, (int)len, &done,
+                                     (unsigned)h->opts.timeout_ms);
     if (got)
         *got = (size_t)done;
     if (e == 0)
@@ -244,7 +269,7 @@ static void usb_close(hal_t *h)
     hal_usb_t *s = (hal_usb_t *)h;
     drop(s);
     if (s->ctx)
-        libusb_exit(s->ctx);
+        usb.libusb_exit(s->ctx);
     free(s);
 }
 
@@ -266,6 +291,11 @@ int hal_usb_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **out, char *msg
         return RIG_EARG;
     }
     *out = NULL;
+    if (hal_dl_load(&usb_lib)) {
+        if (msg && len)
+            snprintf(msg, len, "%s", hal_dl_error(&usb_lib));
+        return RIG_EUNSUPPORTED;
+    }
     hal_usb_t *s = calloc(1, sizeof *s);
     if (!s) {
         if (msg && len)
@@ -275,7 +305,7 @@ int hal_usb_open(const hal_uri_t *u, const hal_opts_t *o, hal_t **out, char *msg
     s->base.ops = &usb_ops;
     s->base.uri = *u;
     s->base.opts = o ? *o : defaults;
-    int e = libusb_init(&s->ctx);
+    int e = usb.libusb_init(&s->ctx);
     int rc = e ? fail(&s->base, "init", e) : attach(s);
     if (rc) {
         if (msg && len)

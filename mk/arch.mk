@@ -27,7 +27,7 @@ endif
 # $(shell)), and no umockdev testbed (GLib of the build machine).
 ifneq ($(TARGET),)
 HAL_CFLAGS = $(shell PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR) pkg-config --cflags $(HAL_PKGS) 2>/dev/null)
-HAL_LIBS = $(if $(HAL_SRC),$(shell PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR) pkg-config --libs $(HAL_PKGS) 2>/dev/null))
+HAL_LIBS = $(if $(HAL_SRC),$(shell PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR) pkg-config --libs $(HAL_LINK_PKGS) 2>/dev/null))
 override UMOCK_HAVE :=
 endif
 
@@ -40,12 +40,13 @@ QEMU_A64 ?= qemu-aarch64 -L /
 A64 := aarch64-linux-gnu
 # The unit tests run under emulation: the fitter's numerics (basis, stripe
 # accumulation and the solvers against dense references, PCG, refinement,
-# curve fits, Coons bases), IGES files and the dispatch test; about 40 s
+# curve fits, Coons bases), IGES files, the dispatch test and dlopen
+# (test_hal_dl: libm.so.6 through the target's loader); about 40 s
 # under qemu-aarch64 on a busy 2-core machine. Left out for time (each
 # 40 s to several minutes emulated): test_accum, test_quad, test_project,
 # test_points, test_jnl; and the rig, PLC, USB, scan and loop tests, which
 # need sockets, ptys, umockdev and timing and run natively.
-ARCH_EMU_TESTS ?= test_basis test_fit test_pcg test_refine test_curvefit test_coons test_iges \
+ARCH_EMU_TESTS ?= test_basis test_fit test_pcg test_refine test_curvefit test_coons test_iges test_hal_dl \
 	test_dispatch
 ARCH_A64_TESTS ?= $(ARCH_EMU_TESTS)
 ARCH_X86_TESTS ?= $(ARCH_EMU_TESTS)

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 # mk/gev.mk: the GigE Vision laser line profiler (issue 19): hal/hal_gev.c
 # (the driver) and sim/sim_gev.c (cellsim's fake camera) compile against
-# Aravis (Debian libaravis-dev, scripts/deps.sh build), and everything that
-# links hal/ links it. Also build/gev-check (tests/unit/gev_check.c: receives
+# Aravis (Debian libaravis-dev, scripts/deps.sh build). hal_gev loads
+# libaravis at its first open (hal/hal_dl.h, mk/dl.mk); only cellsim, whose
+# fake camera calls Aravis directly, links it. Also build/gev-check (tests/unit/gev_check.c: receives
 # frames through hal_gev and checks them against the part, for
 # tests/cli/profiler.sh) and build/scan-bench (bench/scan_bench.c: the scan
 # benchmark, make bench-scan).
@@ -14,7 +15,7 @@ GEV_HAVE := $(shell $(GEV_PC) --exists $(GEV_PKGS) 2>/dev/null && echo 1)
 # GLib's headers come in as system headers (they are not -Wstrict-prototypes clean).
 GEV_CFLAGS = $(if $(GEV_HAVE),-DCF_HAVE_ARAVIS=1 $(patsubst -I%,-isystem %,$(shell $(GEV_PC) --cflags $(GEV_PKGS) 2>/dev/null)))
 GEV_LIBS = $(if $(GEV_HAVE),$(shell $(GEV_PC) --libs $(GEV_PKGS) 2>/dev/null))
-LIBS += $(GEV_LIBS)
+$(BUILD)/cellsim: LIBS += $(GEV_LIBS)
 
 $(BUILD)/hal/hal_gev.o: HAL_CFLAGS += $(GEV_CFLAGS)
 $(BUILD)/sim/sim_gev.o: HAL_CFLAGS += $(GEV_CFLAGS)

@@ -2,7 +2,8 @@
 # mk/install.mk: what a plant installs (included by the top Makefile).
 #   make install [PREFIX=/usr/local] [DESTDIR=STAGE]   programs, man pages,
 #       the public header, libcellfit.a, cellfit.pc, bash completion, the
-#       systemd unit, the example configuration and the documents
+#       systemd unit, the example configuration and the documents (with
+#       debian-depends: the runtime packages, dlopen'd ones included)
 #   make uninstall [PREFIX=...] [DESTDIR=...]          removes exactly those
 #   make lib      build/libcellfit.a (include/cellfit.h's implementation)
 #   make man      build/man/cellfit.1, cellsim.1, cellfit.conf.5
@@ -51,10 +52,21 @@ $(BUILD)/dist/cellfit.pc: dist/cellfit.pc.in
 $(BUILD)/dist/cellfit.service: dist/cellfit.service.in
 	@mkdir -p $(@D)
 	sed -e 's|@BINDIR@|$(BINDIR)|; s|@SYSCONFDIR@|$(SYSCONFDIR)|; s|@DOCDIR@|$(DOCDIR)|' $< >$@
+# The dlopen'd libraries' packages, as this build names them (mk/dl.mk):
+# each @ID@ becomes ", package" (the first of a line without its comma), or
+# nothing when the build has no such library.
+$(BUILD)/dist/debian-depends: dist/debian-depends.in $(DL_HDR)
+	@mkdir -p $(@D)
+	awk 'NR == FNR { if ($$2 ~ /^HAL_DL_PACKAGE_/) { sub(/^HAL_DL_PACKAGE_/, "", $$2); \
+	  gsub(/"/, "", $$3); p[$$2] = $$3 } next } \
+	  /^[A-Z][a-z]*: / { while (match($$0, /@[A-Z0-9]+@/)) { id = substr($$0, RSTART + 1, RLENGTH - 2); \
+	  $$0 = substr($$0, 1, RSTART - 1) (id in p ? ", " p[id] : "") substr($$0, RSTART + RLENGTH) } \
+	  sub(/: , /, ": ") } { print }' $(DL_HDR) $< >$@
 # Always remade: PREFIX may differ from the last run.
 .PHONY: $(BUILD)/dist/cellfit.pc $(BUILD)/dist/cellfit.service
 
-install: all lib man $(BUILD)/dist/cellfit.pc $(BUILD)/dist/cellfit.service
+install: all lib man $(BUILD)/dist/cellfit.pc $(BUILD)/dist/cellfit.service \
+	  $(BUILD)/dist/debian-depends
 	$(INSTALL) -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(INCLUDEDIR) \
 	  $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 $(DESTDIR)$(DOCDIR)/examples \
 	  $(DESTDIR)$(COMPLETIONDIR) $(DESTDIR)$(UNITDIR) $(DESTDIR)$(SYSCONFDIR)/cellfit
@@ -65,6 +77,7 @@ install: all lib man $(BUILD)/dist/cellfit.pc $(BUILD)/dist/cellfit.service
 	$(INSTALL) -m 644 $(BUILD)/man/cellfit.1 $(BUILD)/man/cellsim.1 $(DESTDIR)$(MANDIR)/man1/
 	$(INSTALL) -m 644 $(BUILD)/man/cellfit.conf.5 $(DESTDIR)$(MANDIR)/man5/
 	$(INSTALL) -m 644 $(DOCS) $(DESTDIR)$(DOCDIR)/
+	$(INSTALL) -m 644 $(BUILD)/dist/debian-depends $(DESTDIR)$(DOCDIR)/
 	$(INSTALL) -m 644 boards/linux-cell/cellfit.conf examples/*.c $(DESTDIR)$(DOCDIR)/examples/
 	$(INSTALL) -m 644 dist/cellfit.bash-completion $(DESTDIR)$(COMPLETIONDIR)/cellfit
 	$(INSTALL) -m 644 $(BUILD)/dist/cellfit.service $(DESTDIR)$(UNITDIR)/

@@ -1,20 +1,17 @@
 # SPDX-License-Identifier: MIT
 # mk/plant.mk: results at the cell (SQLite) and for the plant (PostgreSQL
 # through libpq, MQTT through libmosquitto): host/cell/cf_resdb.c,
-# cf_forward.c, cf_record.c and `cellfit results`. The libraries reach
-# cellfit and the unit tests only; cellsim stays free of them.
+# cf_forward.c, cf_record.c and `cellfit results`. cf_resdb and cf_forward
+# load the libraries at first use (hal/hal_dl.h, mk/dl.mk): nothing links
+# them but test_resdb, which reads its databases with SQLite itself.
 PLANT_PKGS := sqlite3 libpq libmosquitto
 # The target's own libraries decide (a cross build looks in its pkg-config):
 # without them cellfit is built with CF_NO_PLANT (no results.db, no forwarding).
 PLANT_PC := $(if $(TARGET),PKG_CONFIG_LIBDIR=$(ARCH_PKG_LIBDIR)) pkg-config
 PLANT_HAVE := $(shell $(PLANT_PC) --exists $(PLANT_PKGS) 2>/dev/null && echo 1)
 PLANT_CFLAGS := $(if $(PLANT_HAVE),$(shell pkg-config --cflags $(PLANT_PKGS) 2>/dev/null),-DCF_NO_PLANT=1)
-PLANT_LIBS := $(if $(PLANT_HAVE),$(shell $(PLANT_PC) --libs $(PLANT_PKGS) 2>/dev/null))
 $(BUILD)/host/cell/%.o $(BUILD)/host/cmd/%.o $(BUILD)/tests/%.o: CFLAGS += $(PLANT_CFLAGS)
-$(BUILD)/cellfit: LIBS += $(PLANT_LIBS)
-$(TEST_BIN): LIBS += $(PLANT_LIBS)
-# The fuzz targets (mk/fuzz.mk) link every host object, serve's included.
-$(FUZZ_BIN): LIBS += $(PLANT_LIBS)
+$(BUILD)/tests/test_resdb: LIBS += $(if $(PLANT_HAVE),$(shell $(PLANT_PC) --libs sqlite3 2>/dev/null))
 
 .PHONY: test-plant plant-demo
 # tests/cli/plant.sh, plant_tls.sh (TLS to both engines) and record.sh

@@ -9,17 +9,57 @@
 #include "cf_resdb.h"
 #include "cf_resfmt.h"
 #include "cf_thread.h"
+#include "hal_dl.h"
+#include "hal_dl_libs.h"
 #include <libpq-fe.h>
 #include <math.h>
 #include <mosquitto.h>
 #include <pthread.h>
-#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
+
+/* libpq and libmosquitto, loaded when serve forwards to a plant database or
+ * a broker (hal_dl.h): no other command maps them. */
+/* clang-format off */
+#define PQ_SYMS(X) \
+    X(PQclear) \
+    X(PQconnectdbParams) \
+    X(PQerrorMessage) \
+    X(PQexec) \
+    X(PQexecParams) \
+    X(PQfinish) \
+    X(PQresultErrorMessage) \
+    X(PQresultStatus) \
+    X(PQstatus)
+#define MOSQ_SYMS(X) \
+    X(mosquitto_connect) \
+    X(mosquitto_connect_callback_set) \
+    X(mosquitto_destroy) \
+    X(mosquitto_disconnect) \
+    X(mosquitto_disconnect_callback_set) \
+    X(mosquitto_lib_cleanup) \
+    X(mosquitto_lib_init) \
+    X(mosquitto_log_callback_set) \
+    X(mosquitto_loop) \
+    X(mosquitto_new) \
+    X(mosquitto_publish) \
+    X(mosquitto_publish_callback_set) \
+    X(mosquitto_reconnect) \
+    X(mosquitto_strerror) \
+    X(mosquitto_tls_set) \
+    X(mosquitto_username_pw_set) \
+    X(mosquitto_will_set)
+/* clang-format on */
+HAL_DL_TABLE(pq, PQ_SYMS)
+HAL_DL_TABLE(mosq, MOSQ_SYMS)
+static hal_dl_t pq_lib =
+    HAL_DL_LIB(pq, HAL_DL_SONAME_PQ, HAL_DL_PACKAGE_PQ, "forwarding to plant_db (PostgreSQL)");
+static hal_dl_t mosq_lib = HAL_DL_LIB(mosq, HAL_DL_SONAME_MOSQUITTO, HAL_DL_PACKAGE_MOSQUITTO,
+                                      "forwarding to mqtt (the broker)");
 
 #define FWD_POLL_MS 50    /* outbox poll and MQTT loop period */
 #define FWD_ACK_S 10.0    /* a QoS 1 message without PUBACK is sent again after this */
@@ -175,7 +215,7 @@ static const char *const pg_create =
 static void pg_close(cf_forward_t *f)
 {
     if (f->pg)
-        PQfinish(f->pg);
+        pq.PQfinish(f->pg);
     f->pg = NULL;
 }
 
@@ -196,18 +236,18 @@ static int pg_connect(cf_forward_t *f, double now)
     const char *val[] = {f->o.plant_db, "5", "cellfit", f->o.pg_password, NULL};
     if (!f->o.pg_password)
         kw[3] = NULL;
-    f->pg = PQconnectdbParams(kw, val, 1);
-    if (!f->pg || PQstatus(f->pg) != CONNECTION_OK) {
+    f->pg = pq.PQconnectdbParams(kw, val, 1);
+    if (!f->pg || pq.PQstatus(f->pg) != CONNECTION_OK) {
         char why[256];
-        snprintf(why, sizeof why, "%s", f->pg ? PQerrorMessage(f->pg) : "out of memory");
+        snprintf(why, sizeof why, "%s", f->pg ? pq.PQerrorMessage(f->pg) : "out of memory");
         why[strcspn(why, "\n")] = 0;
         pg_down(f, why, now);
         return -1;
     }
-    PGresult *r = PQexec(f->pg, pg_create);
-    if (PQresultStatus(r) != PGRES_COMMAND_OK) /* another cell may be creating it: go on */
-        cf_log(CF_LOG_DEBUG, "forward: create jobs: %s", PQresultErrorMessage(r));
-    PQclear(r);
+    PGresult *r = pq.PQexec(f->pg, pg_create);
+    if (pq.PQresultStatus(r) != PGRES_COMMAND_OK) /* another cell may be creating it: go on */
+        cf_log(CF_LOG_DEBUG, "forward: create jobs: %s", pq.PQresultErrorMessage(r));
+    pq.PQclear(r);
     char m[512];
     cf_forward_mask(f->o.plant_db, m, sizeof m);
     cf_log(CF_LOG_INFO, "forward: plant database %s connected", m);
@@ -252,7 +292,7 @@ static int pg_insert(cf_forward_t *f, const cf_resdb_job_t *j, char *err, size_t
     TXT(j->journal_path);
     TXT(j->journal_sha256);
 #undef TXT
-    PGresult *r = PQexecParams(
+    PGresult *r = pq.PQexecParams(
         f->pg,
         "INSERT INTO jobs (job_uuid, cell_id, part_number, part_id, program, result_seq, "
         "command, started_at, ended_at, state, error_code, fit_status, rms, max_dev, min_dev, "
@@ -261,12 +301,12 @@ static int pg_insert(cf_forward_t *f, const cf_resdb_job_t *j, char *err, size_t
         "$6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23, "
         "$24, $25) ON CONFLICT (job_uuid) DO NOTHING",
         k, NULL, v, NULL, NULL, 0);
-    int ok = PQresultStatus(r) == PGRES_COMMAND_OK;
+    int ok = pq.PQresultStatus(r) == PGRES_COMMAND_OK;
     if (!ok) {
-        snprintf(err, el, "%s", PQresultErrorMessage(r));
+        snprintf(err, el, "%s", pq.PQresultErrorMessage(r));
         err[strcspn(err, "\n")] = 0;
     }
-    PQclear(r);
+    pq.PQclear(r);
     return ok ? 0 : -1;
 }
 
@@ -289,7 +329,7 @@ static void pg_step(cf_forward_t *f, double now)
             cf_resdb_delivered(f->db, e.id);
             continue;
         }
-        if (PQstatus(f->pg) != CONNECTION_OK) {
+        if (pq.PQstatus(f->pg) != CONNECTION_OK) {
             pg_down(f, err, now); /* the entry waits for the reconnection */
             break;
         }
@@ -369,19 +409,19 @@ static void mq_why(const cf_forward_t *f, int rc, const char *what, char *why, s
         snprintf(why, n,
                  "TLS handshake failed: %s (is the broker's certificate signed by mqtt_cafile, "
                  "for this host name?)",
-                 *f->mq_err ? f->mq_err : mosquitto_strerror(rc));
+                 *f->mq_err ? f->mq_err : mosq.mosquitto_strerror(rc));
     else if (rc == MOSQ_ERR_ERRNO)
         snprintf(why, n, "connection refused or unreachable");
     else
-        snprintf(why, n, "%s", rc ? mosquitto_strerror(rc) : what);
+        snprintf(why, n, "%s", rc ? mosq.mosquitto_strerror(rc) : what);
 }
 
 static int mq_connect(cf_forward_t *f, double now)
 {
     char why[400];
     f->mq_err[0] = 0;
-    int rc = f->mq_ever ? mosquitto_reconnect(f->mq)
-                        : mosquitto_connect(f->mq, f->mq_host, f->mq_port, 30);
+    int rc = f->mq_ever ? mosq.mosquitto_reconnect(f->mq)
+                        : mosq.mosquitto_connect(f->mq, f->mq_host, f->mq_port, 30);
     if (rc != MOSQ_ERR_SUCCESS) {
         mq_why(f, rc, "", why, sizeof why);
         mq_down(f, why, now);
@@ -391,7 +431,7 @@ static int mq_connect(cf_forward_t *f, double now)
     /* CONNACK arrives in the loop; until then publishing is queued by the
      * library, which is fine, but wait for it to know the broker is up. */
     for (int i = 0; i < 40 && !f->mq_connected && rc == MOSQ_ERR_SUCCESS; i++)
-        rc = mosquitto_loop(f->mq, FWD_POLL_MS, 1);
+        rc = mosq.mosquitto_loop(f->mq, FWD_POLL_MS, 1);
     if (!f->mq_connected) {
         mq_why(f, rc, "no CONNACK", why, sizeof why);
         mq_down(f, why, now);
@@ -416,7 +456,7 @@ static void mq_status(cf_forward_t *f)
         return;
     status_payload(f, st, buf, sizeof buf);
     int mid;
-    if (mosquitto_publish(f->mq, &mid, f->topic_st, (int)strlen(buf), buf, 1, true) ==
+    if (mosq.mosquitto_publish(f->mq, &mid, f->topic_st, (int)strlen(buf), buf, 1, true) ==
         MOSQ_ERR_SUCCESS) {
         f->fl[f->nfl++] = (inflight_t){mid, 0};
         snprintf(f->sent_state, sizeof f->sent_state, "%s", st);
@@ -446,9 +486,9 @@ static void mq_step(cf_forward_t *f, double now)
             cf_resdb_delivered(f->db, e.id);
             continue;
         }
-        int rc = mosquitto_publish(f->mq, &mid, f->topic_res, len, buf, 1, false);
+        int rc = mosq.mosquitto_publish(f->mq, &mid, f->topic_res, len, buf, 1, false);
         if (rc != MOSQ_ERR_SUCCESS) {
-            mq_down(f, mosquitto_strerror(rc), now);
+            mq_down(f, mosq.mosquitto_strerror(rc), now);
             break;
         }
         f->fl[f->nfl++] = (inflight_t){mid, e.id};
@@ -471,7 +511,7 @@ static void *fwd_main(void *arg)
         if (f->mq) {
             mq_step(f, now);
             if (f->mq_connected) {
-                int rc = mosquitto_loop(f->mq, FWD_POLL_MS, 1);
+                int rc = mosq.mosquitto_loop(f->mq, FWD_POLL_MS, 1);
                 if (rc != MOSQ_ERR_SUCCESS || !f->mq_connected) {
                     char why[400];
                     mq_why(f, rc, "disconnected", why, sizeof why);
@@ -504,13 +544,13 @@ static void mq_free(cf_forward_t *f)
         pthread_mutex_unlock(&f->mu);
         mq_status(f);
         for (int i = 0; i < 20 && f->nfl > 0; i++)
-            if (mosquitto_loop(f->mq, FWD_POLL_MS, 1) != MOSQ_ERR_SUCCESS)
+            if (mosq.mosquitto_loop(f->mq, FWD_POLL_MS, 1) != MOSQ_ERR_SUCCESS)
                 break;
-        mosquitto_disconnect(f->mq);
-        mosquitto_loop(f->mq, FWD_POLL_MS, 1);
+        mosq.mosquitto_disconnect(f->mq);
+        mosq.mosquitto_loop(f->mq, FWD_POLL_MS, 1);
     }
-    mosquitto_destroy(f->mq);
-    mosquitto_lib_cleanup();
+    mosq.mosquitto_destroy(f->mq);
+    mosq.mosquitto_lib_cleanup();
     f->mq = NULL;
 }
 
@@ -520,27 +560,27 @@ static int mq_setup(cf_forward_t *f, char *msg, size_t ml)
                sizeof f->prefix);
     snprintf(f->topic_res, sizeof f->topic_res, "%s/%s/result", f->prefix, f->cell);
     snprintf(f->topic_st, sizeof f->topic_st, "%s/%s/status", f->prefix, f->cell);
-    mosquitto_lib_init();
+    mosq.mosquitto_lib_init();
     char id[96];
     snprintf(id, sizeof id, "cellfit-%s", f->cell);
-    f->mq = mosquitto_new(id, true, f);
+    f->mq = mosq.mosquitto_new(id, true, f);
     if (!f->mq)
         return snprintf(msg, ml, "mqtt: cannot create the client"), -1;
-    mosquitto_connect_callback_set(f->mq, on_connect);
-    mosquitto_disconnect_callback_set(f->mq, on_disconnect);
-    mosquitto_publish_callback_set(f->mq, on_publish);
-    mosquitto_log_callback_set(f->mq, on_log);
+    mosq.mosquitto_connect_callback_set(f->mq, on_connect);
+    mosq.mosquitto_disconnect_callback_set(f->mq, on_disconnect);
+    mosq.mosquitto_publish_callback_set(f->mq, on_publish);
+    mosq.mosquitto_log_callback_set(f->mq, on_log);
     char will[256];
     status_payload(f, "offline", will, sizeof will);
-    mosquitto_will_set(f->mq, f->topic_st, (int)strlen(will), will, 1, true);
+    mosq.mosquitto_will_set(f->mq, f->topic_st, (int)strlen(will), will, 1, true);
     const char *user = f->o.mqtt_user ? f->o.mqtt_user : getenv("CELLFIT_MQTT_USERNAME");
     const char *pw = f->o.mqtt_password ? f->o.mqtt_password : getenv("CELLFIT_MQTT_PASSWORD");
     if (user)
-        mosquitto_username_pw_set(f->mq, user, pw);
+        mosq.mosquitto_username_pw_set(f->mq, user, pw);
     if (f->mq_tls || f->o.mqtt_cafile) {
-        int rc =
-            mosquitto_tls_set(f->mq, f->o.mqtt_cafile, f->o.mqtt_cafile ? NULL : "/etc/ssl/certs",
-                              f->o.mqtt_certfile, f->o.mqtt_keyfile, NULL);
+        int rc = mosq.mosquitto_tls_set(f->mq, f->o.mqtt_cafile,
+                                        f->o.mqtt_cafile ? NULL : "/etc/ssl/certs",
+                                        f->o.mqtt_certfile, f->o.mqtt_keyfile, NULL);
         if (rc != MOSQ_ERR_SUCCESS) /* a file that cannot be read, or a key without its cert */
             return snprintf(msg, ml,
                             "mqtt TLS: mqtt_cafile %s, mqtt_certfile %s, mqtt_keyfile %s: %s "
@@ -548,7 +588,7 @@ static int mq_setup(cf_forward_t *f, char *msg, size_t ml)
                             f->o.mqtt_cafile ? f->o.mqtt_cafile : "(system: /etc/ssl/certs)",
                             f->o.mqtt_certfile ? f->o.mqtt_certfile : "(none)",
                             f->o.mqtt_keyfile ? f->o.mqtt_keyfile : "(none)",
-                            mosquitto_strerror(rc)),
+                            mosq.mosquitto_strerror(rc)),
                    -1;
     }
     return 0;
@@ -559,6 +599,11 @@ int cf_forward_start(const cf_forward_opts_t *o, cf_forward_t **out, char *msg, 
     *out = NULL;
     if (cf_forward_check(o, msg, ml))
         return CF_FORWARD_EARG;
+    /* The libraries first: a missing one says what to install, nothing started. */
+    hal_dl_t *need[2] = {o->plant_db ? &pq_lib : NULL, o->mqtt ? &mosq_lib : NULL};
+    for (int i = 0; i < 2; i++)
+        if (need[i] && hal_dl_load(need[i]))
+            return snprintf(msg, ml, "%s", hal_dl_error(need[i])), CF_FORWARD_ESTART;
     cf_forward_t *f = calloc(1, sizeof *f);
     if (!f)
         return snprintf(msg, ml, "forwarder: out of memory"), CF_FORWARD_ESTART;

@@ -21,7 +21,8 @@ enum {
     CF_RESDB_ESCHEMA = -2,   /* a newer schema, or a migration failed */
     CF_RESDB_EIO = -3,       /* a statement failed (disk full, locked too long) */
     CF_RESDB_ENOTFOUND = -4, /* no such job */
-    CF_RESDB_ENOTDB = -5     /* a file, but not a results database */
+    CF_RESDB_ENOTDB = -5,    /* a file, but not a results database */
+    CF_RESDB_ENOLIB = -6     /* SQLite is not installed (msg names the package) */
 };
 const char *cf_resdb_strerror(int err);
 

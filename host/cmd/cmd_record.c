@@ -106,6 +106,8 @@ int cmd_record(const char *cmd, const cmd_record_t *r, const cmd_record_job_t *j
     /* An existing file must be ours: cf_resdb_open would migrate anything. */
     struct stat sb;
     int ce = stat(path, &sb) ? CF_RESDB_OK : cf_resdb_check(path, msg, sizeof msg);
+    if (ce == CF_RESDB_ENOLIB) /* msg names the package to install */
+        return cli_error(cmd, CLI_FAIL, "--record: %s; the job is not recorded", msg);
     if (ce)
         return cli_error(cmd, CLI_FAIL,
                          "--record: %s; the job is not recorded (--db: a results database, "

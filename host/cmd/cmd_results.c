@@ -149,6 +149,8 @@ int cmd_results(int argc, char **argv)
     int ce = cf_resdb_check(dbpath, msg, sizeof msg);
     if (ce == CF_RESDB_ESCHEMA)
         return cli_error(CMD, CLI_USAGE, "%s: query it with a cellfit that new", msg);
+    if (ce == CF_RESDB_ENOLIB) /* msg names the package: no hint about --db */
+        return cli_error(CMD, CLI_FAIL, "%s", msg);
     if (ce)
         return cli_error(CMD, ce == CF_RESDB_EOPEN ? CLI_FAIL : CLI_USAGE,
                          "%s; --db takes the results.db that `cellfit serve` or `cellfit fit "

@@ -1,7 +1,8 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
 # tests/pkg/install.sh BUILD: what a plant's IT does with cellfit: `make
-# install DESTDIR=STAGE PREFIX=/usr` lays out the tree; the examples build
+# install DESTDIR=STAGE PREFIX=/usr` lays out the tree (debian-depends names
+# the packages of the libraries cellfit loads at first use); the examples build
 # against it with pkg-config and run (an exact fit from an array, a journal
 # read back and compared with `cellfit journal info`); every man page
 # renders with man -l; every option `--help` shows is in the man page;
@@ -34,6 +35,16 @@ for d in $(sed -n 's#^\(results_dir[.0-9]*\|journal_dir\) *= */var/lib/\(.*\)#\2
 done
 doc=$(sed -n 's#^Documentation=.*file://\([^ ]*\).*#\1#p' "$U")
 [ -n "$doc" ] && [ -f "$S$doc" ] && ok "unit's Documentation= is installed ($doc)" || no "Documentation= '$doc' not installed"
+# The libraries loaded at first use (mk/dl.mk) are no ELF dependency: the
+# installed debian-depends lists each one's package, and cellfit links none.
+D=$S/usr/share/doc/cellfit/debian-depends
+for p in $(sed -n 's/^#define HAL_DL_PACKAGE_[A-Z0-9]* "\(.*\)"/\1/p' "$B/gen/hal_dl_libs.h"); do
+    grep -Eq "^(Depends|Recommends):(.*,)? $p(,|\$)" "$D" && ok "debian-depends lists $p" ||
+        no "debian-depends lacks $p: $(grep -v '^#' "$D" 2>&1)"
+done
+for s in $(sed -n 's/^#define HAL_DL_SONAME_[A-Z0-9]* "\(.*\)"/\1/p' "$B/gen/hal_dl_libs.h"); do
+    readelf -d "$S/usr/bin/cellfit" | grep -q "NEEDED.*\[$s\]" && no "installed cellfit links $s"
+done
 "$S/usr/bin/cellfit" --version >"$T/v" 2>&1 && grep -q '^cellfit [0-9]' "$T/v" &&
     ok "installed cellfit --version: $(head -1 "$T/v")" || no "installed cellfit --version"
 

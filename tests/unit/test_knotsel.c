@@ -510,26 +510,67 @@ static void test_verdict(void **state)
     assert_string_equal(nf_loopctl_str(NF_LOOPCTL_CONTINUE), "continue");
 }
 
-/* The round budget, by hand: 100 control points more brought 4 points of
- * share; 1 point is missing, so 25 more, within [50, 200] -> 50; a round
- * that gained nothing may double; never under one knot line. */
+/* The round budget, by hand: 100 control points more brought 20 points of
+ * share; 9 are missing, so 45 more, within [50, 200] -> 50 (more than
+ * NF_LOOPCTL_FINE_GAP missing: FITPACK's half-step floor); a round that
+ * gained nothing may double; never under one knot line. */
 static void test_budget(void **state)
 {
     (void)state;
     nf_loopctl_t c;
     nf_loopctl_init(&c);
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 0); /* no history: no limit */
-    nf_loopctl_record(&c, 94.0, 400);
+    nf_loopctl_record(&c, 70.0, 400);
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 0);
-    nf_loopctl_record(&c, 98.0, 500);
+    nf_loopctl_record(&c, 90.0, 500);
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 50);
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 80), 80);
-    nf_loopctl_record(&c, 98.1, 550); /* 50 more for 0.1 point: est 450 -> 2 x 50 */
+    nf_loopctl_record(&c, 90.1, 550); /* 50 more for 0.1 point: est 4,450 -> 2 x 50 */
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 100);
-    nf_loopctl_record(&c, 97.0, 650); /* lost share: twice the last step */
+    nf_loopctl_record(&c, 89.0, 650); /* lost share: twice the last step */
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 200);
-    nf_loopctl_record(&c, 98.8, 700); /* 1.8 for 50, 0.2 missing: est 5.6 -> 25 */
+}
+
+/* Near the goal (at most NF_LOOPCTL_FINE_GAP points missing) the budget
+ * is the estimate, not half the last step: the last round takes the knot
+ * lines the missing share needs (cliffs at 4,047 points: 2 lines where 1
+ * met). By hand: 100 more brought 4 points, 1 missing: est 25 (the floor
+ * said 50); 50 more brought 1.8, 0.2 missing: est 5.6 -> one line, 10 (the
+ * floor said 25); a lost round still doubles. */
+static void test_budget_near_goal(void **state)
+{
+    (void)state;
+    nf_loopctl_t c;
+    nf_loopctl_init(&c);
+    nf_loopctl_record(&c, 94.0, 400);
+    nf_loopctl_record(&c, 98.0, 500);
     assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 25);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 30), 30); /* one knot line at least */
+    nf_loopctl_record(&c, 97.0, 600);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 200);
+    nf_loopctl_record(&c, 98.8, 650);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 10);
+    /* After a fine step that misses the goal: 25 more brought 0.9 of 1
+     * missing: est 2.8, one line (10) again; 25 more that brought 0.2 of 1
+     * missing: est 100, capped by twice the step before the fine one
+     * (200), not twice the fine step (50). */
+    nf_loopctl_init(&c);
+    nf_loopctl_record(&c, 94.0, 400);
+    nf_loopctl_record(&c, 98.0, 500);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 25);
+    nf_loopctl_record(&c, 98.9, 525);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 10);
+    nf_loopctl_init(&c);
+    nf_loopctl_record(&c, 94.0, 400);
+    nf_loopctl_record(&c, 98.0, 500);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 25);
+    nf_loopctl_record(&c, 98.2, 525);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 100);
+    /* 5.5 missing: the floor again (100 for 13.5 points: est 40.7 -> 50) */
+    nf_loopctl_init(&c);
+    nf_loopctl_record(&c, 80.0, 400);
+    nf_loopctl_record(&c, 93.5, 500);
+    assert_int_equal(nf_loopctl_budget(&c, 99.0, 10), 50);
 }
 
 /* alpha per level: closed form on uniform nets, and the fit with the scaled
@@ -689,12 +730,19 @@ static void test_loop_bump(void **state)
 int main(void)
 {
     const struct CMUnitTest t[] = {
-        cmocka_unit_test(test_counts),     cmocka_unit_test(test_concentrated),
-        cmocka_unit_test(test_sides),      cmocka_unit_test(test_side_balance),
-        cmocka_unit_test(test_merge),      cmocka_unit_test(test_rows),
-        cmocka_unit_test(test_gain_order), cmocka_unit_test(test_caps),
-        cmocka_unit_test(test_verdict),    cmocka_unit_test(test_budget),
-        cmocka_unit_test(test_alpha),      cmocka_unit_test(test_loop_bump),
+        cmocka_unit_test(test_counts),
+        cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_sides),
+        cmocka_unit_test(test_side_balance),
+        cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_rows),
+        cmocka_unit_test(test_gain_order),
+        cmocka_unit_test(test_caps),
+        cmocka_unit_test(test_verdict),
+        cmocka_unit_test(test_budget),
+        cmocka_unit_test(test_budget_near_goal),
+        cmocka_unit_test(test_alpha),
+        cmocka_unit_test(test_loop_bump),
     };
     return cmocka_run_group_tests(t, NULL, NULL);
 }
