@@ -322,10 +322,12 @@ static void test_raw_halves(void **state)
 
 /* ------------------------------------------------------------ the job */
 
-static int job(const char *path, int cores, int threads, cf_fitjob_result_t *r, char *m, size_t ml)
+static int job_r(const char *path, int cores, int threads, int robust, cf_fitjob_result_t *r,
+                 char *m, size_t ml)
 {
     cf_fitjob_opts_t o;
     cf_fitjob_defaults(&o);
+    o.robust = robust;
     o.alpha = 0.1;
     o.beta = 0.001;
     o.solver = NF_SOLVER_CHOL;
@@ -347,6 +349,11 @@ static int job(const char *path, int cores, int threads, cf_fitjob_result_t *r, 
     cf_points_close(pr);
     cf_fitjob_close(j);
     return rc;
+}
+
+static int job(const char *path, int cores, int threads, cf_fitjob_result_t *r, char *m, size_t ml)
+{
+    return job_r(path, cores, threads, 0, r, m, ml);
 }
 
 static double max_cp(const nf_surf_t *s)
@@ -397,6 +404,18 @@ static void test_job_two_cores(void **state)
         assert_int_equal(r2.threads, 2);
         assert_true(r2.max_abs == r1.max_abs);
         assert_near(r2.rms, r1.rms, 1e-12 * r1.rms);
+        cf_fitjob_result_free(&r1);
+        cf_fitjob_result_free(&r2);
+        /* Robust: the scale from the |d| histogram of the halves, merged by
+         * its bins, is one thread's exactly, and so are the weights and the
+         * reweighted net. */
+        if (job_r(p[f], 1, 2, 1, &r1, m, sizeof m) || job_r(p[f], 2, 2, 1, &r2, m, sizeof m))
+            fail_msg("%s", m);
+        assert_true(r1.sigma > 0);
+        assert_true(r2.sigma == r1.sigma);
+        assert_int_equal(r2.outliers, r1.outliers);
+        assert_memory_equal(r1.surf.cp, r2.surf.cp, sizeof(double) * 3 * NU * NV);
+        assert_int_equal(r2.threads, 2);
         cf_fitjob_result_free(&r1);
         cf_fitjob_result_free(&r2);
     }
