@@ -423,6 +423,30 @@ static void test_job_two_cores(void **state)
     unlink(p[1]);
 }
 
+/* One line (an empty second half) and a few points, through the job:
+ * two cores give one core's net. */
+static void test_job_small(void **state)
+{
+    (void)state;
+    char p[700], m[1024];
+    path_of(p, sizeof p, "one.uvxyz");
+    for (long n = 1; n <= 3; n += 2) {
+        write_text(p, n, 0, 0, 0);
+        cf_fitjob_result_t r1, r2;
+        if (job(p, 1, 1, &r1, m, sizeof m) || job(p, 2, 1, &r2, m, sizeof m))
+            fail_msg("%s", m);
+        assert_int_equal(r2.points, n);
+        assert_int_equal(r2.threads, 2);
+        double s = max_cp(&r1.surf);
+        for (long i = 0; i < 3L * NU * NV; i++)
+            assert_near(r2.surf.cp[i], r1.surf.cp[i], 1e-12 * s);
+        assert_near(r2.max_abs, r1.max_abs, 1e-12 * s);
+        cf_fitjob_result_free(&r1);
+        cf_fitjob_result_free(&r2);
+    }
+    unlink(p);
+}
+
 /* The job's error on two cores is one core's: the same code and text. */
 static void same_error(const char *path)
 {
@@ -474,7 +498,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_text_halves), cmocka_unit_test(test_small_files),
         cmocka_unit_test(test_raw_halves),  cmocka_unit_test(test_job_two_cores),
-        cmocka_unit_test(test_job_errors),
+        cmocka_unit_test(test_job_errors),  cmocka_unit_test(test_job_small),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
