@@ -67,9 +67,9 @@
  * (nf_knotsel_opts_t.side_depth). One halving divides a resolved feature's
  * misfit by 4 or more (h^2; a cubic's h^4 once smooth), so shallower misfit
  * comes within tol by plain bisection, and side knots there only crowd it
- * (the holes field's hill from a 9 x 7 net on: 1.3 to 3.3 tol, four u knots
+ * (the holes field's hill from a 9 x 7 net on: 1.2 to 3.3 tol, four u knots
  * within 5 mm); a feature narrower than the span (the 1 mm ridge) leaves
- * mostly 5 to 11 tol until it is bracketed (docs/loop.md). */
+ * 7 to 18 tol on a 7 x 7 net, 3 to 11 on 27 x 27 (docs/loop.md). */
 #define NF_KNOTSEL_SIDE_DEPTH 4.0
 /* Candidates nf_knotsel_choose may list: NF_KNOTSEL_PER_SPAN per span. */
 #define NF_KNOTSEL_CANDS(nu, nv, p, q) (NF_KNOTSEL_PER_SPAN * ((nu) - (p) + (nv) - (q)))
