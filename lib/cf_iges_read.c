@@ -1003,6 +1003,9 @@ static int ig_real_at(const ig_rd_t *c, const ig_par_t *p, size_t *pos, double *
         q++;
         any = 1;
     }
+    /* Coordinates have a few integer digits: one at a time is cheaper. */
+    for (; nd < 3 && ig_isdigit(*q); q++, nd++, any = 1)
+        m = m * 10 + (uint64_t)(*q - '0');
 #if IG_SWAR
     for (int n = 8; n == 8 && nd <= 11 && ig_isdigit(*q);) { /* nd + 8 <= 19: none dropped */
         uint64_t dv = 0;
