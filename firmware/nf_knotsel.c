@@ -207,9 +207,11 @@ static int best_split(const double *sp, double t0, double t1, int b0, int b1, in
  * misfit's centroid, no closer than a quarter side to the side's ends
  * (rounded up: at least one sub-bin), scored by that side's misfit (level
  * 1): a wide span with much misfit is split in up to four in one round, a
- * narrow feature bracketed, instead of one halving per round. */
+ * narrow feature bracketed, instead of one halving per round; only where
+ * the misfit is deeper than depth tol (rms out of tolerance; depth <= 0:
+ * always). */
 static int candidates(const nf_knotsel_t *a, int dir, int i, int min_pts, int min_rows,
-                      int per_span, double cost, nf_knotsel_cand_t *c, int *blocked)
+                      int per_span, double depth, double cost, nf_knotsel_cand_t *c, int *blocked)
 {
     const nf_surf_t *s = a->s;
     const int deg = dir ? s->q : s->p;
@@ -227,6 +229,10 @@ static int candidates(const nf_knotsel_t *a, int dir, int i, int min_pts, int mi
     }
     c[0] = (nf_knotsel_cand_t){dir, i, x, g / cost, 0};
     int n = 1;
+    /* Shallow misfit (rms out of tolerance at most depth tol): bisection
+     * mends it; sides would crowd a broad feature (NF_KNOTSEL_SIDE_DEPTH). */
+    if (depth > 0.0 && !(g > depth * depth * a->tol * a->tol * sp[S_OUT]))
+        return n;
     /* The sides, the one holding more misfit first (per_span 2: that one). */
     double gl = 0.0;
     for (int b = 0; b < j; b++)
@@ -274,7 +280,7 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
     if (!a || !out || !n || !status || cap < 0)
         return NF_EARG;
     const nf_surf_t *s = a->s;
-    nf_knotsel_opts_t o = {0, 0, 0, 0.0, 0.0, 0, 0, 0};
+    nf_knotsel_opts_t o = {0, 0, 0, 0.0, 0.0, 0, 0, 0, 0.0};
     if (opts)
         o = *opts;
     long max_cp = o.max_cp > 0 && o.max_cp < NF_MAX_CP ? o.max_cp : NF_MAX_CP;
@@ -291,6 +297,7 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
      * control point line: few). Room for the first of each span is the
      * caller's promise; a second knot without room waits a round. */
     const int per_span = o.per_span > 0 ? o.per_span : NF_KNOTSEL_PER_SPAN;
+    const double depth = o.side_depth != 0.0 ? o.side_depth : NF_KNOTSEL_SIDE_DEPTH;
     int m = 0, blocked_any = 0, left = (s->nu - s->p) + (s->nv - s->q); /* spans to go */
     for (int dir = 0; dir < 2; dir++) {
         const int deg = dir ? s->q : s->p, ns = dir ? s->nv - s->q : s->nu - s->p;
@@ -300,7 +307,7 @@ int nf_knotsel_choose(const nf_knotsel_t *a, const nf_knotsel_opts_t *opts, nf_k
             nf_knotsel_cand_t cs[3];
             int blocked;
             const int nc = candidates(a, dir, i, min_pts, min_rows, per_span < 3 ? per_span : 3,
-                                      cost, cs, &blocked);
+                                      depth, cost, cs, &blocked);
             blocked_any |= blocked;
             left--;
             for (int q = 0; q < nc; q++) {

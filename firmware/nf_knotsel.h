@@ -23,7 +23,8 @@
  *    sub-bin boundary nearest the misfit's centroid, no closer than a
  *    quarter span to the span's ends (and one on each side of it with
  *    misfit, at that side's centroid, no closer than a quarter side to
- *    the side's ends: NF_KNOTSEL_PER_SPAN), and only where each new span
+ *    the side's ends: NF_KNOTSEL_PER_SPAN, where the span's misfit is deep:
+ *    NF_KNOTSEL_SIDE_DEPTH), and only where each new span
  *    holds at least min_pts points and min_rows data rows (a knot between
  *    two scan rows with no data between them would leave control points
  *    that no point determines: the ripple between rows of issue 14). Candidates are
@@ -61,6 +62,15 @@
  * side's ends), the side holding more first (2: that side only); FITPACK's
  * several knots per interval. */
 #define NF_KNOTSEL_PER_SPAN 3
+/* Side knots only where the span's misfit is deep: the root mean square
+ * distance of its points out of tolerance above this many tol
+ * (nf_knotsel_opts_t.side_depth). One halving divides a resolved feature's
+ * misfit by 4 or more (h^2; a cubic's h^4 once smooth), so shallower misfit
+ * comes within tol by plain bisection, and side knots there only crowd it
+ * (the holes field's hill from a 9 x 7 net on: 1.2 to 3.3 tol, four u knots
+ * within 5 mm); a feature narrower than the span (the 1 mm ridge) leaves
+ * 7 to 18 tol on a 7 x 7 net, 3 to 11 on 27 x 27 (docs/loop.md). */
+#define NF_KNOTSEL_SIDE_DEPTH 4.0
 /* Candidates nf_knotsel_choose may list: NF_KNOTSEL_PER_SPAN per span. */
 #define NF_KNOTSEL_CANDS(nu, nv, p, q) (NF_KNOTSEL_PER_SPAN * ((nu) - (p) + (nv) - (q)))
 /* Data rows each new span must hold by default (lower bound from the
@@ -100,15 +110,17 @@ double nf_knotsel_span_rss(const nf_knotsel_t *a, int dir, int i);
 int nf_knotsel_merge_span(nf_knotsel_t *a, const nf_knotsel_t *b, int dir, int i);
 
 typedef struct nf_knotsel_opts {
-    long max_cp;   /* cap on Nu Nv after the round; <= 0: the board's NF_MAX_CP */
-    int min_rows;  /* data rows each new span must hold; <= 0: NF_KNOTSEL_MIN_ROWS */
-    int min_pts;   /* points each new span must hold; <= 0: the degree + 1 */
-    double ratio;  /* <= 0: NF_KNOTSEL_RATIO */
-    double share;  /* <= 0: NF_KNOTSEL_SHARE */
-    int max_knots; /* knots a round may insert in all; <= 0: no limit */
-    long max_add;  /* control points a round may add (nf_loopctl_budget); <= 0: no limit;
-                      the best candidate is always taken */
-    int per_span;  /* knots a span may get in a round (1 .. 3); <= 0: NF_KNOTSEL_PER_SPAN */
+    long max_cp;       /* cap on Nu Nv after the round; <= 0: the board's NF_MAX_CP */
+    int min_rows;      /* data rows each new span must hold; <= 0: NF_KNOTSEL_MIN_ROWS */
+    int min_pts;       /* points each new span must hold; <= 0: the degree + 1 */
+    double ratio;      /* <= 0: NF_KNOTSEL_RATIO */
+    double share;      /* <= 0: NF_KNOTSEL_SHARE */
+    int max_knots;     /* knots a round may insert in all; <= 0: no limit */
+    long max_add;      /* control points a round may add (nf_loopctl_budget); <= 0: no limit;
+                          the best candidate is always taken */
+    int per_span;      /* knots a span may get in a round (1 .. 3); <= 0: NF_KNOTSEL_PER_SPAN */
+    double side_depth; /* side knots only where the span's rms out of tolerance exceeds
+                          side_depth tol; 0: NF_KNOTSEL_SIDE_DEPTH; < 0: wherever misfit */
 } nf_knotsel_opts_t;
 
 /* One knot line to insert. */

@@ -23,14 +23,21 @@
 
 /* --------------------------------------------------------------- output */
 
+#define IG_WBLK (81 * 64) /* lines gathered before an fwrite */
+
 typedef struct ig_w {
     FILE *f; /* NULL: only count the lines */
     char sect;
-    size_t width; /* data columns of a free-format line: 72 (S, G) or 64 (P) */
-    char cur[81];
+    size_t width;  /* data columns of a free-format line: 72 (S, G) or 64 (P) */
+    char cur[128]; /* the line being filled, with room for cf_fmt17_iges's word writes */
     size_t curlen;
-    long seq; /* lines of this section so far */
-    long de;  /* P lines: DE number of the entity they belong to (0: 1) */
+    long seq;       /* lines of this section so far */
+    long de;        /* P lines: DE number of the entity they belong to (0: 1) */
+    char seqtxt[7]; /* columns 74-80: seq % 10^7 right-justified, counted up */
+    long detxt_of;  /* the de that detxt holds, -1 none yet */
+    char detxt[8];  /* columns 65-72 of a P line */
+    size_t blen;
+    char blk[IG_WBLK]; /* whole lines not yet written */
 } ig_w_t;
 
 /* x right-aligned in the w columns ending before end (x >= 0 fits). */
@@ -40,62 +47,116 @@ static void ig_rjust(char *end, int w, long x)
         end[-1 - i] = i > 0 && x == 0 ? ' ' : (char)('0' + x % 10);
 }
 
+static void ig_winit(ig_w_t *w, FILE *f, char sect, size_t width)
+{
+    w->f = f;
+    w->sect = sect;
+    w->width = width;
+    memset(w->cur, ' ', sizeof w->cur);
+    w->curlen = 0;
+    w->seq = 0;
+    w->de = 0;
+    memset(w->seqtxt, ' ', sizeof w->seqtxt);
+    w->seqtxt[6] = '0';
+    w->detxt_of = -1;
+    w->blen = 0;
+}
+
+/* Lines gathered so far to the file (one fwrite per IG_WBLK bytes: an
+ * fwrite a line cost about 140 instructions, a quarter of a line's). */
+static void ig_wblk(ig_w_t *w)
+{
+    if (w->f && w->blen)
+        fwrite(w->blk, 1, w->blen, w->f);
+    w->blen = 0;
+}
+
 static void ig_wline(ig_w_t *w, const char *data, size_t n)
 {
-    char line[96];
     w->seq++;
     if (!w->f)
         return;
-    memset(line, ' ', 80);
-    memcpy(line, data, n < 72 ? n : 72);
-    /* The same bytes as "%8ld" and "%c%7ld\n" (snprintf was a fifth of a
-     * 10^5-point write): P's back pointer to its DE, section, sequence. */
-    if (w->sect == 'P')
-        ig_rjust(line + 72, 8, w->de ? w->de : 1L);
+    /* The sequence number counted up in place (the same bytes as
+     * ig_rjust(seq % 10^7), which the division loop made a fifth of a
+     * line); > 7 digits: refused after, as before. */
+    int i = 6;
+    while (i >= 0 && w->seqtxt[i] == '9')
+        w->seqtxt[i--] = '0';
+    if (i >= 0)
+        w->seqtxt[i] = w->seqtxt[i] == ' ' ? '1' : (char)(w->seqtxt[i] + 1);
+    else
+        ig_rjust(w->seqtxt + 7, 7, w->seq % 10000000L);
+    if (w->blen + 81 > sizeof w->blk)
+        ig_wblk(w);
+    char *line = w->blk + w->blen;
+    w->blen += 81;
+    if (n > 72)
+        n = 72;
+    /* fixed-size copies (the variable ones were library calls): the line
+     * being filled is 128 bytes; blanks from n, eight at a time (what
+     * passes column 72 is overwritten below) */
+    if (data == w->cur)
+        memcpy(line, data, 72);
+    else
+        memcpy(line, data, n);
+    for (size_t j = n; j < 72; j += 8)
+        memcpy(line + j, "        ", 8);
+    /* P's back pointer to its DE, "%8ld" as before */
+    if (w->sect == 'P') {
+        const long de = w->de ? w->de : 1L;
+        if (de != w->detxt_of) {
+            ig_rjust(w->detxt + 8, 8, de);
+            w->detxt_of = de;
+        }
+        memcpy(line + 64, w->detxt, 8);
+    }
     line[72] = w->sect;
-    ig_rjust(line + 80, 7, w->seq % 10000000L); /* > 7 digits: refused after */
+    memcpy(line + 73, w->seqtxt, 7);
     line[80] = '\n';
-    fwrite(line, 1, 81, w->f);
 }
 
+/* The current line out, and every gathered line to the file. */
 static void ig_flush(ig_w_t *w)
 {
     if (w->curlen)
         ig_wline(w, w->cur, w->curlen);
     w->curlen = 0;
+    ig_wblk(w);
 }
 
-/* A parameter and its delimiter; parameters never straddle lines. */
-static void ig_tok(ig_w_t *w, const char *tok, char delim)
+/* A parameter of n bytes and its delimiter; parameters never straddle lines. */
+static void ig_tokn(ig_w_t *w, const char *tok, size_t n, char delim)
 {
-    size_t n = strlen(tok);
-    if (w->curlen + n + 1 > w->width)
-        ig_flush(w);
+    if (w->curlen + n + 1 > w->width) {
+        if (w->curlen)
+            ig_wline(w, w->cur, w->curlen);
+        w->curlen = 0;
+    }
     memcpy(w->cur + w->curlen, tok, n);
     w->curlen += n;
     w->cur[w->curlen++] = delim;
 }
 
-/* %.17g (round-trip exact) with the decimal point and capital E IGES wants. */
-static void ig_fmt(double x, char *b, size_t bl)
+static void ig_tok(ig_w_t *w, const char *tok, char delim)
 {
-    cf_fmt17(x, b, bl); /* "%.17g", fast */
-    char *e = strchr(b, 'e');
-    if (e)
-        *e = 'E';
-    if (!strchr(b, '.')) {
-        size_t n = strlen(b), at = e ? (size_t)(e - b) : n;
-        memmove(b + at + 2, b + at, n - at + 1);
-        b[at] = '.';
-        b[at + 1] = '0';
-    }
+    ig_tokn(w, tok, strlen(tok), delim);
 }
 
+/* %.17g (round-trip exact) with the decimal point and capital E IGES
+ * wants, formatted in place at the end of the line, moved to the start of
+ * the next when it does not fit. */
 static void ig_real_tok(ig_w_t *w, double x, char delim)
 {
-    char b[48];
-    ig_fmt(x, b, sizeof b);
-    ig_tok(w, b, delim);
+    char *at = w->cur + w->curlen;
+    const size_t n = (size_t)cf_fmt17_iges(x, at, sizeof w->cur - w->curlen);
+    if (w->curlen + n + 1 > w->width) {
+        if (w->curlen)
+            ig_wline(w, w->cur, w->curlen);
+        memmove(w->cur, at, n);
+        w->curlen = 0;
+    }
+    w->curlen += n;
+    w->cur[w->curlen++] = delim;
 }
 
 static void ig_int_tok(ig_w_t *w, long x)
@@ -248,14 +309,17 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     FILE *f = h.aw.f;
     char text[160];
     long cnt[4];
-    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    ig_w_t ws;
+    ig_winit(&ws, f, 'S', IG_GCOLS);
     int tl = snprintf(text, sizeof text,
                       "cellfit: rational B-spline surface %s (IGES 5.3, one entity 128)", h.nm);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
+    ig_flush(&ws);
     cnt[0] = ws.seq;
 
-    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_w_t wg;
+    ig_winit(&wg, f, 'G', IG_GCOLS);
     ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), h.nm, h.fname, h.date);
     cnt[1] = wg.seq;
 
@@ -270,7 +334,8 @@ int cf_iges_write_at(const char *path, const nf_surf_t *s, const char *name, lon
     fputs(d[1], f);
     cnt[2] = 2;
 
-    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    ig_w_t wp;
+    ig_winit(&wp, f, 'P', IG_PCOLS);
     ig_pdata(&wp, s, poly);
     cnt[3] = wp.seq;
     if (cnt[3] > IG_MAX_SEQ) {
@@ -342,18 +407,22 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
     FILE *f = h.aw.f;
     char text[160];
     long cnt[4];
-    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    ig_w_t ws;
+    ig_winit(&ws, f, 'S', IG_GCOLS);
     int tl = snprintf(text, sizeof text,
                       "cellfit: %d rational B-spline curves %s (IGES 5.3, entity 126)", nc, h.nm);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
+    ig_flush(&ws);
     cnt[0] = ws.seq;
-    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_w_t wg;
+    ig_winit(&wg, f, 'G', IG_GCOLS);
     ig_global_out(&wg, mx, h.nm, h.fname, h.date);
     cnt[1] = wg.seq;
     long pstart = 1;
     for (int k = 0; k < nc; k++) { /* D entries: each curve's P line count from a dry run */
-        ig_w_t dry = {NULL, 'P', IG_PCOLS, {0}, 0, 0, 0};
+        ig_w_t dry;
+        ig_winit(&dry, NULL, 'P', IG_PCOLS);
         ig_cdata(&dry, &c[k]);
         fprintf(f, "%8d%8ld%8d%8d%8d%8d%8d%8d%8s%c%7d\n", 126, pstart, 0, 0, 0, 0, 0, 0, "00000000",
                 'D', 2 * k + 1);
@@ -362,7 +431,8 @@ int cf_iges_write_curves(const char *path, const nf_curve_t *c, int nc, const ch
         pstart += dry.seq;
     }
     cnt[2] = 2L * nc;
-    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    ig_w_t wp;
+    ig_winit(&wp, f, 'P', IG_PCOLS);
     for (int k = 0; k < nc; k++) {
         wp.de = 2L * k + 1;
         ig_cdata(&wp, &c[k]);
@@ -491,15 +561,18 @@ int cf_iges_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim
     FILE *f = h.aw.f;
     char text[200];
     long cnt[4];
-    ig_w_t ws = {f, 'S', IG_GCOLS, {0}, 0, 0, 0};
+    ig_w_t ws;
+    ig_winit(&ws, f, 'S', IG_GCOLS);
     int tl = snprintf(text, sizeof text,
                       "cellfit: trimmed rational B-spline surface %s (IGES 5.3, entity 144 over "
                       "128, %d boundaries)",
                       h.nm, t->nloops);
     for (int at = 0; at < tl; at += IG_GCOLS)
         ig_wline(&ws, text + at, (size_t)(tl - at));
+    ig_flush(&ws);
     cnt[0] = ws.seq;
-    ig_w_t wg = {f, 'G', IG_GCOLS, {0}, 0, 0, 0};
+    ig_w_t wg;
+    ig_winit(&wg, f, 'G', IG_GCOLS);
     ig_global_out(&wg, ig_maxabs(s->cp, 3L * s->nu * s->nv), h.nm, h.fname, h.date);
     cnt[1] = wg.seq;
     /* P pointers and line counts patched in after the P section (no dry
@@ -511,7 +584,8 @@ int cf_iges_write_trimmed_at(const char *path, const nf_surf_t *s, const cf_trim
                 ents[i].label, 0, 'D', 2 * i + 2);
     }
     cnt[2] = 2L * ne;
-    ig_w_t wp = {f, 'P', IG_PCOLS, {0}, 0, 0, 0};
+    ig_w_t wp;
+    ig_winit(&wp, f, 'P', IG_PCOLS);
     for (int i = 0; i < ne; i++) {
         long before = wp.seq;
         wp.de = 2L * i + 1;

@@ -124,7 +124,7 @@ static void sel_end(sel_t *x)
 
 /* The first knot of a span alone (per_span 1): the rules below test its
  * placement; test_sides the knots on its sides. */
-static const nf_knotsel_opts_t one = {0, 0, 0, 0.0, 0.0, 0, 0, 1};
+static const nf_knotsel_opts_t one = {0, 0, 0, 0.0, 0.0, 0, 0, 1, 0.0};
 
 /* Misfit in one cell only: the first knot in each direction goes into
  * that cell's spans, a quarter span or more from their ends, near the
@@ -214,7 +214,7 @@ static void test_sides(void **state)
     assert_int_equal(x.c[1].level, 0);
     /* A side goes only with its span's first knot: with room for one knot
      * in the round (max_knots 1) it is the first knot alone. */
-    nf_knotsel_opts_t k1 = {0, 0, 0, 0.0, 0.0, 1, 0, 0};
+    nf_knotsel_opts_t k1 = {0, 0, 0, 0.0, 0.0, 1, 0, 0, 0.0};
     assert_int_equal(nf_knotsel_choose(&x.a, &k1, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 1);
     assert_int_equal(x.c[0].level, 0);
@@ -225,11 +225,71 @@ static void test_sides(void **state)
     assert_int_equal(x.c[0].level + x.c[1].level, 0);
     /* per_span 2: the first knot and the side holding more misfit (here
      * both hold 18: the left one, the first of equals). */
-    nf_knotsel_opts_t two = {0, 0, 0, 0.0, 0.0, 0, 0, 2};
+    nf_knotsel_opts_t two = {0, 0, 0, 0.0, 0.0, 0, 0, 2, 0.0};
     assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 4);
     for (int k = 0; k < x.n; k++)
         assert_true(x.c[k].level == 0 || fabs(x.c[k].x - want[x.c[k].dir][1]) < 1e-12);
+    sel_end(&x);
+}
+
+/* Side knots only where the misfit is deep (NF_KNOTSEL_SIDE_DEPTH): the
+ * cell of test_sides at tol 0.1 with misfit d of 36 points, the root mean
+ * square of d worked out here. 5 tol (all at 0.5) or 4.47 tol (18 at 0.6,
+ * 18 at 0.2: sqrt(0.2)): the first knot and both sides per direction (6);
+ * 3 tol (all at 0.3) or 2.73 tol (4 at 0.7, 32 at 0.15: sqrt(0.0744), deep
+ * points but a shallow span): the first knots alone (2), with uniform d
+ * where test_concentrated puts them. side_depth < 0 gives every span with misfit
+ * its sides, 2 gives them at 3 tol. Then both in one round on different
+ * spans (ratio and share opened so both spans are taken): the deep span
+ * gets its sides, the shallow one (2.5 tol) its first knot only. */
+static void test_side_depth(void **state)
+{
+    (void)state;
+    const double hi[4] = {0.5, 0.6, 0.3, 0.7}, lo[4] = {0.5, 0.2, 0.3, 0.15};
+    const int nhi[4] = {36, 18, 36, 4}, want[4] = {6, 6, 2, 2};
+    for (int t = 0; t < 4; t++) {
+        sel_t x;
+        sel_start(&x, 8, 8, 0.1);
+        grid(&x.a, 64, 64);
+        for (int k = 0; k < 36; k++)
+            nf_knotsel_add(&x.a, 0.40 + 0.01 * (k % 6), 0.30 + 0.01 * (k / 6),
+                           k < nhi[t] ? hi[t] : lo[t]);
+        assert_int_equal(nf_knotsel_choose(&x.a, NULL, x.c, 64, &x.n, &x.st), NF_OK);
+        assert_int_equal(x.n, want[t]);
+        if (want[t] == 2)
+            for (int k = 0; k < x.n; k++) {
+                assert_int_equal(x.c[k].level, 0);
+                if (t == 2) /* uniform d: test_concentrated's places */
+                    assert_near(x.c[k].x, x.c[k].dir ? 0.328125 : 0.421875, 1e-12);
+            }
+        if (t == 2) {
+            nf_knotsel_opts_t all = {0, 0, 0, 0.0, 0.0, 0, 0, 0, -1.0};
+            assert_int_equal(nf_knotsel_choose(&x.a, &all, x.c, 64, &x.n, &x.st), NF_OK);
+            assert_int_equal(x.n, 6);
+            nf_knotsel_opts_t two = {0, 0, 0, 0.0, 0.0, 0, 0, 0, 2.0};
+            assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
+            assert_int_equal(x.n, 6);
+        }
+        sel_end(&x);
+    }
+    sel_t x;
+    sel_start(&x, 8, 8, 0.1);
+    grid(&x.a, 64, 64);
+    for (int k = 0; k < 36; k++) {
+        nf_knotsel_add(&x.a, 0.40 + 0.01 * (k % 6), 0.30 + 0.01 * (k / 6), 1.0);
+        nf_knotsel_add(&x.a, 0.80 + 0.01 * (k % 6), 0.80 + 0.01 * (k / 6), 0.25);
+    }
+    const nf_knotsel_opts_t open = {0, 0, 0, 0.01, 0.99, 0, 0, 0, 0.0};
+    assert_int_equal(nf_knotsel_choose(&x.a, &open, x.c, 64, &x.n, &x.st), NF_OK);
+    int per[2][8] = {{0}, {0}};
+    for (int k = 0; k < x.n; k++)
+        per[x.c[k].dir][x.c[k].span]++;
+    assert_int_equal(x.n, 8);
+    assert_int_equal(per[0][3], 3);
+    assert_int_equal(per[1][2], 3);
+    assert_int_equal(per[0][6], 1);
+    assert_int_equal(per[1][6], 1);
     sel_end(&x);
 }
 
@@ -353,7 +413,7 @@ static void test_rows(void **state)
     for (int k = 0; k < x.n; k++)
         assert_int_equal(x.c[k].dir, 0);
     /* ... unless u needs more points per new span than its spans hold. */
-    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0, 0, 1};
+    nf_knotsel_opts_t o = {0, 0, 10000, 0.0, 0.0, 0, 0, 1, 0.0};
     assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 0);
     assert_int_equal(x.st, NF_KNOTSEL_DATA);
@@ -372,7 +432,7 @@ static void test_rows(void **state)
         if (x.c[k].dir == 1)
             xv = x.c[k].x;
     assert_true(xv > 0.40 && xv < 0.43);
-    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0, 1};
+    nf_knotsel_opts_t two = {0, 2, 0, 0.0, 0.0, 0, 0, 1, 0.0};
     assert_int_equal(nf_knotsel_choose(&x.a, &two, x.c, 64, &x.n, &x.st), NF_OK);
     for (int k = 0; k < x.n; k++)
         assert_int_equal(x.c[k].dir, 0);
@@ -396,7 +456,7 @@ static void test_gain_order(void **state)
             nf_knotsel_add(&x.a, 0.51 + 0.0005 * i, 0.52 + 0.0005 * i, d);
             g += d * d;
         }
-        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0, 0, 1};
+        nf_knotsel_opts_t o = {0, 0, 0, 0.01, 0.99, 0, 0, 1, 0.0};
         assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
         assert_int_equal(x.n, 2);
         const int first = flip ? 1 : 0; /* the direction adding fewer control points */
@@ -434,7 +494,7 @@ static void test_caps(void **state)
     assert_true(x.n >= 1);
     /* The round budget: the best candidate always, then only what fits. */
     for (long add = 1; add <= 16; add += 15) {
-        nf_knotsel_opts_t b = {0, 0, 0, 0.0, 0.0, 0, add, 0};
+        nf_knotsel_opts_t b = {0, 0, 0, 0.0, 0.0, 0, add, 0, 0.0};
         assert_int_equal(nf_knotsel_choose(&x.a, &b, x.c, 64, &x.n, &x.st), NF_OK);
         ru = rv = 0;
         for (int k = 0; k < x.n; k++)
@@ -443,7 +503,7 @@ static void test_caps(void **state)
         assert_true(add == 1 || (8L + ru) * (8 + rv) - 64 <= add);
     }
     /* max_cp below half the points binds instead. */
-    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0, 0, 0};
+    nf_knotsel_opts_t o = {70, 1, 1, 0.0, 0.0, 0, 0, 0, 0.0};
     assert_int_equal(nf_knotsel_choose(&x.a, &o, x.c, 64, &x.n, &x.st), NF_OK);
     assert_int_equal(x.n, 0);
     assert_int_equal(x.st, NF_KNOTSEL_MAX_CP);
@@ -730,19 +790,13 @@ static void test_loop_bump(void **state)
 int main(void)
 {
     const struct CMUnitTest t[] = {
-        cmocka_unit_test(test_counts),
-        cmocka_unit_test(test_concentrated),
-        cmocka_unit_test(test_sides),
-        cmocka_unit_test(test_side_balance),
-        cmocka_unit_test(test_merge),
-        cmocka_unit_test(test_rows),
-        cmocka_unit_test(test_gain_order),
-        cmocka_unit_test(test_caps),
-        cmocka_unit_test(test_verdict),
-        cmocka_unit_test(test_budget),
-        cmocka_unit_test(test_budget_near_goal),
-        cmocka_unit_test(test_alpha),
-        cmocka_unit_test(test_loop_bump),
+        cmocka_unit_test(test_counts),     cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_sides),      cmocka_unit_test(test_side_balance),
+        cmocka_unit_test(test_side_depth), cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_rows),       cmocka_unit_test(test_gain_order),
+        cmocka_unit_test(test_caps),       cmocka_unit_test(test_verdict),
+        cmocka_unit_test(test_budget),     cmocka_unit_test(test_budget_near_goal),
+        cmocka_unit_test(test_alpha),      cmocka_unit_test(test_loop_bump),
     };
     return cmocka_run_group_tests(t, NULL, NULL);
 }
