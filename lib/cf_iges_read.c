@@ -92,7 +92,7 @@ typedef struct ig_rd {
     ig_par_t want[1 + IG_MAX_CHAIN];
     int nwant;
     int fast; /* ig_real_at may run: no tab delimiter (blanks around numbers are skipped) */
-    int ext;  /* long double is the x87's 64-bit significand here (ig_ext_ok) */
+    int ext;  /* long double is the x87's 64-bit significand here (cf_pel_ext_ok) */
 } ig_rd_t;
 
 static int ig_getc(ig_in_t *in)
@@ -927,26 +927,6 @@ static const long double ig_p10l[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,
 #define IG_EXT 0
 #endif
 
-/* Whether long double division has the x87's 64-bit significand here:
- * (2^64 - 1) / 3 = 0x5555555555555555 exactly, significand bytes
- * 0xAAAAAAAAAAAAAAAA. Not so under valgrind (80-bit values are kept as
- * doubles, and compare equal to other doubles: the bytes are looked at) or
- * with the precision control lowered; there the check in ig_real_at would
- * take double roundings for exact results. */
-static int ig_ext_ok(void)
-{
-#if IG_EXT
-    volatile uint64_t a = UINT64_MAX;
-    volatile long double three = 3.0L;
-    const long double q = (long double)a / three;
-    uint64_t sig;
-    memcpy(&sig, &q, sizeof sig);
-    return sig == UINT64_C(0xAAAAAAAAAAAAAAAA);
-#else
-    return 0;
-#endif
-}
-
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && defined(__GNUC__)
 #define IG_SWAR 1
 static const uint64_t ig_p10u[9] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
@@ -1461,7 +1441,7 @@ static int ig_load(ig_rd_t *c, const char *path, int type, int entity_de, long n
     if (!rc)
         rc = ig_scan(c, entity_de);
     c->fast = c->pd != '\t' && c->rd != '\t';
-    c->ext = ig_ext_ok();
+    c->ext = IG_EXT && cf_pel_ext_ok(); /* not under valgrind (cf_points_el.h) */
     if (!rc && c->notfound)
         rc = c->notfound; /* its message is already in msg */
     for (int i = 1; !rc && !dir_only && i < c->nwant; i++)

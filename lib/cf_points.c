@@ -401,7 +401,7 @@ static int cp_num(const char *p, const char **end, double *out)
      * correct unless x sits exactly on a midpoint between two doubles (low 11
      * significand bits 10000000000): a monotone rounding cannot move a value
      * across a midpoint it can represent. Midpoints go to strtod. */
-    if (!drop && e10 >= -27 && e10 <= 27) {
+    if (!drop && e10 >= -27 && e10 <= 27 && cf_pel_ext_ok()) {
         long double x = (long double)m;
         uint64_t sig;
         x = e10 < 0 ? x / cp_p10l[-e10] : x * cp_p10l[e10];

@@ -12,6 +12,7 @@
  * then exactly that multiple), exact integer arithmetic says on which side
  * of it X lies, or that X is on it. */
 #include "cf_points_el.h"
+#include <float.h>
 #include <pthread.h>
 #include <string.h>
 
@@ -219,3 +220,30 @@ void cf_pel_pow5(long q, uint64_t *hi, uint64_t *lo, int *s)
 }
 
 #endif
+
+/* (2^64 - 1) / 3 = 0x5555555555555555 is exact in a 64-bit significand,
+ * whose bytes then read 0xAAAAAAAAAAAAAAAA (normalised); the bytes are
+ * looked at because under valgrind the quotient is a double that compares
+ * equal to the right value anyway. */
+static int pel_ext;
+static pthread_once_t pel_ext_once = PTHREAD_ONCE_INIT;
+
+static void pel_ext_probe(void)
+{
+#if LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
+    volatile uint64_t a = UINT64_MAX;
+    volatile long double three = 3.0L;
+    const long double q = (long double)a / three;
+    uint64_t sig;
+    memcpy(&sig, &q, sizeof sig);
+    pel_ext = sig == UINT64_C(0xAAAAAAAAAAAAAAAA);
+#else
+    pel_ext = 0;
+#endif
+}
+
+int cf_pel_ext_ok(void)
+{
+    pthread_once(&pel_ext_once, pel_ext_probe);
+    return pel_ext;
+}

@@ -31,6 +31,12 @@ int cf_pel_decide(uint64_t m, long q, double *out);
  * (digits beyond the 19th dropped): decided when both ends round alike. */
 int cf_pel_decide_range(uint64_t m, long q, double *out);
 
+/* 1 when long double division has the x87's 64-bit significand here, so
+ * that the readers' 80-bit check (cf_points.c, cf_iges_read.c) is exact: not
+ * under valgrind (it keeps 80-bit values as doubles) or with the x87's
+ * precision control lowered. Probed once, thread-safe. */
+int cf_pel_ext_ok(void);
+
 /* The table entry for 5^q: T = floor(5^q * 2^-s), 2^127 <= T < 2^128 (hi,
  * lo words), exact when 0 <= q <= 55. For the tests. */
 void cf_pel_pow5(long q, uint64_t *hi, uint64_t *lo, int *s);
