@@ -30,7 +30,7 @@
 #define IG_MAX_GLINES 10000L
 #define IG_MAX_CHAIN 8 /* transformation matrices followed per entity */
 #define IG_MAX_SEQ 9999999L
-#define IG_PAD 8 /* NUL bytes after the parameter data: ig_digits loads 8 at a time */
+#define IG_PAD 8 /* NUL bytes after the parameter data: cf_pel_digits8 loads 8 at a time */
 
 /* ---------------------------------------------------------------- input */
 
@@ -92,7 +92,6 @@ typedef struct ig_rd {
     ig_par_t want[1 + IG_MAX_CHAIN];
     int nwant;
     int fast; /* ig_real_at may run: no tab delimiter (blanks around numbers are skipped) */
-    int ext;  /* long double is the x87's 64-bit significand here (cf_pel_ext_ok) */
 } ig_rd_t;
 
 static int ig_getc(ig_in_t *in)
@@ -135,7 +134,7 @@ static int ig_seq(const char *t, long *seq)
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
     /* The usual right-justified number at once: columns 73-80 as eight
      * bytes, column 73 and the leading blanks made '0's, eight digits
-     * summed as in ig_digits. Blanks elsewhere, or all blank: the loop. */
+     * summed as in cf_pel_digits8. Blanks elsewhere, or all blank: the loop. */
     uint64_t x, y;
     memcpy(&x, t + 72, 8);
     y = x ^ UINT64_C(0x2020202020202020);
@@ -828,21 +827,9 @@ static int ig_pfail(ig_rd_t *c, const ig_par_t *p, size_t at, int err, const cha
 
 enum { IG_NUM_OK, IG_NUM_EMPTY, IG_NUM_BAD, IG_NUM_RANGE };
 
-/* x87 extended evaluation would round Clinger's operation twice. */
-#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0
-#define IG_FAST 0
-#else
-#define IG_FAST 1
-#endif
-
-/* 10^0..10^22: exact doubles (Clinger's fast path below). */
-static const double ig_p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                  1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                  1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
 /* IGES real: [+-] digits [. digits] [E|D [+-] digits]; Fortran D exponents.
- * Correctly rounded as strtod: Clinger's exact operation (m <= 2^53, |e10|
- * <= 22), else the Eisel-Lemire decision (cf_points_el.c), else strtod. */
+ * Correctly rounded as strtod: the exact shortcuts of cf_points_el.h
+ * (Clinger, the x87 check, Eisel-Lemire), else strtod. */
 static int ig_real(const ig_fld_t *f, double *v)
 {
     const char *b = f->s;
@@ -894,11 +881,7 @@ static int ig_real(const ig_fld_t *f, double *v)
     double d;
     if (m == 0) {
         d = 0.0;
-    } else if (IG_FAST && !drop && m <= (UINT64_C(1) << 53) && e10 >= -22 && e10 <= 22) {
-        d = (double)m;
-        d = e10 < 0 ? d / ig_p10[-e10] : d * ig_p10[e10];
-    } else if (!IG_FAST || e10 < CF_PEL_QMIN || e10 > CF_PEL_QMAX ||
-               !(drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d))) {
+    } else if (!cf_pel_fast(m, e10, drop, &d)) { /* the exact shortcuts, else strtod */
         char t[72];
         memcpy(t, b, n);
         t[n] = '\0';
@@ -914,49 +897,6 @@ static int ig_real(const ig_fld_t *f, double *v)
     *v = neg ? -d : d;
     return IG_NUM_OK;
 }
-
-/* With x87 80-bit long double, mantissas of up to 19 digits (%.17g text)
- * have an exact check too, as in cf_points.c; see ig_real_at. */
-#if IG_FAST && LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
-#define IG_EXT 1
-static const long double ig_p10l[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,  1e6L,
-                                        1e7L,  1e8L,  1e9L,  1e10L, 1e11L, 1e12L, 1e13L,
-                                        1e14L, 1e15L, 1e16L, 1e17L, 1e18L, 1e19L, 1e20L,
-                                        1e21L, 1e22L, 1e23L, 1e24L, 1e25L, 1e26L, 1e27L};
-#else
-#define IG_EXT 0
-#endif
-
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && defined(__GNUC__)
-#define IG_SWAR 1
-static const uint64_t ig_p10u[9] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
-
-/* The run of up to 8 decimal digits at p (8 bytes read: the data has
- * IG_PAD NULs after it): their count, and their value in *val (fast_float's
- * SWAR, as cf_points.c's cp_digits). Bytes below the first non-digit
- * neither carry nor borrow, so its high bit in t is exact. */
-static inline __attribute__((always_inline)) int ig_digits(const char *p, uint64_t *val)
-{
-    uint64_t v;
-    memcpy(&v, p, 8);
-    const uint64_t t = ((v + UINT64_C(0x4646464646464646)) | (v - UINT64_C(0x3030303030303030))) &
-                       UINT64_C(0x8080808080808080);
-    const int n = t ? __builtin_ctzll(t) >> 3 : 8;
-    if (!n)
-        return 0;
-    v -= UINT64_C(0x3030303030303030);
-    if (n < 8)
-        v <<= 8 * (8 - n); /* the digits to the high bytes, zeros (leading) below */
-    v = v * 10 + (v >> 8);
-    v = (((v & UINT64_C(0x000000FF000000FF)) * (100 + (UINT64_C(1000000) << 32))) +
-         (((v >> 16) & UINT64_C(0x000000FF000000FF)) * (1 + (UINT64_C(10000) << 32)))) >>
-        32;
-    *val = v & 0xFFFFFFFFu;
-    return n;
-}
-#else
-#define IG_SWAR 0
-#endif
 
 static int ig_isdigit(char ch)
 {
@@ -986,11 +926,11 @@ static int ig_real_at(const ig_rd_t *c, const ig_par_t *p, size_t *pos, double *
     /* Coordinates have a few integer digits: one at a time is cheaper. */
     for (; nd < 3 && ig_isdigit(*q); q++, nd++, any = 1)
         m = m * 10 + (uint64_t)(*q - '0');
-#if IG_SWAR
+#if CF_PEL_SWAR
     for (int n = 8; n == 8 && nd <= 11 && ig_isdigit(*q);) { /* nd + 8 <= 19: none dropped */
         uint64_t dv = 0;
-        n = ig_digits(q, &dv);
-        m = m * ig_p10u[n] + dv;
+        n = cf_pel_digits8(q, &dv);
+        m = m * cf_pel_p10u[n] + dv;
         nd += n;
         q += n;
         any = 1;
@@ -1010,11 +950,11 @@ static int ig_real_at(const ig_rd_t *c, const ig_par_t *p, size_t *pos, double *
         if (!nd)
             for (; *q == '0'; q++, any = 1)
                 e10--;
-#if IG_SWAR
+#if CF_PEL_SWAR
         for (int n = 8; n == 8 && nd <= 11 && ig_isdigit(*q);) {
             uint64_t dv = 0;
-            n = ig_digits(q, &dv);
-            m = m * ig_p10u[n] + dv;
+            n = cf_pel_digits8(q, &dv);
+            m = m * cf_pel_p10u[n] + dv;
             nd += n;
             e10 -= n;
             q += n;
@@ -1053,30 +993,8 @@ static int ig_real_at(const ig_rd_t *c, const ig_par_t *p, size_t *pos, double *
         return 0;
     double x = 0.0;
     if (m == 0) {
-    } else if (IG_FAST && !drop && m <= (UINT64_C(1) << 53) && e10 >= -22 && e10 <= 22) {
-        x = (double)m; /* Clinger: one exact operation */
-        x = e10 < 0 ? x / ig_p10[-e10] : x * ig_p10[e10];
-    } else {
-        int ok = 0;
-#if IG_EXT
-        /* m < 2^64 and 10^|e10| <= 10^27 are exact in the 64-bit
-         * significand, so y is m 10^e10 rounded once to 64 bits; rounding y
-         * to 53 bits is then exact unless y lies on a midpoint between two
-         * doubles (low 11 bits 10000000000), which goes on below. */
-        if (c->ext && !drop && e10 >= -27 && e10 <= 27) {
-            long double y = (long double)m;
-            uint64_t sig;
-            y = e10 < 0 ? y / ig_p10l[-e10] : y * ig_p10l[e10];
-            memcpy(&sig, &y, sizeof sig); /* x86 extended: bytes 0-7 hold the significand */
-            if ((sig & 0x7FF) != 0x400) {
-                x = (double)y;
-                ok = 1;
-            }
-        }
-#endif
-        if (!ok && (!IG_FAST || e10 < CF_PEL_QMIN || e10 > CF_PEL_QMAX ||
-                    !(drop ? cf_pel_decide_range(m, e10, &x) : cf_pel_decide(m, e10, &x))))
-            return 0;
+    } else if (!cf_pel_fast(m, e10, drop, &x)) { /* the exact shortcuts (cf_points_el.h) */
+        return 0;
     }
     *v = neg ? -x : x;
     *pos = (size_t)(q - d) + 1;
@@ -1441,7 +1359,6 @@ static int ig_load(ig_rd_t *c, const char *path, int type, int entity_de, long n
     if (!rc)
         rc = ig_scan(c, entity_de);
     c->fast = c->pd != '\t' && c->rd != '\t';
-    c->ext = IG_EXT && cf_pel_ext_ok(); /* not under valgrind (cf_points_el.h) */
     if (!rc && c->notfound)
         rc = c->notfound; /* its message is already in msg */
     for (int i = 1; !rc && !dir_only && i < c->nwant; i++)

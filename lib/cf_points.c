@@ -29,37 +29,13 @@
 #define CP_BUF ((long)CF_POINTS_BUF)
 _Static_assert(CF_POINTS_BUF >= 2 * CF_POINTS_MAX_LINE + 2,
                "the buffer holds a longest line twice");
-#define CP_PAD 8 /* bytes after the buffer's NUL: cp_digits loads 8 at a time */
+#define CP_PAD 8 /* bytes after the buffer's NUL: cf_pel_digits8 loads 8 at a time */
 #define CP_MAX_PROPS 32
 #define CP_MAX_ELEMS 16
 /* The parse thread's ring (cf_points_thread): 4 blocks of 8,192 rows, 1.5
  * MiB at 5 columns; a block changes hands about every millisecond. */
 #define CP_MT_BLOCK 8192
 #define CP_MT_NBLK 4
-
-/* x87 extended precision would round the fast path twice: use strtod only. */
-#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0
-#define CP_FAST 0
-#else
-#define CP_FAST 1
-#endif
-
-/* Eight digits at a time (SWAR, as in fast_float) on little-endian hosts
- * with __builtin_ctzll; elsewhere one digit at a time. Either way the same
- * m, e10 and digit counts, so the same value. */
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && defined(__GNUC__)
-#define CP_SWAR 1
-#else
-#define CP_SWAR 0
-#endif
-
-/* With x87 80-bit long double, 19-digit mantissas (%.17g output) have an
- * exact check too; see cp_num. */
-#if CP_FAST && LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
-#define CP_EXT 1
-#else
-#define CP_EXT 0
-#endif
 
 enum { CP_ASCII, CP_PLY_ASCII, CP_PLY_BIN, CP_RAW };
 enum { CP_NUM_OK, CP_NUM_JUNK, CP_NUM_NONFINITE, CP_NUM_RANGE };
@@ -82,7 +58,7 @@ struct cf_points {
     int is_stdin;
     char name[256];
     char *buf; /* CP_BUF + 1 + CP_PAD bytes: a NUL after a final unterminated line, and
-                * room for cp_digits' 8-byte loads past it */
+                * room for cf_pel_digits8's 8-byte loads past it */
     size_t len, pos;
     long long boff;     /* file offset of buf[0] */
     long long data_off; /* offset of the first point (after a PLY header) */
@@ -205,45 +181,6 @@ static int cp_line(cf_points_t *r, char **s, char **e)
 
 /* ------------------------------------------------------------- numbers */
 
-static const double cp_p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                  1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                  1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
-#if CP_EXT
-static const long double cp_p10l[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,  1e6L,
-                                        1e7L,  1e8L,  1e9L,  1e10L, 1e11L, 1e12L, 1e13L,
-                                        1e14L, 1e15L, 1e16L, 1e17L, 1e18L, 1e19L, 1e20L,
-                                        1e21L, 1e22L, 1e23L, 1e24L, 1e25L, 1e26L, 1e27L};
-#endif
-
-#if CP_SWAR
-static const uint64_t cp_p10u[9] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
-
-/* The run of up to 8 decimal digits at p (the bytes after it are read but
- * ignored; the reader's buffer has CP_PAD bytes of room): their count, and
- * their value in *val. Bytes below the first non-digit neither carry nor
- * borrow, so its high bit in t is exact; the bytes above it are shifted out. */
-static inline __attribute__((always_inline)) int cp_digits(const char *p, uint64_t *val)
-{
-    uint64_t v;
-    memcpy(&v, p, 8);
-    uint64_t t = ((v + UINT64_C(0x4646464646464646)) | (v - UINT64_C(0x3030303030303030))) &
-                 UINT64_C(0x8080808080808080);
-    int n = t ? __builtin_ctzll(t) >> 3 : 8;
-    if (!n)
-        return 0;
-    v -= UINT64_C(0x3030303030303030);
-    if (n < 8)
-        v <<= 8 * (8 - n); /* the digits to the high bytes, zeros (leading) below */
-    v = v * 10 + (v >> 8);
-    v = (((v & UINT64_C(0x000000FF000000FF)) * (100 + (UINT64_C(1000000) << 32))) +
-         (((v >> 16) & UINT64_C(0x000000FF000000FF)) * (1 + (UINT64_C(10000) << 32)))) >>
-        32;
-    *val = v & 0xFFFFFFFFu;
-    return n;
-}
-#endif
-
 static int cp_digit(char c)
 {
     return (unsigned)(c - '0') < 10u;
@@ -297,12 +234,12 @@ static int cp_num(const char *p, const char **end, double *out)
         p++;
         any = 1;
     }
-#if CP_SWAR
+#if CF_PEL_SWAR
     for (int n = 8; n == 8 && nd <= 11 && cp_digit(*p);) { /* nd + 8 <= 19: nothing dropped here */
         uint64_t v;
-        if (!(n = cp_digits(p, &v)))
+        if (!(n = cf_pel_digits8(p, &v)))
             break;
-        m = m * cp_p10u[n] + v;
+        m = m * cf_pel_p10u[n] + v;
         nd += n;
         p += n;
         any = 1;
@@ -322,12 +259,12 @@ static int cp_num(const char *p, const char **end, double *out)
         if (!nd)
             for (; *p == '0'; p++, any = 1)
                 e10--;
-#if CP_SWAR
+#if CF_PEL_SWAR
         for (int n = 8; n == 8 && nd <= 11 && cp_digit(*p);) {
             uint64_t v;
-            if (!(n = cp_digits(p, &v)))
+            if (!(n = cf_pel_digits8(p, &v)))
                 break;
-            m = m * cp_p10u[n] + v;
+            m = m * cf_pel_p10u[n] + v;
             nd += n;
             e10 -= n;
             p += n;
@@ -387,39 +324,10 @@ static int cp_num(const char *p, const char **end, double *out)
         *out = neg ? -0.0 : 0.0;
         return CP_NUM_OK;
     }
-    /* Clinger: m and 10^|e10| are exact doubles, so one IEEE operation gives
-     * the correctly rounded quotient or product. */
-    if (CP_FAST && !drop && m <= (UINT64_C(1) << 53) && e10 >= -22 && e10 <= 22) {
-        double d = (double)m;
-        d = e10 < 0 ? d / cp_p10[-e10] : d * cp_p10[e10];
-        *out = neg ? -d : d;
-        return CP_NUM_OK;
-    }
-#if CP_EXT
-    /* m < 2^64 and 10^|e10| <= 10^27 are exact in the 64-bit significand, so x
-     * is m*10^e10 correctly rounded to 64 bits. Rounding x again to 53 bits is
-     * correct unless x sits exactly on a midpoint between two doubles (low 11
-     * significand bits 10000000000): a monotone rounding cannot move a value
-     * across a midpoint it can represent. Midpoints go to strtod. */
-    if (!drop && e10 >= -27 && e10 <= 27 && cf_pel_ext_ok()) {
-        long double x = (long double)m;
-        uint64_t sig;
-        x = e10 < 0 ? x / cp_p10l[-e10] : x * cp_p10l[e10];
-        memcpy(&sig, &x, sizeof sig); /* x86 extended: bytes 0-7 hold the significand */
-        if ((sig & 0x7FF) != 0x400) {
-            double d = (double)x;
-            *out = neg ? -d : d;
-            return CP_NUM_OK;
-        }
-    }
-#endif
-    /* Eisel-Lemire (cf_points_el.c): nearly every other normal value,
-     * mantissas longer than 19 digits too (both ends of the dropped digits'
-     * interval rounding alike). After the x87 check, which is cheaper where
-     * it applies (4 against 7 ns a value measured on 17-digit mantissas). */
+    /* The exact shortcuts (cf_points_el.h), else strtod. */
     {
         double d;
-        if (drop ? cf_pel_decide_range(m, e10, &d) : cf_pel_decide(m, e10, &d)) {
+        if (cf_pel_fast(m, e10, drop, &d)) {
             *out = neg ? -d : d;
             return CP_NUM_OK;
         }
