@@ -367,19 +367,25 @@ static void test_refuse_no_data(void **state)
 /* Every control point has data, yet the data cannot separate them: all
  * points on lines v = const through the middle of each v span of a degree-1
  * direction... here: v fixed at one value for a q = 1 net with Nv = 3. */
+static double *rank_deficient(nf_surf_t *s, long M)
+{
+    ref_seed(52);
+    ref_surf_random(s, 2, 1, 6, 3, 0, 1, 0, 1, 1, 1);
+    s->V[0] = s->V[1] = 0.0;
+    s->V[2] = 0.5;
+    s->V[3] = s->V[4] = 1.0;
+    double *pts = sample(s, M, 0.01);
+    for (long k = 0; k < M; k++) /* two v values per span: rank 2 of the 3 rows needs 3 */
+        pts[5 * k + 1] = (k % 2) ? 0.25 : 0.75;
+    return pts;
+}
+
 static void test_refuse_rank_deficient(void **state)
 {
     (void)state;
-    ref_seed(52);
     nf_surf_t s;
-    ref_surf_random(&s, 2, 1, 6, 3, 0, 1, 0, 1, 1, 1);
-    s.V[0] = s.V[1] = 0.0;
-    s.V[2] = 0.5;
-    s.V[3] = s.V[4] = 1.0;
     long M = 400;
-    double *pts = sample(&s, M, 0.01);
-    for (long k = 0; k < M; k++) /* two v values per span: rank 2 of the 3 rows needs 3 */
-        pts[5 * k + 1] = (k % 2) ? 0.25 : 0.75;
+    double *pts = rank_deficient(&s, M);
     const nf_solver_t which[] = {NF_SOLVER_CHOL, NF_SOLVER_PCG, NF_SOLVER_GS};
     for (int w = 0; w < 3; w++) {
         job_t j;
@@ -403,16 +409,9 @@ static void test_refuse_rank_deficient(void **state)
 static void test_beta_determines_rank_deficient(void **state)
 {
     (void)state;
-    ref_seed(52);
     nf_surf_t s;
-    ref_surf_random(&s, 2, 1, 6, 3, 0, 1, 0, 1, 1, 1);
-    s.V[0] = s.V[1] = 0.0;
-    s.V[2] = 0.5;
-    s.V[3] = s.V[4] = 1.0;
     long M = 400;
-    double *pts = sample(&s, M, 0.01);
-    for (long k = 0; k < M; k++)
-        pts[5 * k + 1] = (k % 2) ? 0.25 : 0.75;
+    double *pts = rank_deficient(&s, M);
     double *A, *b, x[3 * 18];
     ref_eq7(&s, pts, M, 0.0, 1e-3, &A, &b);
     assert_int_equal(ref_solve(A, b, 18, x), 0);
