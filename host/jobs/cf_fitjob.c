@@ -648,8 +648,20 @@ static void *fit_half(void *arg)
 /* Run fn on two halves, the second on a new thread (without one, after
  * the first on this). Then, when the first read to its end, the second's
  * lines count from the file's start (join). */
-static void two_halves(const run_t *r, half_t h[2], void *(*fn)(void *))
+static void two_halves(const run_t *r, const cf_fitsrc_t half[2], half_t h[2], void *(*fn)(void *))
 {
+    /* What every pass's halves share: the readers, the job's batch buffer
+     * in two, the halt flag. */
+    atomic_int halt;
+    atomic_init(&halt, 0);
+    const long c = r->j->cap / 2;
+    for (int k = 0; k < 2; k++) {
+        h[k].src = &half[k];
+        h[k].buf = r->j->buf + 5 * c * k;
+        h[k].cap = c;
+        h[k].halt = &halt;
+    }
+    h[0].r = r;
     pthread_t th;
     int on = !cf_thread_start(&th, fn, &h[1]); /* signals stay the caller's */
     fn(&h[0]);
@@ -695,30 +707,14 @@ static void edges_merge(cf_edges_t *a, const cf_edges_t *b)
  * own, merged (the solve merges the shard). */
 static int fit_halves(run_t *r, const nf_surf_t *cur, const cf_fitsrc_t half[2], pass_t *ps)
 {
-    cf_fitjob_t *j = r->j;
     cf_edges_t ed1;
     memset(&ed1, 0, sizeof ed1);
     int rc;
     if (ps->ed.mem && (rc = cf_edges_begin(&ed1, cur)))
         return cf_fail(r->msg, r->ml, rc, "data footprint: %s", cf_strerror(rc));
-    atomic_int halt;
-    atomic_init(&halt, 0);
-    const long c = j->cap / 2;
-    half_t h[2] = {{.r = r,
-                    .src = &half[0],
-                    .buf = j->buf,
-                    .cap = c,
-                    .halt = &halt,
-                    .f = &ps->fp.f,
-                    .ed = &ps->ed},
-                   {.src = &half[1],
-                    .buf = j->buf + 5 * c,
-                    .cap = c,
-                    .halt = &halt,
-                    .f = ps->fp.sh,
-                    .ed = &ed1}};
+    half_t h[2] = {{.f = &ps->fp.f, .ed = &ps->ed}, {.f = ps->fp.sh, .ed = &ed1}};
     double t = cli_now();
-    two_halves(r, h, fit_half);
+    two_halves(r, half, h, fit_half);
     ps->fp.t_rows += cli_now() - t;
     ps->points = h[0].n + h[1].n;
     edges_merge(&ps->ed, &ed1);
@@ -866,29 +862,9 @@ static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2
     resid_t b;
     memset(&b, 0, sizeof b);
     nf_rhist_init(&b.hist);
-    atomic_int halt;
-    atomic_init(&halt, 0);
-    const long c = j->cap / 2;
-    half_t h[2] = {{.r = r,
-                    .src = &half[0],
-                    .buf = j->buf,
-                    .cap = c,
-                    .halt = &halt,
-                    .s = s,
-                    .tol = j->o.tol,
-                    .cut = cut,
-                    .want_hist = want_hist,
-                    .res = out},
-                   {.src = &half[1],
-                    .buf = j->buf + 5 * c,
-                    .cap = c,
-                    .halt = &halt,
-                    .s = s,
-                    .tol = j->o.tol,
-                    .cut = cut,
-                    .want_hist = want_hist,
-                    .res = &b}};
-    two_halves(r, h, measure_half);
+    half_t h[2] = {{.s = s, .tol = j->o.tol, .cut = cut, .want_hist = want_hist, .res = out},
+                   {.s = s, .tol = j->o.tol, .cut = cut, .want_hist = want_hist, .res = &b}};
+    two_halves(r, half, h, measure_half);
     out->ss += b.ss;
     out->mx = b.mx > out->mx ? b.mx : out->mx;
     out->n += b.n;
