@@ -22,19 +22,37 @@ int nf_footprint_init(nf_footprint_t *fp, const nf_surf_t *s, void *mem, size_t 
     fp->count = mem;
     fp->pin = (unsigned char *)mem + 4L * fp->cu * fp->cv;
     fp->points = 0;
+    fp->hu = (s->nu - s->p) / (s->U[s->nu] - s->U[s->p]);
+    fp->hv = (s->nv - s->q) / (s->V[s->nv] - s->V[s->q]);
     return NF_OK;
 }
 
 /* Cell index along one direction: the knot span (0-based from the first of
- * the domain) times NF_FP_SUB plus the sub-cell within it. */
-static int cell_of(const double *K, int n, int p, double x)
+ * the domain) times NF_FP_SUB plus the sub-cell within it; h the spans per
+ * unit (the uniform guess first: the binary search was most of the
+ * footprint's cost, issue 20). */
+static inline int cell_of(const double *K, int n, int p, double x, double h)
 {
-    /* The uniform guess first (issue 20: the binary search was most of
-     * the footprint's cost, a pass over every point). */
-    const int l = nf_find_span_from(-1, n, p, x, K, (n - p + 1) / (K[n + 1] - K[p]));
+    const int l = nf_find_span_from(-1, n, p, x, K, h);
+#if NF_FP_SUB == 2
+    /* The upper half from its midpoint, without a division (2 (x - K_l) is
+     * exact); the domain's end stays in the last cell. */
+    const int sub = 2.0 * (x - K[l]) >= K[l + 1] - K[l];
+#else
     int sub = (int)(NF_FP_SUB * (x - K[l]) / (K[l + 1] - K[l]));
     sub = sub < 0 ? 0 : (sub >= NF_FP_SUB ? NF_FP_SUB - 1 : sub);
+#endif
     return (l - p) * NF_FP_SUB + sub;
+}
+
+/* Count (u, v), known finite and in the domain. */
+static inline void mark(nf_footprint_t *fp, double u, double v)
+{
+    const nf_surf_t *s = fp->s;
+    const int i = cell_of(s->U, s->nu - 1, s->p, u, fp->hu);
+    const int j = cell_of(s->V, s->nv - 1, s->q, v, fp->hv);
+    uint32_t *c = fp->count + i + (long)j * fp->cu;
+    *c += *c < UINT32_MAX; /* saturates: a count only needs to say "enough" */
 }
 
 int nf_footprint_add(nf_footprint_t *fp, double u, double v)
@@ -44,11 +62,25 @@ int nf_footprint_add(nf_footprint_t *fp, double u, double v)
         return NF_ENONFINITE;
     if (u < s->U[s->p] || u > s->U[s->nu] || v < s->V[s->q] || v > s->V[s->nv])
         return NF_EDOMAIN;
-    const int i = cell_of(s->U, s->nu - 1, s->p, u), j = cell_of(s->V, s->nv - 1, s->q, v);
-    uint32_t *c = fp->count + i + (long)j * fp->cu;
-    *c += *c < UINT32_MAX; /* saturates: a count only needs to say "enough" */
+    mark(fp, u, v);
     fp->points++;
     return NF_OK;
+}
+
+long nf_footprint_add_rows(nf_footprint_t *fp, const double *rows, long n, int stride)
+{
+    const nf_surf_t *s = fp->s;
+    const double u0 = s->U[s->p], u1 = s->U[s->nu], v0 = s->V[s->q], v1 = s->V[s->nv];
+    long m = 0;
+    for (long k = 0; k < n; k++, rows += stride) {
+        const double u = rows[0], v = rows[1];
+        if (u >= u0 && u <= u1 && v >= v0 && v <= v1) { /* false for NaN as well */
+            mark(fp, u, v);
+            m++;
+        }
+    }
+    fp->points += m;
+    return m;
 }
 
 long nf_footprint_cell(const nf_footprint_t *fp, int i, int j)

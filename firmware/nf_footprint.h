@@ -32,6 +32,7 @@ typedef struct nf_footprint {
     uint32_t *count;    /* points per cell, cell (i, j) at i + j cu */
     unsigned char *pin; /* per control point (nf_footprint_pin) */
     long long points;   /* points marked */
+    double hu, hv;      /* knot spans per unit parameter (the uniform guess of a span) */
 } nf_footprint_t;
 
 typedef struct nf_footprint_stats {
@@ -50,6 +51,11 @@ int nf_footprint_init(nf_footprint_t *fp, const nf_surf_t *s, void *mem, size_t 
 /* Mark a point at parameters (u, v). NF_EDOMAIN outside the knot domain,
  * NF_ENONFINITE for NaN/Inf. */
 int nf_footprint_add(nf_footprint_t *fp, double u, double v);
+
+/* Mark n points whose u, v are the first two of every stride doubles from
+ * rows: nf_footprint_add's cells, those it refuses skipped. The count
+ * marked. (One call per batch: issue 20's pass over every point.) */
+long nf_footprint_add_rows(nf_footprint_t *fp, const double *rows, long n, int stride);
 
 /* Points in cell (i, j), 0 <= i < cu, 0 <= j < cv. */
 long nf_footprint_cell(const nf_footprint_t *fp, int i, int j);

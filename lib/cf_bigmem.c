@@ -49,7 +49,8 @@ void *cf_bigmem_alloc(size_t n)
         return NULL;
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     if (n >= CF_BIGMEM_MIN) {
-        size_t len = (n + HDR + 4095) & ~(size_t)4095;
+        /* Whole huge pages: a tail of 4 KiB ones costs a fault each. */
+        size_t len = (n + HDR + HUGE - 1) & ~(HUGE - 1);
         char *m = map_aligned(len);
         if (m) {
             hdr_t h = {MAGIC_MAP, len};

@@ -13,14 +13,14 @@ static double clampd(double x, double lo, double hi)
     return x < lo ? lo : x > hi ? hi : x;
 }
 
-/* The power form of span l's p+1 basis functions about its middle m:
- * N_(l-p+a)(m + t) = sum_j M[j (p+1) + a] t^j, by Taylor (A2.3's exact
- * derivatives over j!): exact for a polynomial of degree p. */
-static void span_power(const nf_surf_t *s, int l, double *M)
+/* The power form of span l's p+1 basis functions (knots U) about its
+ * middle m: N_(l-p+a)(m + t) = sum_j M[j (p+1) + a] t^j, by Taylor (A2.3's
+ * exact derivatives over j!): exact for a polynomial of degree p. */
+static void span_power(const double *U, int p, int l, double *M)
 {
-    const int p = s->p, o = p + 1;
+    const int o = p + 1;
     double ders[NF_MAX_ORDER * NF_MAX_ORDER];
-    nf_ders_basis_funs(l, 0.5 * (s->U[l] + s->U[l + 1]), p, p, s->U, ders);
+    nf_ders_basis_funs(l, 0.5 * (U[l] + U[l + 1]), p, p, U, ders);
     double f = 1.0;
     for (int j = 0; j <= p; j++) {
         f = j > 0 ? f * j : 1.0;
@@ -44,8 +44,10 @@ int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s)
     const size_t o2 = (size_t)(s->p + 1) * (size_t)(s->p + 1);
     e->C = malloc(sizeof(double) * 3 * (size_t)s->nu);
     e->stamp = malloc(sizeof(long) * (size_t)s->nu);
+    const size_t q2 = (size_t)(s->q + 1) * (size_t)(s->q + 1);
     e->M = malloc(sizeof(double) * o2 * (size_t)(s->nu - s->p));
-    if (!e->C || !e->stamp || !e->M) {
+    e->Mv = malloc(sizeof(double) * q2 * (size_t)(s->nv - s->q));
+    if (!e->C || !e->stamp || !e->M || !e->Mv) {
         cf_surfrow_free(e);
         return CF_ENOMEM;
     }
@@ -53,7 +55,10 @@ int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s)
         e->stamp[i] = -1;
     for (int l = s->p; l < s->nu; l++)
         if (s->U[l] < s->U[l + 1]) /* empty spans are never found */
-            span_power(s, l, e->M + o2 * (size_t)(l - s->p));
+            span_power(s->U, s->p, l, e->M + o2 * (size_t)(l - s->p));
+    for (int k = s->q; k < s->nv; k++)
+        if (s->V[k] < s->V[k + 1])
+            span_power(s->V, s->q, k, e->Mv + q2 * (size_t)(k - s->q));
     e->row = -1;
     e->v = s->V[s->q] - 1.0; /* no row yet */
     e->umin = s->U[s->p], e->umax = s->U[s->nu];
@@ -100,6 +105,51 @@ static void row_span(cf_surfrow_t *e, int l)
     e->arow = e->row;
 }
 
+/* The p+1 basis functions at t from the span's power form M (Horner). */
+static void power_basis(const double *M, int p, double t, double *N)
+{
+    const int o = p + 1;
+    for (int a = 0; a < o; a++) {
+        double b = M[p * o + a];
+        for (int j = p - 1; j >= 0; j--)
+            b = b * t + M[j * o + a];
+        N[a] = b;
+    }
+}
+
+/* S at the current span l and row k from both bases, Eq. 1 as is: a point
+ * whose row has no second point costs (p+1)(q+1) x 3 multiply-adds and no
+ * row set-up (random order: the row path's columns and power form cost
+ * three times that, redone for every point). */
+static void direct(const cf_surfrow_t *e, double u, double out[3])
+{
+    const nf_surf_t *s = e->s;
+    const int p = s->p, q = s->q;
+    double Nu[NF_MAX_ORDER];
+    power_basis(e->M + (size_t)(p + 1) * (p + 1) * (size_t)(e->l - p), p, u - e->mid, Nu);
+    const double *P = s->cp + 3 * ((e->l - p) + (long)(e->k - q) * s->nu);
+    double x = 0.0, y = 0.0, z = 0.0;
+    if (p == 3) { /* the design degree, unrolled over u */
+        for (int b = 0; b <= q; b++, P += 3 * (long)s->nu) {
+            double cx = Nu[0] * P[0] + Nu[1] * P[3] + Nu[2] * P[6] + Nu[3] * P[9];
+            double cy = Nu[0] * P[1] + Nu[1] * P[4] + Nu[2] * P[7] + Nu[3] * P[10];
+            double cz = Nu[0] * P[2] + Nu[1] * P[5] + Nu[2] * P[8] + Nu[3] * P[11];
+            x += e->Nv[b] * cx, y += e->Nv[b] * cy, z += e->Nv[b] * cz;
+        }
+    } else {
+        for (int b = 0; b <= q; b++, P += 3 * (long)s->nu) {
+            double cx = 0.0, cy = 0.0, cz = 0.0;
+            for (int a = 0; a <= p; a++) {
+                cx += Nu[a] * P[3 * a];
+                cy += Nu[a] * P[3 * a + 1];
+                cz += Nu[a] * P[3 * a + 2];
+            }
+            x += e->Nv[b] * cx, y += e->Nv[b] * cy, z += e->Nv[b] * cz;
+        }
+    }
+    out[0] = x, out[1] = y, out[2] = z;
+}
+
 void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3])
 {
     const nf_surf_t *s = e->s;
@@ -110,10 +160,13 @@ void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3])
     const int p = s->p;
     u = clampd(u, e->umin, e->umax);
     v = clampd(v, e->vmin, e->vmax);
-    if (v != e->v) { /* a new row: its basis, and every column stale */
+    const int fresh = v != e->v;
+    if (fresh) { /* a new row: its basis, and every column stale */
         e->v = v;
         e->k = nf_find_span_from(e->k, s->nv - 1, s->q, v, s->V, e->hv);
-        nf_basis_funs(e->k, v, s->q, s->V, e->Nv);
+        const int q = s->q;
+        power_basis(e->Mv + (size_t)(q + 1) * (q + 1) * (size_t)(e->k - q), q,
+                    v - 0.5 * (s->V[e->k] + s->V[e->k + 1]), e->Nv);
         e->row++;
     }
     if (!(e->lo <= u && u < e->hi)) {
@@ -122,6 +175,10 @@ void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3])
         e->lo = s->U[l];
         e->hi = l == s->nu - 1 ? INFINITY : s->U[l + 1]; /* u <= umax: the last span's end */
         e->mid = 0.5 * (s->U[l] + s->U[l + 1]);
+    }
+    if (fresh) { /* the row's first point: no row set-up until a second */
+        direct(e, u, out);
+        return;
     }
     if (e->l != e->al || e->row != e->arow)
         row_span(e, e->l);
@@ -147,6 +204,8 @@ void cf_surfrow_free(cf_surfrow_t *e)
     free(e->C);
     free(e->stamp);
     free(e->M);
+    free(e->Mv);
+    e->Mv = NULL;
     e->C = NULL;
     e->stamp = NULL;
     e->M = NULL;

@@ -8,9 +8,11 @@
  * basis in power form, computed once per span at init, times the p+1
  * columns) once per row and span, and a point costs its span and Horner's
  * rule, p x 3 multiply-adds (issue 20: 289 instructions a point before,
- * N(u) per point). Same surface point as nf_surf_eval up to rounding (sums
- * regrouped). Rational surfaces (weights not all equal) go to
- * nf_surf_eval. Memory: 4 + (p+1)^2 doubles per control column. */
+ * N(u) per point). A row's first point (every point, in random order) is
+ * Eq. 1 itself from both bases in power form: no division, no row set-up.
+ * Same surface point as nf_surf_eval up to rounding (sums regrouped).
+ * Rational surfaces (weights not all equal) go to nf_surf_eval. Memory:
+ * 4 + (p+1)^2 doubles per control column, (q+1)^2 per control row. */
 #ifndef CF_SURFROW_H
 #define CF_SURFROW_H
 
@@ -23,6 +25,7 @@ typedef struct cf_surfrow {
     double *C;   /* 3 nu: the curve of the current row */
     long *stamp; /* nu: the row each C_i was computed for */
     double *M;   /* (p+1)^2 per u span l (at l - p): N_(l-p+a)(u) = sum_j M[j][a] t^j */
+    double *Mv;  /* (q+1)^2 per v span k (at k - q), the same for N(v) */
     long row;    /* rows seen (stamps) */
     double v;    /* the current row's v (clamped) */
     int k;       /* its v span */

@@ -30,6 +30,12 @@ void cf_edges_add(cf_edges_t *e, double u, double v)
         nf_footprint_add(&e->fp, u, v); /* NF_EDOMAIN, NF_ENONFINITE: not counted */
 }
 
+void cf_edges_add_rows(cf_edges_t *e, const double *rows, long n, int stride)
+{
+    if (e->mem)
+        nf_footprint_add_rows(&e->fp, rows, n, stride);
+}
+
 /* The knots of B not in A (both non-decreasing, A's a sub-multiset of
  * B's), at most r of them into X; the count, or -1 when A is not nested. */
 static int knot_diff(const double *A, int na, const double *B, int nb, double *X)

@@ -32,6 +32,8 @@ int cf_edges_begin(cf_edges_t *e, const nf_surf_t *cur);
 
 /* A row fitted at (u, v) (outside the domain or not finite: not counted). */
 void cf_edges_add(cf_edges_t *e, double u, double v);
+/* The rows' u, v (the first two of every stride doubles), n of them. */
+void cf_edges_add_rows(cf_edges_t *e, const double *rows, long n, int stride);
 
 /* Flag the control points of cur with no point in their support, and pin
  * them to nominal refined into cur's knots (nominal's knots must be a

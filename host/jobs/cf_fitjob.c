@@ -30,8 +30,9 @@
 
 /* Points read (and projected) at a time: a batch is the fitter's binning
  * window for random order (up to N points, nf_fit_add_rows). Fixed, and
- * touched whole when allocated, so that memory never follows the points. */
-#define BATCH 65536
+ * touched whole when allocated, so that memory never follows the points.
+ * 5 doubles a point fill one 2 MiB huge page (cf_bigmem) and no more. */
+#define BATCH 52400
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
 #define FOOT 2        /* doubles per kept foot: u v */
 #define SEEDS 8       /* seed samples per knot span and direction (cf_seedgrid) */
@@ -416,9 +417,11 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
     if (rc)
         *bad = uv != in && b >= 0 ? j->src[b] : b;
     /* The footprint of the rows in the fit (weight > 0): where data are. */
-    for (long k = 0; !rc && ps->ed.mem && k < m; k++)
-        if (cols == 5 || uv[6 * k + 5] > 0)
-            cf_edges_add(&ps->ed, uv[(long)cols * k], uv[(long)cols * k + 1]);
+    if (!rc && cols == 5)
+        cf_edges_add_rows(&ps->ed, uv, m, 5);
+    for (long k = 0; !rc && cols == 6 && ps->ed.mem && k < m; k++)
+        if (uv[6 * k + 5] > 0)
+            cf_edges_add(&ps->ed, uv[6 * k], uv[6 * k + 1]);
     ps->points += n;
     return rc;
 }
@@ -635,8 +638,7 @@ static void *fit_half(void *arg)
             memcpy(h->row, h->buf + 5 * (b >= 0 ? b : 0), sizeof h->row);
             break;
         }
-        for (long k = 0; h->ed->mem && k < got; k++)
-            cf_edges_add(h->ed, h->buf[5 * k], h->buf[5 * k + 1]);
+        cf_edges_add_rows(h->ed, h->buf, got, 5);
         h->n += got;
         if (h->r)
             progress(h->r, 2 * h->n);
@@ -818,9 +820,10 @@ static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, 
 {
     double P[3];
     cf_surfrow_eval(ev, q[0], q[1], P);
-    double d = sqrt((q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
-                    (q[4] - P[2]) * (q[4] - P[2]));
-    out->ss += d * d;
+    const double d2 = (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
+                      (q[4] - P[2]) * (q[4] - P[2]);
+    const double d = sqrt(d2);
+    out->ss += d2;
     out->mx = d > out->mx ? d : out->mx;
     out->n++;
     out->within += tol > 0 && d <= tol;
@@ -828,6 +831,20 @@ static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, 
         nf_rhist_add(&out->hist, d);
     out->outliers += cut > 0 && d >= cut;
     return d;
+}
+
+/* resid_add's sums where nothing needs d itself (no tolerance, no cut, no
+ * histogram: a plain fit's rms and max): no square root per point. The
+ * root of the largest d^2 is the largest d (sqrt is monotonic and
+ * correctly rounded); the caller takes it once. */
+static inline void resid_add2(resid_t *out, double *mx2, cf_surfrow_t *ev, const double *q)
+{
+    double P[3];
+    cf_surfrow_eval(ev, q[0], q[1], P);
+    const double d2 = (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
+                      (q[4] - P[2]) * (q[4] - P[2]);
+    out->ss += d2;
+    *mx2 = d2 > *mx2 ? d2 : *mx2;
 }
 
 static void *measure_half(void *arg)
@@ -840,14 +857,21 @@ static void *measure_half(void *arg)
         half_end(h);
         return NULL;
     }
+    const int sums = !(h->tol > 0) && !(h->cut > 0) && !h->want_hist;
+    double mx2 = 0.0;
     long got;
     while ((got = half_read(h)) > 0) {
-        for (long k = 0; k < got; k++)
+        for (long k = 0; sums && k < got; k++)
+            resid_add2(h->res, &mx2, &ev, h->buf + 5 * k);
+        for (long k = 0; !sums && k < got; k++)
             resid_add(h->res, &ev, h->buf + 5 * k, h->tol, h->cut, h->want_hist);
+        h->res->n += sums ? got : 0;
         h->n += got;
         if (h->r)
             progress(h->r, 2 * h->n);
     }
+    const double mx = sqrt(mx2);
+    h->res->mx = mx > h->res->mx ? mx : h->res->mx;
     cf_surfrow_free(&ev);
     half_end(h);
     return NULL;

@@ -23,8 +23,9 @@ static int thp_offered(void)
     return ok;
 }
 
-/* 1 if the mapping holding p is advised for huge pages (smaps' VmFlags). */
-static int advised_huge(const void *p)
+/* 1 if the mapping holding p is advised for huge pages (smaps' VmFlags);
+ * its length to *len (if len). */
+static int advised_huge_len(const void *p, size_t *len)
 {
     FILE *f = fopen("/proc/self/smaps", "r");
     if (!f)
@@ -34,13 +35,20 @@ static int advised_huge(const void *p)
     uintptr_t a = (uintptr_t)p;
     while (fgets(line, sizeof line, f)) {
         unsigned long lo, hi;
-        if (sscanf(line, "%lx-%lx ", &lo, &hi) == 2 && strchr(line, '-') < strchr(line, ' '))
+        if (sscanf(line, "%lx-%lx ", &lo, &hi) == 2 && strchr(line, '-') < strchr(line, ' ')) {
             in = a >= lo && a < hi;
-        else if (in && !strncmp(line, "VmFlags:", 8))
+            if (in && len)
+                *len = hi - lo;
+        } else if (in && !strncmp(line, "VmFlags:", 8))
             hg = strstr(line, " hg") != NULL;
     }
     fclose(f);
     return hg;
+}
+
+static int advised_huge(const void *p)
+{
+    return advised_huge_len(p, NULL);
 }
 
 static void fill_check(unsigned char *p, size_t n)
@@ -88,6 +96,36 @@ static void test_large(void **state)
     }
 }
 
+/* From half a huge page up: whole huge pages, no 4 KiB tail (each of its
+ * pages would be a fault of its own). */
+static void test_whole_pages(void **state)
+{
+    (void)state;
+    const size_t H = (size_t)2 << 20;
+    const size_t sizes[] = {CF_BIGMEM_MIN, H - 4096, H + 12345, 3 * H - 64};
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+        size_t n = sizes[k];
+        unsigned char *p = cf_bigmem_alloc(n);
+        assert_non_null(p);
+        fill_check(p, n);
+#if defined(__linux__)
+        assert_true(cf_bigmem_huge(p));
+        size_t len = 0;
+        if (thp_offered()) {
+            assert_int_equal(advised_huge_len(p, &len), 1);
+            assert_int_equal(len % H, 0);
+            assert_true(len >= n + 64);
+            assert_true(len < n + 64 + H);
+        }
+#endif
+        cf_bigmem_free(p);
+    }
+    unsigned char *q = cf_bigmem_alloc(CF_BIGMEM_MIN - 1); /* below: malloc's */
+    assert_non_null(q);
+    assert_false(cf_bigmem_huge(q));
+    cf_bigmem_free(q);
+}
+
 static void test_too_large(void **state)
 {
     (void)state;
@@ -99,6 +137,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_small),
         cmocka_unit_test(test_large),
+        cmocka_unit_test(test_whole_pages),
         cmocka_unit_test(test_too_large),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -370,12 +370,67 @@ static void test_honest_edges(void **state)
     free(tm);
 }
 
+/* nf_footprint_add_rows against the per-point nf_footprint_add on uneven
+ * knots (the uniform guess misses): the same counts, refused rows (NaN,
+ * outside the domain) skipped and not counted; and the cells at the
+ * boundaries by hand: a span's midpoint opens its upper cell, the
+ * domain's end is in the last. */
+static void test_rows_and_boundaries(void **state)
+{
+    (void)state;
+    ref_seed(977);
+    nf_surf_t s;
+    double *sm = part(&s, 9, 7, 0.0); /* 6 x 4 spans */
+    const double U[] = {0, 0, 0, 0, 0.0625, 0.3125, 0.34375, 0.6875, 0.875, 1, 1, 1, 1};
+    memcpy(s.U, U, sizeof U);
+    size_t bytes;
+    void *ma = fp_mem(&s, &bytes), *mb = fp_mem(&s, &bytes);
+    nf_footprint_t a, b;
+    assert_int_equal(nf_footprint_init(&a, &s, ma, bytes), NF_OK);
+    assert_int_equal(nf_footprint_init(&b, &s, mb, bytes), NF_OK);
+    enum { M = 5000, W = 6 };
+    static double rows[M * W];
+    long ok = 0;
+    for (long k = 0; k < M; k++) {
+        double *r = rows + W * k;
+        r[0] = ref_rand(-0.1, 1.1);
+        r[1] = ref_rand(-0.1, 1.1);
+        if (k % 97 == 0)
+            r[k % 2] = NAN;
+        if (k % 89 == 0) /* knots and span midpoints exactly */
+            r[0] = U[4 + k % 5], r[1] = 0.5 * (U[5 + k % 4] + U[6 + k % 4]);
+        r[2] = r[3] = r[4] = r[5] = 1e300; /* not read */
+        ok += nf_footprint_add(&a, r[0], r[1]) == NF_OK;
+    }
+    assert_true(ok > M / 2 && ok < M);
+    assert_int_equal(nf_footprint_add_rows(&b, rows, M, W), ok);
+    assert_int_equal(b.points, ok);
+    assert_int_equal(a.points, ok);
+    for (int j = 0; j < b.cv; j++)
+        for (int i = 0; i < b.cu; i++)
+            assert_int_equal(nf_footprint_cell(&b, i, j), nf_footprint_cell(&a, i, j));
+    /* By hand (dyadic knots: the midpoints exact): span 1 of u is
+     * [0.0625, 0.3125), its cells 2 (lower) and 3. */
+    nf_footprint_init(&a, &s, ma, bytes);
+    const double pts[][2] = {
+        {0.1875, 0.0}, {nextafter(0.1875, 0.0), 0.0}, {1.0, 1.0}, {0.0625, 0.5}};
+    const int cell[][2] = {{3, 0}, {2, 0}, {11, 7}, {2, 4}};
+    for (int k = 0; k < 4; k++) {
+        assert_int_equal(nf_footprint_add_rows(&a, pts[k], 1, 2), 1);
+        assert_int_equal(nf_footprint_cell(&a, cell[k][0], cell[k][1]), 1);
+    }
+    free(ma);
+    free(mb);
+    free(sm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cells_and_stats),
         cmocka_unit_test(test_pin_dense),
         cmocka_unit_test(test_honest_edges),
+        cmocka_unit_test(test_rows_and_boundaries),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
