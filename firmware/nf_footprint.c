@@ -45,14 +45,19 @@ static inline int cell_of(const double *K, int n, int p, double x, double h)
     return (l - p) * NF_FP_SUB + sub;
 }
 
-/* Count (u, v), known finite and in the domain. */
-static inline void mark(nf_footprint_t *fp, double u, double v)
+/* Count a point of u (known finite, in the domain) in the cell row that
+ * starts at row. */
+static inline void mark(nf_footprint_t *fp, double u, long row)
 {
     const nf_surf_t *s = fp->s;
-    const int i = cell_of(s->U, s->nu - 1, s->p, u, fp->hu);
-    const int j = cell_of(s->V, s->nv - 1, s->q, v, fp->hv);
-    uint32_t *c = fp->count + i + (long)j * fp->cu;
+    uint32_t *c = fp->count + cell_of(s->U, s->nu - 1, s->p, u, fp->hu) + row;
     *c += *c < UINT32_MAX; /* saturates: a count only needs to say "enough" */
+}
+
+static inline long cell_row(const nf_footprint_t *fp, double v)
+{
+    const nf_surf_t *s = fp->s;
+    return (long)cell_of(s->V, s->nv - 1, s->q, v, fp->hv) * fp->cu;
 }
 
 int nf_footprint_add(nf_footprint_t *fp, double u, double v)
@@ -62,7 +67,7 @@ int nf_footprint_add(nf_footprint_t *fp, double u, double v)
         return NF_ENONFINITE;
     if (u < s->U[s->p] || u > s->U[s->nu] || v < s->V[s->q] || v > s->V[s->nv])
         return NF_EDOMAIN;
-    mark(fp, u, v);
+    mark(fp, u, cell_row(fp, v));
     fp->points++;
     return NF_OK;
 }
@@ -71,13 +76,18 @@ long nf_footprint_add_rows(nf_footprint_t *fp, const double *rows, long n, int s
 {
     const nf_surf_t *s = fp->s;
     const double u0 = s->U[s->p], u1 = s->U[s->nu], v0 = s->V[s->q], v1 = s->V[s->nv];
-    long m = 0;
+    long m = 0, row = 0;
+    double last = v0 - 1.0; /* no v yet */
     for (long k = 0; k < n; k++, rows += stride) {
         const double u = rows[0], v = rows[1];
-        if (u >= u0 && u <= u1 && v >= v0 && v <= v1) { /* false for NaN as well */
-            mark(fp, u, v);
-            m++;
+        if (!(u >= u0 && u <= u1 && v >= v0 && v <= v1)) /* true for NaN as well */
+            continue;
+        if (v != last) { /* a scanner's row shares its v: its cell row once */
+            last = v;
+            row = cell_row(fp, v);
         }
+        mark(fp, u, row);
+        m++;
     }
     fp->points += m;
     return m;

@@ -511,6 +511,49 @@ static void check_raw(const char *name, int cols, long n)
     free(want), free(b), free(got);
 }
 
+/* Non-finite values the large reads (straight into the caller's rows, the
+ * branch-free check) refuse, with the point named: inf, -inf, quiet and
+ * signalling NaN, at a block's start, inside it, and in the tail; finite
+ * extremes (DBL_MAX, the smallest subnormal, -0) pass. */
+static void test_raw_nonfinite_direct(void **state)
+{
+    (void)state;
+    enum { N = 3001, C = 5 };
+    char path[600];
+    tmp_path(path, sizeof path, "nf.uvxyz.bin");
+    static unsigned char b[8 * N * C];
+    static double got[N * C];
+    const unsigned long long bad[] = {0x7ff0000000000000ULL, 0xfff0000000000000ULL,
+                                      0x7ff8000000000000ULL, 0x7ff0000000000001ULL,
+                                      0xffffffffffffffffULL};
+    const long at[] = {0, 1, 3, 4, 5 * 1000 + 2, N * C - 1};
+    for (size_t a = 0; a < sizeof at / sizeof at[0]; a++)
+        for (size_t v = 0; v < sizeof bad / sizeof bad[0]; v++) {
+            for (long i = 0; i < N * C; i++)
+                le_bytes(b + 8 * i, i % 3 == 0 ? DBL_MAX : i % 3 == 1 ? 4.9e-324 : -0.0);
+            double x;
+            memcpy(&x, &bad[v], sizeof x);
+            le_bytes(b + 8 * at[a], x);
+            write_bytes(path, b, sizeof b);
+            cf_points_t *r;
+            assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+            assert_int_equal(cf_points_read(r, got, N, msg, sizeof msg), CF_EPARSE);
+            char want[64];
+            snprintf(want, sizeof want, "point %ld: non-finite", at[a] / C + 1);
+            assert_msg(want);
+            cf_points_close(r);
+        }
+    for (long i = 0; i < N * C; i++)
+        le_bytes(b + 8 * i, i % 3 == 0 ? -DBL_MAX : i % 3 == 1 ? -4.9e-324 : 0.0);
+    write_bytes(path, b, sizeof b);
+    cf_points_t *r;
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_read(r, got, N, msg, sizeof msg), N);
+    assert_int_equal(cf_points_read(r, got, N, msg, sizeof msg), 0);
+    cf_points_close(r);
+    remove(path);
+}
+
 static void test_raw_float64(void **state)
 {
     (void)state;
@@ -859,6 +902,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_batches_across_buffer),
         cmocka_unit_test(test_bit_identical_to_strtod),
         cmocka_unit_test(test_raw_float64),
+        cmocka_unit_test(test_raw_nonfinite_direct),
         cmocka_unit_test(test_rewind),
         cmocka_unit_test(test_stdin_not_rewindable),
         cmocka_unit_test(test_errors_name_the_line),
