@@ -65,6 +65,7 @@ int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s)
     e->vmin = s->V[s->q], e->vmax = s->V[s->nv];
     e->lo = 1.0, e->hi = 0.0; /* no span yet: [lo, hi) empty */
     e->hu = (s->nu - s->p) / (s->U[s->nu] - s->U[s->p]);
+    e->p3 = s->p == 3;
     e->hv = (s->nv - s->q) / (s->V[s->nv] - s->V[s->q]);
     return CF_OK;
 }
@@ -150,7 +151,7 @@ static void direct(const cf_surfrow_t *e, double u, double out[3])
     out[0] = x, out[1] = y, out[2] = z;
 }
 
-void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3])
+void cf_surfrow_eval_any(cf_surfrow_t *e, double u, double v, double out[3])
 {
     const nf_surf_t *s = e->s;
     if (!e->C) {
@@ -173,7 +174,9 @@ void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3])
         const int l = nf_find_span_from(e->l, s->nu - 1, p, u, s->U, e->hu);
         e->l = l;
         e->lo = s->U[l];
-        e->hi = l == s->nu - 1 ? INFINITY : s->U[l + 1]; /* u <= umax: the last span's end */
+        /* The last span's end is in it: u < next(umax) is u <= umax, so
+         * the inline case never takes a u past the domain unclamped. */
+        e->hi = l == s->nu - 1 ? nextafter(e->umax, INFINITY) : s->U[l + 1];
         e->mid = 0.5 * (s->U[l] + s->U[l + 1]);
     }
     if (fresh) { /* the row's first point: no row set-up until a second */

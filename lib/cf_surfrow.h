@@ -34,15 +34,32 @@ typedef struct cf_surfrow {
     int al;                        /* the u span of A, -1 none */
     long arow;                     /* the row of A */
     double A[3 * NF_MAX_ORDER];    /* the row's curve on span al: x y z per power of t */
-    double lo, hi, mid;            /* span l: [lo, hi) (hi included on the last), middle */
+    double lo, hi, mid;            /* span l: [lo, hi) (hi: just past umax on the last), middle */
+    int p3;                        /* polynomial (C set) of degree 3 in u: the inline case */
     double umin, umax, vmin, vmax; /* the domain */
     double hu, hv;                 /* spans per unit parameter (the uniform guess) */
 } cf_surfrow_t;
 
 /* CF_OK or CF_ENOMEM. s must outlive e and keep its net. */
 int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s);
-/* S(u, v), the parameters clamped to the domain like nf_surf_eval's. */
-void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3]);
+/* cf_surfrow_eval's general case (any row, span or degree). */
+void cf_surfrow_eval_any(cf_surfrow_t *e, double u, double v, double out[3]);
+
+/* S(u, v), the parameters clamped to the domain like nf_surf_eval's.
+ * Inline for the common case, a point on the last point's row and u span
+ * at degree 3 in u: Horner's rule on the span's power form, no call (the
+ * residual pass's cost per point, issue 20). */
+static inline void cf_surfrow_eval(cf_surfrow_t *e, double u, double v, double out[3])
+{
+    if (v == e->v && e->al == e->l && e->arow == e->row && e->lo <= u && u < e->hi && e->p3) {
+        const double t = u - e->mid, *A = e->A;
+        out[0] = ((A[9] * t + A[6]) * t + A[3]) * t + A[0];
+        out[1] = ((A[10] * t + A[7]) * t + A[4]) * t + A[1];
+        out[2] = ((A[11] * t + A[8]) * t + A[5]) * t + A[2];
+        return;
+    }
+    cf_surfrow_eval_any(e, u, v, out);
+}
 void cf_surfrow_free(cf_surfrow_t *e);
 
 #endif

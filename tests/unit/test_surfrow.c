@@ -146,11 +146,46 @@ static void test_same_as_nf_surf_eval(void **state)
     check_vs_eval(3, 3, 15, 12, 1, 1);
 }
 
+/* Along one row: the inline case (same row, same u span) must not take a
+ * u past the domain's end unclamped, nor one on the span's far knot; a
+ * row's first point (no row set-up) and the ones after agree with
+ * nf_surf_eval, on uniform and uneven knots. */
+static void test_row_walk_edges(void **state)
+{
+    (void)state;
+    for (int uneven = 0; uneven <= 1; uneven++) {
+        nf_surf_t s;
+        make(&s, 3, 3, 11, 9, uneven, 0);
+        double *w = s.w;
+        s.w = NULL; /* polynomial */
+        cf_surfrow_t e;
+        assert_int_equal(cf_surfrow_init(&e, &s), CF_OK);
+        const double k1 = s.U[s.nu - 1]; /* the last span's start */
+        const double u[] = {0.97,  0.99, 1.0,    nextafter(1.0, 2.0),   1.25,
+                            0.999, 1.5,  k1,     nextafter(k1, 0.0),    0.5 * (k1 + 1.0),
+                            -0.5,  0.0,  s.U[4], nextafter(s.U[4], 0.0)};
+        for (int row = 0; row < 3; row++) {
+            const double v = row == 0 ? 0.5 : row == 1 ? 1.0 : -3.0;
+            for (size_t k = 0; k < sizeof u / sizeof u[0]; k++) {
+                double P[3], Q[3];
+                cf_surfrow_eval(&e, u[k], v, P);
+                nf_surf_eval(&s, u[k], v, Q);
+                for (int c = 0; c < 3; c++)
+                    assert_near(P[c], Q[c], 1e-12);
+            }
+        }
+        cf_surfrow_free(&e);
+        s.w = w;
+        cf_surf_free(&s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_linear_precision),
         cmocka_unit_test(test_same_as_nf_surf_eval),
+        cmocka_unit_test(test_row_walk_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
