@@ -6,6 +6,7 @@
  * 128 and of its transformation matrices), Terminate (counts checked).
  * Nothing is allocated from a count in the file before the values behind it
  * have been read, so a lying header cannot make it allocate much. */
+#include "cf_bigmem.h"
 #include "cf_err.h"
 #include "cf_fmt.h"
 #include "cf_iges.h"
@@ -22,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #define IG_INBUF 65536
@@ -602,6 +604,34 @@ static int ig_dline(ig_rd_t *c, const ig_rec_t *r)
     return CF_OK;
 }
 
+/* Room for more of w's P lines: at first all pcount of them (no regrowth;
+ * a large net's on huge pages, cf_bigmem), unless the file is too short
+ * to hold them (a damaged count: then as the lines come, doubling). */
+static int ig_par_grow(ig_rd_t *c, ig_par_t *w)
+{
+    struct stat st;
+    long most = fstat(fileno(c->in->f), &st) ? 16 : (long)(st.st_size / 64) + 16;
+    long n = w->lcap ? 2 * w->lcap : w->pcount;
+    n = n > most && !w->lcap ? most : n;
+    n = n > w->pcount ? w->pcount : n;
+    n = n < w->got + 1 ? w->got + 1 : n;
+    char *nd = cf_bigmem_alloc((size_t)n * IG_PCOLS + IG_PAD);
+    long *nl = realloc(w->lines, sizeof *nl * (size_t)n);
+    if (nl)
+        w->lines = nl;
+    if (!nd || !nl) {
+        cf_bigmem_free(nd);
+        return CF_ENOMEM;
+    }
+    if (w->len)
+        memcpy(nd, w->data, w->len);
+    cf_bigmem_free(w->data);
+    w->data = nd;
+    w->cap = (size_t)n * IG_PCOLS;
+    w->lcap = n;
+    return CF_OK;
+}
+
 static int ig_pline(ig_rd_t *c, const ig_rec_t *r)
 {
     long k = ++c->count[3];
@@ -614,22 +644,8 @@ static int ig_pline(ig_rd_t *c, const ig_rec_t *r)
         ig_par_t *w = &c->want[i];
         if (k < w->pptr || k >= w->pptr + w->pcount)
             continue;
-        if (w->len + IG_PCOLS > w->cap) {
-            size_t cap = w->cap ? 2 * w->cap : 16 * IG_PCOLS;
-            char *nd = realloc(w->data, cap + IG_PAD);
-            if (!nd)
-                return ig_fail(c, CF_ENOMEM, "out of memory for parameter data");
-            w->data = nd;
-            w->cap = cap;
-        }
-        if (w->got == w->lcap) {
-            long cap = w->lcap ? 2 * w->lcap : 16;
-            long *nl = realloc(w->lines, sizeof *nl * (size_t)cap);
-            if (!nl)
-                return ig_fail(c, CF_ENOMEM, "out of memory for parameter data");
-            w->lines = nl;
-            w->lcap = cap;
-        }
+        if (w->got == w->lcap && ig_par_grow(c, w))
+            return ig_fail(c, CF_ENOMEM, "out of memory for parameter data");
         memcpy(w->data + w->len, r->t, IG_PCOLS);
         w->len += IG_PCOLS;
         w->lines[w->got++] = r->line;
@@ -1324,7 +1340,7 @@ static void ig_rd_free(ig_rd_t *c)
     free(c->g);
     free(c->de);
     for (int i = 0; i < c->nwant; i++) {
-        free(c->want[i].data);
+        cf_bigmem_free(c->want[i].data);
         free(c->want[i].lines);
     }
 }

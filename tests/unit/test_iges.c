@@ -962,6 +962,11 @@ static void test_damaged_files(void **state)
     expect_a(patched(iges_a, 3, 73, "X"), 0, CF_EPARSE, "line 3");
     /* The parameter pointer of DE 3 beyond the P section. */
     expect_a(patched(iges_a, 9, 9, "      99"), 0, CF_EPARSE, "DE 3");
+    /* Its line count beyond the file (the P data's room is sized by the
+     * count, bounded by the file's size): refused, nothing allocated for
+     * the count. */
+    expect_a(patched(iges_a, 10, 25, "     500"), 0, CF_EPARSE, "DE 3");
+    expect_a(patched(iges_a, 10, 25, " 9999999"), 0, CF_EPARSE, "DE 3");
     /* Empty file, blank file. */
     write_bytes(path, "", 0);
     assert_int_equal(cf_iges_read(path, 0, &s, msg, sizeof msg), CF_EPARSE);
