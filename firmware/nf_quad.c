@@ -647,6 +647,41 @@ static int has_crease(const double *K, int n, int p)
     return 0;
 }
 
+/* What Newton reads (q->ru, q->rv carved): the reciprocals of every
+ * span, the crease and rational flags. */
+static void newton_setup(nf_quad_t *q, const nf_surf_t *s)
+{
+    for (int l = s->p; l < s->nu; l++)
+        if (s->U[l] < s->U[l + 1])
+            nf_basis_recip(l, s->p, s->U, q->ru + (long)l * NF_RECIP_LEN);
+    for (int k = s->q; k < s->nv; k++)
+        if (s->V[k] < s->V[k + 1])
+            nf_basis_recip(k, s->q, s->V, q->rv + (long)k * NF_RECIP_LEN);
+    q->creased = has_crease(s->U, s->nu - 1, s->p) || has_crease(s->V, s->nv - 1, s->q);
+    /* Equal weights cancel: the surface is polynomial (the host's surfaces
+     * carry weights 1), and Newton skips the quotient rule. */
+    q->rational = 0;
+    for (long k = 1; s->w && k < (long)s->nu * s->nv; k++)
+        q->rational |= s->w[k] != s->w[0];
+}
+
+int nf_quad_newton_init(nf_quad_t *q, const nf_surf_t *s, void *mem, size_t bytes)
+{
+    if (!q || !s || !mem)
+        return NF_EARG;
+    if (bytes < NF_QUAD_NEWTON_BYTES(s->nu, s->nv))
+        return NF_EARENA;
+    memset(q, 0, sizeof *q);
+    q->s = s;
+    nf_surf_domain(s, &q->dom[0], &q->dom[1], &q->dom[2], &q->dom[3]);
+    unsigned char *base = (unsigned char *)mem;
+    base += (64 - (uintptr_t)base % 64) % 64;
+    q->ru = (double *)(void *)base;
+    q->rv = q->ru + (long)(s->nu + 1) * NF_RECIP_LEN;
+    newton_setup(q, s);
+    return NF_OK;
+}
+
 long nf_quad_count(const nf_quad_t *q)
 {
     return (long)(q->nu - 1) * (q->nv - 1);
@@ -676,12 +711,7 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->ru = q->qd + NF_QUAD_QD * maxq;
     q->rv = q->ru + (long)(s->nu + 1) * NF_RECIP_LEN;
     int *im = (int *)(void *)(base + sizeof(double) * (size_t)NF_QUAD_DOUBLES_(maxq, s->nu, s->nv));
-    for (int l = s->p; l < s->nu; l++)
-        if (s->U[l] < s->U[l + 1])
-            nf_basis_recip(l, s->p, s->U, q->ru + (long)l * NF_RECIP_LEN);
-    for (int k = s->q; k < s->nv; k++)
-        if (s->V[k] < s->V[k + 1])
-            nf_basis_recip(k, s->q, s->V, q->rv + (long)k * NF_RECIP_LEN);
+    newton_setup(q, s);
     /* Size of the surface: the diagonal of its control net's box. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (long k = 0; k < (long)s->nu * s->nv; k++)
@@ -694,12 +724,6 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->tol = prm->rel_tol * size;
     q->limit = prm->limit > 0.0 ? prm->limit : 0.05 * size;
     q->drop_far = prm->drop_far;
-    q->creased = has_crease(s->U, s->nu - 1, s->p) || has_crease(s->V, s->nv - 1, s->q);
-    /* Equal weights cancel: the surface is polynomial (the host's surfaces
-     * carry weights 1), and Newton skips the quotient rule. */
-    q->rational = 0;
-    for (long k = 1; s->w && k < (long)s->nu * s->nv; k++)
-        q->rational |= s->w[k] != s->w[0];
     dec_t d;
     d.s = s;
     d.tol = q->tol;
@@ -1111,6 +1135,12 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
         cv = nv;
     }
     return 0;
+}
+
+int nf_quad_newton(const nf_quad_t *q, const double Q[3], double tol, double *u, double *v,
+                   nf_proj_t *out)
+{
+    return !q->creased && newton_fast(q, Q, tol, u, v, out);
 }
 
 int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out)

@@ -63,6 +63,11 @@ struct cf_fitjob {
      * surface, so each foot is its start (Newton ends there). nfeet 0: none. */
     double *feet;
     long nfeet, fcap;
+    /* 1: the last search's surface did not fold over (the quadrilaterals
+     * served): the check pass may take Newton from the last feet. Over a
+     * fold the surface's change between fits can swap which layer is
+     * nearer, and the search (every valley within reach) decides. */
+    int flat;
 };
 
 void cf_fitjob_defaults(cf_fitjob_opts_t *o)
@@ -265,13 +270,32 @@ typedef struct weigh {
 } weigh_t;
 
 /* Feet on a surface by the seed grid's search, the grid set up at its
- * first use (a pass that projects nothing never builds it). */
+ * first use (a pass that projects nothing never builds it); and Newton
+ * alone from a start of the caller's (nf_quad_newton), set up likewise. */
 typedef struct proj {
     const nf_surf_t *s;
     cf_seedgrid_t g;
     int ready;
     int rc; /* the last projection's code */
+    nf_quad_t nq;
+    void *nqmem;
+    int nready; /* 1: nq set up; -1: no memory for it */
 } proj_t;
+
+/* Newton on p->s from (u, v) to an interior foot; 0 when it gave up (the
+ * caller then searches as before: bounds and the true foot are its). */
+static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj_t *out)
+{
+    if (!p->nready) {
+        const size_t b = NF_QUAD_NEWTON_BYTES(p->s->nu, p->s->nv);
+        p->nqmem = malloc(b);
+        p->nready = p->nqmem && nf_quad_newton_init(&p->nq, p->s, p->nqmem, b) == NF_OK ? 1 : -1;
+    }
+    if (p->nready < 0 || !nf_quad_newton(&p->nq, Q, PROJ_TOL, &u, &v, out))
+        return 0;
+    p->rc = NF_OK;
+    return 1;
+}
 
 static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
 {
@@ -309,6 +333,9 @@ static void proj_free(proj_t *p)
     if (p->ready)
         cf_seedgrid_free(&p->g);
     p->ready = 0;
+    free(p->nqmem);
+    p->nqmem = NULL;
+    p->nready = 0;
 }
 
 /* One pass: a fresh fitter on cur's space (P0 = cur's net, cf_fitpass in
@@ -325,15 +352,16 @@ typedef struct pass {
 } pass_t;
 
 /* The foot of point i (Q) from its foot on the surface before Boehm
- * insertion: Newton from there; 0 (search) when there is none or Newton
- * fails (a foot on a bound is checked by nf_project_edge, as the search's). */
-static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, const double Q[3],
-                     nf_proj_t *out)
+ * insertion: Newton from there (the inline one for an interior foot, else
+ * nf_project); 0 (search) when there is none or Newton fails (a foot on a
+ * bound is checked by nf_project_edge, as the search's). */
+static int foot_from(const cf_fitjob_t *j, pass_t *ps, long i, const double Q[3], nf_proj_t *out)
 {
     if (i >= ps->nin || !(j->feet[FOOT * i] == j->feet[FOOT * i]))
         return 0;
-    return nf_project(ps->proj, Q, j->feet[FOOT * i], j->feet[FOOT * i + 1], PROJ_TOL, out) ==
-           NF_OK;
+    const double u = j->feet[FOOT * i], v = j->feet[FOOT * i + 1];
+    return proj_newton(&ps->pj, Q, u, v, out) ||
+           nf_project(ps->proj, Q, u, v, PROJ_TOL, out) == NF_OK;
 }
 
 /* Foot i (u, v; NaN u: none) into the job's feet, in order. */
@@ -895,8 +923,11 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     memset(&pj, 0, sizeof pj);
     pj.s = s;
     int uv = src->cols == 5;
-    /* The check's feet: the next round's fit pass starts from them. */
+    /* The check's feet: the next round's fit pass starts from them. The
+     * feet before (the last check's, on the previous fit) start this
+     * pass's Newton; where it gives up, or over a fold, the search. */
     const int keep = ck && !uv && j->o.loop;
+    const long nin = uv || !j->flat ? 0 : j->nfeet;
     if (keep)
         j->nfeet = 0;
     /* Given parameters and only the sums: each half on its own core. */
@@ -923,7 +954,9 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
-                if (proj_foot(&pj, Q, &pr)) {
+                const double *f = j->feet + FOOT * out->n;
+                if (!(out->n < nin && f[0] == f[0] && proj_newton(&pj, Q, f[0], f[1], &pr)) &&
+                    proj_foot(&pj, Q, &pr)) {
                     rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
                     break;
                 }
@@ -958,6 +991,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     if (keep && (rc || out->n != j->nfeet))
         j->nfeet = 0; /* not every point's: no starts */
     cf_surfrow_free(&ev);
+    if (pj.ready)
+        j->flat = pj.g.use_quad;
     proj_free(&pj);
     return rc;
 }
