@@ -33,7 +33,7 @@
  * touched whole when allocated, so that memory never follows the points. */
 #define BATCH 65536
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
-#define FOOT 2        /* doubles per kept foot: u v */
+#define FOOT 3        /* doubles per kept foot: u v d (|distance|, negative: on a bound) */
 #define SEEDS 8       /* seed samples per knot span and direction (cf_seedgrid) */
 
 struct cf_fitjob {
@@ -57,10 +57,11 @@ struct cf_fitjob {
     long nhold, hcap;
     int hold_over;
     long nlive; /* live points added */
-    /* The feet of the last check pass (u v per point in source order, at
-     * most CF_FITJOB_HOLD_ROWS; NaN: search again): the next round's fit
+    /* The feet of the last check pass (FOOT per point in source order, at
+     * most CF_FITJOB_HOLD_ROWS; NaN u: search again): the next round's fit
      * pass projects onto that fit refined by Boehm insertion, the same
-     * surface, so each foot is its start (Newton ends there). nfeet 0: none. */
+     * surface, so each foot is its foot there (Newton from it ends where
+     * it starts: test_foot's refined_part). nfeet 0: none. */
     double *feet;
     long nfeet, fcap;
     /* 1: the last search's surface did not fold over (the quadrilaterals
@@ -351,26 +352,33 @@ typedef struct pass {
     double ss0, mx0; /* |distance| to proj of the points projected */
 } pass_t;
 
-/* The foot of point i (Q) from its foot on the surface before Boehm
- * insertion: Newton from there (the inline one for an interior foot, else
- * nf_project); 0 (search) when there is none or Newton fails (a foot on a
- * bound is checked by nf_project_edge, as the search's). */
-static int foot_from(const cf_fitjob_t *j, pass_t *ps, long i, const double Q[3], nf_proj_t *out)
+/* The foot of point i on the surface before Boehm insertion, which is its
+ * foot after it (the same surface: Newton, nf_project's boundary check
+ * included, would end where it starts); 0 (search) when there is none.
+ * The pass reads u, v, |dist| and clamped only: foot[] is not set. */
+static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, nf_proj_t *out)
 {
-    if (i >= ps->nin || !(j->feet[FOOT * i] == j->feet[FOOT * i]))
+    const double *f = j->feet + FOOT * i;
+    if (i >= ps->nin || !(f[0] == f[0]))
         return 0;
-    const double u = j->feet[FOOT * i], v = j->feet[FOOT * i + 1];
-    return proj_newton(&ps->pj, Q, u, v, out) ||
-           nf_project(ps->proj, Q, u, v, PROJ_TOL, out) == NF_OK;
+    out->u = f[0];
+    out->v = f[1];
+    out->dist = fabs(f[2]);
+    out->clamped = signbit(f[2]) != 0;
+    out->foot[0] = out->foot[1] = out->foot[2] = NAN;
+    out->iters = 0;
+    return 1;
 }
 
-/* Foot i (u, v; NaN u: none) into the job's feet, in order. */
+/* Foot i (NaN u: none) into the job's feet, in order. */
 static void foot_keep(cf_fitjob_t *j, long i, const nf_proj_t *pr, int ok)
 {
     if (i > j->nfeet || (i == j->nfeet && !feet_room(j, i + 1)))
         return;
-    j->feet[FOOT * i] = ok ? pr->u : NAN;
-    j->feet[FOOT * i + 1] = pr->v;
+    double *f = j->feet + FOOT * i;
+    f[0] = ok ? pr->u : NAN;
+    f[1] = pr->v;
+    f[2] = pr->clamped ? -fabs(pr->dist) : fabs(pr->dist);
     j->nfeet += i == j->nfeet;
 }
 
@@ -415,7 +423,7 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
             if (ps->proj) {
                 const double *Q = in + 3 * k;
                 nf_proj_t pr;
-                if (!foot_from(j, ps, ps->points + k, Q, &pr) && proj_foot(&ps->pj, Q, &pr)) {
+                if (!foot_from(j, ps, ps->points + k, &pr) && proj_foot(&ps->pj, Q, &pr)) {
                     *bad = k;
                     return CF_ENOMEM;
                 }

@@ -497,11 +497,12 @@ static long next_fit(const char *part, const nf_surf_t *r, int bnu, int bnv, con
 }
 
 /* The tolerance loop's next round (cf_fitjob): Boehm insertion keeps the
- * surface, so the foot found on it is the start on the refined net, and
- * Newton from there must end on the refined surface's true foot (brute
- * force on the refined surface) at the same parameters, without a search:
- * nf_project, and the fit pass's first try, nf_quad_newton, which must
- * converge on every interior foot and give up on every boundary one. */
+ * surface, so the foot found on it is the foot on the refined net: Newton
+ * from there must end on the refined surface's true foot (brute force on
+ * the refined surface) at the same parameters and distance, without a
+ * search (so the fit pass reuses it as it is). nf_quad_newton likewise
+ * must converge on every interior foot and give up on every boundary one;
+ * the feet then start the check pass's Newton on the next fit (next_fit). */
 static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
                          unsigned long long seed)
 {
@@ -552,6 +553,11 @@ static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
             fail_msg("%s: brute force %.17g missed the foot %.17g", part, db, fabs(f1.dist));
         worst = fmax(worst, (fabs(f1.dist) - db) / scale);
         moved = fmax(moved, fmax(fabs(f1.u - f0.u), fabs(f1.v - f0.v)));
+        /* cf_fitjob's fit pass takes the old foot as it is: same distance,
+         * same bound */
+        if (fabs(fabs(f1.dist) - fabs(f0.dist)) > 1e-9 * scale || f1.clamped != f0.clamped)
+            fail_msg("%s: point %d: foot before insertion %.17g (clamped %d), after %.17g (%d)",
+                     part, k, f0.dist, f0.clamped, f1.dist, f1.clamped);
         clamped += f1.clamped != 0;
     }
     print_message("%s refined %d x %d -> %d x %d: %d feet by Newton from the foot before "
