@@ -847,6 +847,19 @@ typedef struct check {
  * clamped to the boundary, and (if st) the signed normal deviations. The
  * |d| histogram (a log10 per point) only if want_hist: only the robust
  * scale reads it (issue 20). */
+/* A distance d into measure's sums. */
+static inline double resid_dist(resid_t *out, double d, double tol, double cut, int want_hist)
+{
+    out->ss += d * d;
+    out->mx = d > out->mx ? d : out->mx;
+    out->n++;
+    out->within += tol > 0 && d <= tol;
+    if (want_hist)
+        nf_rhist_add(&out->hist, d);
+    out->outliers += cut > 0 && d >= cut;
+    return d;
+}
+
 /* The distance of one row (u v x y z) to s at its parameters into the
  * sums: measure's, on either thread. */
 static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, double tol,
@@ -856,14 +869,7 @@ static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, 
     cf_surfrow_eval(ev, q[0], q[1], P);
     double d = sqrt((q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
                     (q[4] - P[2]) * (q[4] - P[2]));
-    out->ss += d * d;
-    out->mx = d > out->mx ? d : out->mx;
-    out->n++;
-    out->within += tol > 0 && d <= tol;
-    if (want_hist)
-        nf_rhist_add(&out->hist, d);
-    out->outliers += cut > 0 && d >= cut;
-    return d;
+    return resid_dist(out, d, tol, cut, want_hist);
 }
 
 static void *measure_half(void *arg)
@@ -975,7 +981,9 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 if (!uv)
                     q[0] = pr.u, q[1] = pr.v, q[2] = Q[0], q[3] = Q[1], q[4] = Q[2];
             }
-            double d = resid_add(out, &ev, q, tol, cut, want_hist);
+            /* projected: the foot's distance, S at the foot already known */
+            double d = uv ? resid_add(out, &ev, q, tol, cut, want_hist)
+                          : resid_dist(out, fabs(sd), tol, cut, want_hist);
             if (sr && cut > 0 && d >= cut)
                 nf_spanres_add_rejected(sr, q[0], q[1], d);
             else if (sr)
