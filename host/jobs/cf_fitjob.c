@@ -358,9 +358,9 @@ typedef struct pass {
  * The pass reads u, v, |dist| and clamped only: foot[] is not set. */
 static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, nf_proj_t *out)
 {
-    const double *f = j->feet + FOOT * i;
-    if (i >= ps->nin || !(f[0] == f[0]))
+    if (i >= ps->nin || !(j->feet[FOOT * i] == j->feet[FOOT * i]))
         return 0;
+    const double *f = j->feet + FOOT * i;
     out->u = f[0];
     out->v = f[1];
     out->dist = fabs(f[2]);
@@ -968,8 +968,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
-                const double *f = j->feet + FOOT * out->n;
-                if (!(out->n < nin && f[0] == f[0] && proj_newton(&pj, Q, f[0], f[1], &pr)) &&
+                const double *f = out->n < nin ? j->feet + FOOT * out->n : NULL;
+                if (!(f && f[0] == f[0] && proj_newton(&pj, Q, f[0], f[1], &pr)) &&
                     proj_foot(&pj, Q, &pr)) {
                     rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
                     break;
