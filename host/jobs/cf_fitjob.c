@@ -283,8 +283,11 @@ typedef struct proj {
     int nready; /* 1: nq set up; -1: no memory for it */
 } proj_t;
 
-/* Newton on p->s from (u, v) to an interior foot; 0 when it gave up (the
- * caller then searches as before: bounds and the true foot are its). */
+/* Newton on p->s from (u, v): the inline one to an interior foot, else
+ * nf_project from (u, v) when it ends on a bound (there nf_project_edge
+ * compared the foot with the edge's other minima and the valleys beside
+ * it: the true foot, issue 14). 0 otherwise: the caller then searches (an
+ * interior foot Newton could not reach directly may lie in another valley). */
 static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj_t *out)
 {
     if (!p->nready) {
@@ -292,7 +295,9 @@ static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj
         p->nqmem = malloc(b);
         p->nready = p->nqmem && nf_quad_newton_init(&p->nq, p->s, p->nqmem, b) == NF_OK ? 1 : -1;
     }
-    if (p->nready < 0 || !nf_quad_newton(&p->nq, Q, PROJ_TOL, &u, &v, out))
+    double un = u, vn = v;
+    if ((p->nready < 0 || !nf_quad_newton(&p->nq, Q, PROJ_TOL, &un, &vn, out)) &&
+        (nf_project(p->s, Q, u, v, PROJ_TOL, out) != NF_OK || !out->clamped))
         return 0;
     p->rc = NF_OK;
     return 1;
@@ -939,7 +944,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     int uv = src->cols == 5;
     /* The check's feet: the next round's fit pass starts from them. The
      * feet before (the last check's, on the previous fit) start this
-     * pass's Newton; where it gives up, or over a fold, the search. */
+     * pass's Newton; where it fails, or over a fold, the search. */
     const int keep = ck && !uv && j->o.loop;
     const long nin = uv || !j->flat ? 0 : j->nfeet;
     if (keep)
