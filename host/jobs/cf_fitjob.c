@@ -944,7 +944,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     int uv = src->cols == 5;
     /* The check's feet: the next round's fit pass starts from them. The
      * feet before (the last check's, on the previous fit) start this
-     * pass's Newton; where it fails, or over a fold, the search. */
+     * pass's Newton; where it fails, or over a fold, the search. (A start
+     * from the last foot trusts the fit to move less than the distance's
+     * valleys are apart: test_foot's next_fit; on the loop data sets every
+     * warm foot was the search's.) */
     const int keep = ck && !uv && j->o.loop;
     const long nin = uv || !j->flat ? 0 : j->nfeet;
     if (keep)

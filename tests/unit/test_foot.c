@@ -446,7 +446,10 @@ static void test_edge_restart(void **state)
  * next fit's true foot (brute force), and it must give up on every foot
  * that brute force puts on the boundary; there nf_project from the same
  * start (its true-foot check at the bound) must find brute force's foot.
- * Returns how many nf_quad_newton carried. */
+ * The warm start assumes the fit moves less than the valleys are apart:
+ * moves of 0.5 mm pass here, random moves of 2 mm on the wavy field (4 mm
+ * waves) put a few feet in other valleys. Returns how many nf_quad_newton
+ * carried. */
 static long next_fit(const char *part, const nf_surf_t *r, int bnu, int bnv, const double *feet,
                      const double (*pts)[3], int n)
 {
