@@ -647,6 +647,41 @@ static int has_crease(const double *K, int n, int p)
     return 0;
 }
 
+/* What Newton reads (q->ru, q->rv carved): the reciprocals of every
+ * span, the crease and rational flags. */
+static void newton_setup(nf_quad_t *q, const nf_surf_t *s)
+{
+    for (int l = s->p; l < s->nu; l++)
+        if (s->U[l] < s->U[l + 1])
+            nf_basis_recip(l, s->p, s->U, q->ru + (long)l * NF_RECIP_LEN);
+    for (int k = s->q; k < s->nv; k++)
+        if (s->V[k] < s->V[k + 1])
+            nf_basis_recip(k, s->q, s->V, q->rv + (long)k * NF_RECIP_LEN);
+    q->creased = has_crease(s->U, s->nu - 1, s->p) || has_crease(s->V, s->nv - 1, s->q);
+    /* Equal weights cancel: the surface is polynomial (the host's surfaces
+     * carry weights 1), and Newton skips the quotient rule. */
+    q->rational = 0;
+    for (long k = 1; s->w && k < (long)s->nu * s->nv; k++)
+        q->rational |= s->w[k] != s->w[0];
+}
+
+int nf_quad_newton_init(nf_quad_t *q, const nf_surf_t *s, void *mem, size_t bytes)
+{
+    if (!q || !s || !mem)
+        return NF_EARG;
+    if (bytes < NF_QUAD_NEWTON_BYTES(s->nu, s->nv))
+        return NF_EARENA;
+    memset(q, 0, sizeof *q);
+    q->s = s;
+    nf_surf_domain(s, &q->dom[0], &q->dom[1], &q->dom[2], &q->dom[3]);
+    unsigned char *base = (unsigned char *)mem;
+    base += (64 - (uintptr_t)base % 64) % 64;
+    q->ru = (double *)(void *)base;
+    q->rv = q->ru + (long)(s->nu + 1) * NF_RECIP_LEN;
+    newton_setup(q, s);
+    return NF_OK;
+}
+
 long nf_quad_count(const nf_quad_t *q)
 {
     return (long)(q->nu - 1) * (q->nv - 1);
@@ -676,12 +711,7 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->ru = q->qd + NF_QUAD_QD * maxq;
     q->rv = q->ru + (long)(s->nu + 1) * NF_RECIP_LEN;
     int *im = (int *)(void *)(base + sizeof(double) * (size_t)NF_QUAD_DOUBLES_(maxq, s->nu, s->nv));
-    for (int l = s->p; l < s->nu; l++)
-        if (s->U[l] < s->U[l + 1])
-            nf_basis_recip(l, s->p, s->U, q->ru + (long)l * NF_RECIP_LEN);
-    for (int k = s->q; k < s->nv; k++)
-        if (s->V[k] < s->V[k + 1])
-            nf_basis_recip(k, s->q, s->V, q->rv + (long)k * NF_RECIP_LEN);
+    newton_setup(q, s);
     /* Size of the surface: the diagonal of its control net's box. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (long k = 0; k < (long)s->nu * s->nv; k++)
@@ -694,12 +724,6 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
     q->tol = prm->rel_tol * size;
     q->limit = prm->limit > 0.0 ? prm->limit : 0.05 * size;
     q->drop_far = prm->drop_far;
-    q->creased = has_crease(s->U, s->nu - 1, s->p) || has_crease(s->V, s->nv - 1, s->q);
-    /* Equal weights cancel: the surface is polynomial (the host's surfaces
-     * carry weights 1), and Newton skips the quotient rule. */
-    q->rational = 0;
-    for (long k = 1; s->w && k < (long)s->nu * s->nv; k++)
-        q->rational |= s->w[k] != s->w[0];
     dec_t d;
     d.s = s;
     d.tol = q->tol;
@@ -963,35 +987,36 @@ QINLINE void derivs_pq(const nf_quad_t *qd, int l, int k, double u, double v, co
     double Nu[3][NF_MAX_ORDER], Nv[3][NF_MAX_ORDER];
     ders2(l, u, p, s->U, qd->ru + (long)l * NF_RECIP_LEN, Nu);
     ders2(k, v, q, s->V, qd->rv + (long)k * NF_RECIP_LEN, Nv);
-    if (!qd->rational) { /* polynomial: rows contracted with the u basis, then v */
-        double S[6][3] = {{0}};
-        QUNROLL
-        for (int b = 0; b <= q; b++) {
-            const double *P = s->cp + 3 * ((l - p) + (long)(k - q + b) * s->nu);
-            double r0[3] = {0, 0, 0}, r1[3] = {0, 0, 0}, r2[3] = {0, 0, 0};
+    if (!qd->rational) {
+        /* Polynomial: rows contracted with the u basis, then v; one
+         * coordinate at a time, so that the sums stay in registers (all
+         * three at once spilled them: a third of Newton's time). */
+        for (int c = 0; c < 3; c++) {
+            double S0 = 0.0, S1 = 0.0, S2 = 0.0, S3 = 0.0, S4 = 0.0, S5 = 0.0;
             QUNROLL
-            for (int a = 0; a <= p; a++)
+            for (int b = 0; b <= q; b++) {
+                const double *P = s->cp + 3 * ((l - p) + (long)(k - q + b) * s->nu) + c;
+                double r0 = 0.0, r1 = 0.0, r2 = 0.0;
                 QUNROLL
-            for (int c = 0; c < 3; c++) {
-                r0[c] += Nu[0][a] * P[3 * a + c];
-                r1[c] += Nu[1][a] * P[3 * a + c];
-                r2[c] += Nu[2][a] * P[3 * a + c];
+                for (int a = 0; a <= p; a++) {
+                    r0 += Nu[0][a] * P[3 * a];
+                    r1 += Nu[1][a] * P[3 * a];
+                    r2 += Nu[2][a] * P[3 * a];
+                }
+                S0 += Nv[0][b] * r0;
+                S1 += Nv[0][b] * r1;
+                S2 += Nv[1][b] * r0;
+                S3 += Nv[0][b] * r2;
+                S4 += Nv[1][b] * r1;
+                S5 += Nv[2][b] * r0;
             }
-            QUNROLL
-            for (int c = 0; c < 3; c++) {
-                S[0][c] += Nv[0][b] * r0[c];
-                S[1][c] += Nv[0][b] * r1[c];
-                S[2][c] += Nv[1][b] * r0[c];
-                S[3][c] += Nv[0][b] * r2[c];
-                S[4][c] += Nv[1][b] * r1[c];
-                S[5][c] += Nv[2][b] * r0[c];
-            }
+            d[0][c] = S0;
+            d[1][c] = S1;
+            d[2][c] = S2;
+            d[3][c] = S3;
+            d[4][c] = S4;
+            d[5][c] = S5;
         }
-        QUNROLL
-        for (int m = 0; m < 6; m++)
-            QUNROLL
-        for (int c = 0; c < 3; c++)
-            d[m][c] = S[m][c];
         return;
     }
     double A[6][4] = {{0}};
@@ -1111,6 +1136,12 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
         cv = nv;
     }
     return 0;
+}
+
+int nf_quad_newton(const nf_quad_t *q, const double Q[3], double tol, double *u, double *v,
+                   nf_proj_t *out)
+{
+    return !q->creased && newton_fast(q, Q, tol, u, v, out);
 }
 
 int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out)

@@ -99,6 +99,23 @@ void nf_quad_start(const nf_quad_t *q, const double Q[3], double *u0, double *v0
  * points in q. Returns nf_project's codes, or NF_QUAD_DROPPED. */
 int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out);
 
+/* Newton alone, for callers with starts of their own (the foot on the
+ * surface before knot insertion, or on the previous fit): q holds the
+ * domain and the knot reciprocals of s in mem (at least
+ * NF_QUAD_NEWTON_BYTES(s->nu, s->nv) bytes), no blanket; only
+ * nf_quad_newton may use it. NF_EARG for null pointers, NF_EARENA when
+ * bytes is too small. */
+#define NF_QUAD_NEWTON_BYTES(nu, nv)                                                               \
+    (sizeof(double) * (size_t)(((long)(nu) + (long)(nv) + 2) * (long)NF_RECIP_LEN) + 64)
+int nf_quad_newton_init(nf_quad_t *q, const nf_surf_t *s, void *mem, size_t bytes);
+
+/* nf_quad_project's inline Newton from (*u, *v) (q from either init): 1
+ * when it converged to an interior foot (out set, as nf_project would
+ * from there to rounding); 0 when it gave up (a bound, no progress, a
+ * crease), *u, *v then the nearest iterate, for nf_project or a search. */
+int nf_quad_newton(const nf_quad_t *q, const double Q[3], double tol, double *u, double *v,
+                   nf_proj_t *out);
+
 /* Thinning (Section 3.3) as a stream: per vertex, the nearest point seen so
  * far among those within radius r of it. Caller storage: NF_THIN_DOUBLES
  * doubles (distance^2 and x y z per vertex) and NF_THIN_LONGS longs (point

@@ -34,7 +34,7 @@
  * 5 doubles a point fill one 2 MiB huge page (cf_bigmem) and no more. */
 #define BATCH 52400
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
-#define FOOT 2        /* doubles per kept foot: u v */
+#define FOOT 3        /* doubles per kept foot: u v d (|distance|, negative: on a bound) */
 #define SEEDS 8       /* seed samples per knot span and direction (cf_seedgrid) */
 
 struct cf_fitjob {
@@ -58,12 +58,18 @@ struct cf_fitjob {
     long nhold, hcap;
     int hold_over;
     long nlive; /* live points added */
-    /* The feet of the last check pass (u v per point in source order, at
-     * most CF_FITJOB_HOLD_ROWS; NaN: search again): the next round's fit
+    /* The feet of the last check pass (FOOT per point in source order, at
+     * most CF_FITJOB_HOLD_ROWS; NaN u: search again): the next round's fit
      * pass projects onto that fit refined by Boehm insertion, the same
-     * surface, so each foot is its start (Newton ends there). nfeet 0: none. */
+     * surface, so each foot is its foot there (Newton from it ends where
+     * it starts: test_foot's refined_part). nfeet 0: none. */
     double *feet;
     long nfeet, fcap;
+    /* 1: the last search's surface did not fold over (the quadrilaterals
+     * served): the check pass may take Newton from the last feet. Over a
+     * fold the surface's change between fits can swap which layer is
+     * nearer, and the search (every valley within reach) decides. */
+    int flat;
 };
 
 void cf_fitjob_defaults(cf_fitjob_opts_t *o)
@@ -266,13 +272,37 @@ typedef struct weigh {
 } weigh_t;
 
 /* Feet on a surface by the seed grid's search, the grid set up at its
- * first use (a pass that projects nothing never builds it). */
+ * first use (a pass that projects nothing never builds it); and Newton
+ * alone from a start of the caller's (nf_quad_newton), set up likewise. */
 typedef struct proj {
     const nf_surf_t *s;
     cf_seedgrid_t g;
     int ready;
     int rc; /* the last projection's code */
+    nf_quad_t nq;
+    void *nqmem;
+    int nready; /* 1: nq set up; -1: no memory for it */
 } proj_t;
+
+/* Newton on p->s from (u, v): the inline one to an interior foot, else
+ * nf_project from (u, v) when it ends on a bound (there nf_project_edge
+ * compared the foot with the edge's other minima and the valleys beside
+ * it: the true foot, issue 14). 0 otherwise: the caller then searches (an
+ * interior foot Newton could not reach directly may lie in another valley). */
+static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj_t *out)
+{
+    if (!p->nready) {
+        const size_t b = NF_QUAD_NEWTON_BYTES(p->s->nu, p->s->nv);
+        p->nqmem = malloc(b);
+        p->nready = p->nqmem && nf_quad_newton_init(&p->nq, p->s, p->nqmem, b) == NF_OK ? 1 : -1;
+    }
+    double un = u, vn = v;
+    if ((p->nready < 0 || !nf_quad_newton(&p->nq, Q, PROJ_TOL, &un, &vn, out)) &&
+        (nf_project(p->s, Q, u, v, PROJ_TOL, out) != NF_OK || !out->clamped))
+        return 0;
+    p->rc = NF_OK;
+    return 1;
+}
 
 static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
 {
@@ -310,6 +340,9 @@ static void proj_free(proj_t *p)
     if (p->ready)
         cf_seedgrid_free(&p->g);
     p->ready = 0;
+    free(p->nqmem);
+    p->nqmem = NULL;
+    p->nready = 0;
 }
 
 /* One pass: a fresh fitter on cur's space (P0 = cur's net, cf_fitpass in
@@ -325,25 +358,33 @@ typedef struct pass {
     double ss0, mx0; /* |distance| to proj of the points projected */
 } pass_t;
 
-/* The foot of point i (Q) from its foot on the surface before Boehm
- * insertion: Newton from there; 0 (search) when there is none or Newton
- * fails (a foot on a bound is checked by nf_project_edge, as the search's). */
-static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, const double Q[3],
-                     nf_proj_t *out)
+/* The foot of point i on the surface before Boehm insertion, which is its
+ * foot after it (the same surface: Newton, nf_project's boundary check
+ * included, would end where it starts); 0 (search) when there is none.
+ * The pass reads u, v, |dist| and clamped only: foot[] is not set. */
+static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, nf_proj_t *out)
 {
     if (i >= ps->nin || !(j->feet[FOOT * i] == j->feet[FOOT * i]))
         return 0;
-    return nf_project(ps->proj, Q, j->feet[FOOT * i], j->feet[FOOT * i + 1], PROJ_TOL, out) ==
-           NF_OK;
+    const double *f = j->feet + FOOT * i;
+    out->u = f[0];
+    out->v = f[1];
+    out->dist = fabs(f[2]);
+    out->clamped = signbit(f[2]) != 0;
+    out->foot[0] = out->foot[1] = out->foot[2] = NAN;
+    out->iters = 0;
+    return 1;
 }
 
-/* Foot i (u, v; NaN u: none) into the job's feet, in order. */
+/* Foot i (NaN u: none) into the job's feet, in order. */
 static void foot_keep(cf_fitjob_t *j, long i, const nf_proj_t *pr, int ok)
 {
     if (i > j->nfeet || (i == j->nfeet && !feet_room(j, i + 1)))
         return;
-    j->feet[FOOT * i] = ok ? pr->u : NAN;
-    j->feet[FOOT * i + 1] = pr->v;
+    double *f = j->feet + FOOT * i;
+    f[0] = ok ? pr->u : NAN;
+    f[1] = pr->v;
+    f[2] = pr->clamped ? -fabs(pr->dist) : fabs(pr->dist);
     j->nfeet += i == j->nfeet;
 }
 
@@ -388,7 +429,7 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
             if (ps->proj) {
                 const double *Q = in + 3 * k;
                 nf_proj_t pr;
-                if (!foot_from(j, ps, ps->points + k, Q, &pr) && proj_foot(&ps->pj, Q, &pr)) {
+                if (!foot_from(j, ps, ps->points + k, &pr) && proj_foot(&ps->pj, Q, &pr)) {
                     *bad = k;
                     return CF_ENOMEM;
                 }
@@ -813,6 +854,20 @@ typedef struct check {
  * clamped to the boundary, and (if st) the signed normal deviations. The
  * |d| histogram (a log10 per point) only if want_hist: only the robust
  * scale reads it (issue 20). */
+/* A distance d (its square d2 as computed) into measure's sums. */
+static inline double resid_dist(resid_t *out, double d, double d2, double tol, double cut,
+                                int want_hist)
+{
+    out->ss += d2;
+    out->mx = d > out->mx ? d : out->mx;
+    out->n++;
+    out->within += tol > 0 && d <= tol;
+    if (want_hist)
+        nf_rhist_add(&out->hist, d);
+    out->outliers += cut > 0 && d >= cut;
+    return d;
+}
+
 /* The distance of one row (u v x y z) to s at its parameters into the
  * sums: measure's, on either thread. */
 static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, double tol,
@@ -822,15 +877,7 @@ static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, 
     cf_surfrow_eval(ev, q[0], q[1], P);
     const double d2 = (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
                       (q[4] - P[2]) * (q[4] - P[2]);
-    const double d = sqrt(d2);
-    out->ss += d2;
-    out->mx = d > out->mx ? d : out->mx;
-    out->n++;
-    out->within += tol > 0 && d <= tol;
-    if (want_hist)
-        nf_rhist_add(&out->hist, d);
-    out->outliers += cut > 0 && d >= cut;
-    return d;
+    return resid_dist(out, sqrt(d2), d2, tol, cut, want_hist);
 }
 
 /* resid_add's sums where nothing needs d itself (no tolerance, no cut, no
@@ -919,8 +966,14 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     memset(&pj, 0, sizeof pj);
     pj.s = s;
     int uv = src->cols == 5;
-    /* The check's feet: the next round's fit pass starts from them. */
+    /* The check's feet: the next round's fit pass starts from them. The
+     * feet before (the last check's, on the previous fit) start this
+     * pass's Newton; where it fails, or over a fold, the search. (A start
+     * from the last foot trusts the fit to move less than the distance's
+     * valleys are apart: test_foot's next_fit; on the loop data sets every
+     * warm foot was the search's.) */
     const int keep = ck && !uv && j->o.loop;
+    const long nin = uv || !j->flat ? 0 : j->nfeet;
     if (keep)
         j->nfeet = 0;
     /* Given parameters and only the sums: each half on its own core. */
@@ -947,7 +1000,9 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
             if (!uv || st) {
                 nf_proj_t pr;
-                if (proj_foot(&pj, Q, &pr)) {
+                const double *f = out->n < nin ? j->feet + FOOT * out->n : NULL;
+                if (!(f && f[0] == f[0] && proj_newton(&pj, Q, f[0], f[1], &pr)) &&
+                    proj_foot(&pj, Q, &pr)) {
                     rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
                     break;
                 }
@@ -958,7 +1013,9 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 if (!uv)
                     q[0] = pr.u, q[1] = pr.v, q[2] = Q[0], q[3] = Q[1], q[4] = Q[2];
             }
-            double d = resid_add(out, &ev, q, tol, cut, want_hist);
+            /* projected: the foot's distance, S at the foot already known */
+            double d = uv ? resid_add(out, &ev, q, tol, cut, want_hist)
+                          : resid_dist(out, fabs(sd), sd * sd, tol, cut, want_hist);
             if (sr && cut > 0 && d >= cut)
                 nf_spanres_add_rejected(sr, q[0], q[1], d);
             else if (sr)
@@ -982,6 +1039,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     if (keep && (rc || out->n != j->nfeet))
         j->nfeet = 0; /* not every point's: no starts */
     cf_surfrow_free(&ev);
+    if (pj.ready)
+        j->flat = pj.g.use_quad;
     proj_free(&pj);
     return rc;
 }

@@ -20,6 +20,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define TOL 1e-9
 #define NPTS 10000
@@ -439,10 +440,90 @@ static void test_edge_restart(void **state)
     free(mem);
 }
 
+/* The tolerance loop's check pass (cf_fitjob's measure): the foot on the
+ * refined net starts Newton on the next fit (here r moved by up to 0.05 mm
+ * per coordinate); nf_quad_newton's foot, where it converges, must be the
+ * next fit's true foot (brute force), and it must give up on every foot
+ * that brute force puts on the boundary; there nf_project from the same
+ * start (its true-foot check at the bound) must find brute force's foot.
+ * The warm start assumes the fit moves less than the valleys are apart:
+ * moves of 0.5 mm pass here, random moves of 2 mm on the wavy field (4 mm
+ * waves) put a few feet in other valleys. Returns how many nf_quad_newton
+ * carried. */
+static long next_fit(const char *part, const nf_surf_t *r, int bnu, int bnv, const double *feet,
+                     const double (*pts)[3], int n)
+{
+    nf_surf_t r2;
+    assert_int_equal(cf_surf_alloc(&r2, r->p, r->q, r->nu, r->nv), CF_OK);
+    memcpy(r2.U, r->U, sizeof(double) * (size_t)(r->nu + r->p + 1));
+    memcpy(r2.V, r->V, sizeof(double) * (size_t)(r->nv + r->q + 1));
+    for (long k = 0; k < 3L * r->nu * r->nv; k++)
+        r2.cp[k] = r->cp[k] + 0.05 * ref_rand(-1.0, 1.0);
+    r2.w = NULL;
+    assert_int_equal(nf_surf_check(&r2), NF_OK);
+    const size_t nb = NF_QUAD_NEWTON_BYTES(r2.nu, r2.nv);
+    void *nm = malloc(nb);
+    assert_non_null(nm);
+    nf_quad_t nq;
+    assert_int_equal(nf_quad_newton_init(&nq, &r2, nm, nb), NF_OK);
+    brute_t b;
+    brute_init(&b, &r2, bnu, bnv);
+    cf_seedgrid_t sg;
+    assert_int_equal(cf_seedgrid_init(&sg, &r2, 8), CF_OK);
+    long fast = 0, edge = 0, nback = 0;
+    double worst = 0.0;
+    for (int k = 0; k < n; k++) {
+        double ub = 0, vb = 0, dint, u = feet[2 * k], v = feet[2 * k + 1];
+        nf_proj_t f;
+        const int ok = nf_quad_newton(&nq, pts[k], TOL, &u, &v, &f);
+        const double db = brute(&b, pts[k], &ub, &vb, &dint), scale = fmax(1.0, db);
+        /* brute force's foot on the boundary: nearer than any interior one */
+        const int on_edge = dint > db + 1e-9 * scale;
+        edge += on_edge;
+        if (ok && on_edge)
+            fail_msg("%s next fit: point %d converged inside (%.17g) where brute force's foot is "
+                     "on the boundary (%.17g)",
+                     part, k, fabs(f.dist), db);
+        if (!ok) {
+            /* cf_fitjob keeps nf_project's foot from the warm start when
+             * it is on a bound, else searches */
+            nf_proj_t g;
+            assert_int_equal(nf_project(&r2, pts[k], feet[2 * k], feet[2 * k + 1], TOL, &g), NF_OK);
+            if (!g.clamped)
+                assert_int_equal(cf_seedgrid_project(&sg, pts[k], TOL, &g), NF_OK);
+            nback += !g.clamped;
+            if (fabs(fabs(g.dist) - db) > 1e-9 * scale)
+                fail_msg("%s next fit: point %d nf_project from the warm start %.17g (clamped %d), "
+                         "brute force %.17g",
+                         part, k, fabs(g.dist), g.clamped, db);
+            worst = fmax(worst, fabs(fabs(g.dist) - db) / scale);
+            continue;
+        }
+        fast++;
+        if (fabs(fabs(f.dist) - db) > 1e-9 * scale)
+            fail_msg("%s next fit: point %d warm foot %.17g, brute force %.17g", part, k,
+                     fabs(f.dist), db);
+        worst = fmax(worst, fabs(fabs(f.dist) - db) / scale);
+    }
+    print_message("%s next fit: %ld of %d feet by nf_quad_newton from the last fit's foot, %ld "
+                  "by nf_project from it (on a bound), %ld by the search (%ld on the boundary by "
+                  "brute force), worst difference from brute force %.3g (relative)\n",
+                  part, fast, n, n - fast - nback, nback, edge, worst);
+    cf_seedgrid_free(&sg);
+    free(b.bc);
+    free(b.P);
+    free(nm);
+    cf_surf_free(&r2);
+    return fast;
+}
+
 /* The tolerance loop's next round (cf_fitjob): Boehm insertion keeps the
- * surface, so the foot found on it is the start on the refined net, and
- * Newton from there must end on the refined surface's true foot (brute
- * force on the refined surface) at the same parameters, without a search. */
+ * surface, so the foot found on it is the foot on the refined net: Newton
+ * from there must end on the refined surface's true foot (brute force on
+ * the refined surface) at the same parameters and distance, without a
+ * search (so the fit pass reuses it as it is). nf_quad_newton likewise
+ * must converge on every interior foot and give up on every boundary one;
+ * the feet then start the check pass's Newton on the next fit (next_fit). */
 static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
                          unsigned long long seed)
 {
@@ -456,21 +537,48 @@ static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
     brute_init(&b, &r, bnu, bnv);
     cf_seedgrid_t sg;
     assert_int_equal(cf_seedgrid_init(&sg, s, 8), CF_OK);
+    const size_t nb = NF_QUAD_NEWTON_BYTES(r.nu, r.nv);
+    void *nm = malloc(nb);
+    assert_non_null(nm);
+    nf_quad_t nq;
+    assert_int_equal(nf_quad_newton_init(&nq, &r, nm, nb), NF_OK);
     ref_seed(seed);
     double worst = 0.0, moved = 0.0;
     long clamped = 0;
     const int n = NPTS / 5;
+    double(*pts)[3] = malloc(sizeof *pts * (size_t)n), *feet = malloc(sizeof(double) * 2 * n);
+    assert_non_null(pts);
+    assert_non_null(feet);
     for (int k = 0; k < n; k++) {
         double Q[3], ub = 0, vb = 0, dint;
         random_point(s, Q);
-        nf_proj_t f0, f1;
+        nf_proj_t f0, f1, f2;
         assert_int_equal(cf_seedgrid_project(&sg, Q, TOL, &f0), NF_OK);
         assert_int_equal(nf_project(&r, Q, f0.u, f0.v, TOL, &f1), NF_OK);
+        double u2 = f0.u, v2 = f0.v;
+        const int fast = nf_quad_newton(&nq, Q, TOL, &u2, &v2, &f2);
+        if (fast != !f1.clamped)
+            fail_msg("%s: point %d: nf_quad_newton %s on a foot %s the boundary", part, k,
+                     fast ? "converged" : "gave up", f1.clamped ? "on" : "off");
+        if (fast && (fabs(f2.u - f1.u) > 1e-7 || fabs(f2.v - f1.v) > 1e-7 ||
+                     fabs(fabs(f2.dist) - fabs(f1.dist)) > TOL * fmax(1.0, fabs(f1.dist))))
+            fail_msg("%s: point %d: nf_quad_newton (%.17g, %.17g) %.17g, nf_project (%.17g, "
+                     "%.17g) %.17g",
+                     part, k, f2.u, f2.v, f2.dist, f1.u, f1.v, f1.dist);
+        for (int c = 0; c < 3; c++)
+            pts[k][c] = Q[c];
+        feet[2 * k] = f1.u;
+        feet[2 * k + 1] = f1.v;
         const double db = brute(&b, Q, &ub, &vb, &dint), scale = fmax(1.0, db);
         if (fabs(f1.dist) < db - 1e-9 * scale)
             fail_msg("%s: brute force %.17g missed the foot %.17g", part, db, fabs(f1.dist));
         worst = fmax(worst, (fabs(f1.dist) - db) / scale);
         moved = fmax(moved, fmax(fabs(f1.u - f0.u), fabs(f1.v - f0.v)));
+        /* cf_fitjob's fit pass takes the old foot as it is: same distance,
+         * same bound */
+        if (fabs(fabs(f1.dist) - fabs(f0.dist)) > 1e-9 * scale || f1.clamped != f0.clamped)
+            fail_msg("%s: point %d: foot before insertion %.17g (clamped %d), after %.17g (%d)",
+                     part, k, f0.dist, f0.clamped, f1.dist, f1.clamped);
         clamped += f1.clamped != 0;
     }
     print_message("%s refined %d x %d -> %d x %d: %d feet by Newton from the foot before "
@@ -479,16 +587,46 @@ static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
                   part, s->nu, s->nv, nu, nv, n, clamped, worst, moved);
     assert_true(worst <= TOL);
     assert_true(moved <= 1e-7);
+    /* Most feet are interior and stay so: the warm path must carry them.
+     * Over a fold (no quadrilaterals) cf_fitjob searches instead: a moved
+     * layer can become the nearer one (this folded edge: 1.409 mm from
+     * Newton's foot, 1.384 mm on the other layer). */
+    if (sg.use_quad)
+        assert_true(next_fit(part, &r, bnu, bnv, feet, (const double(*)[3])pts, n) >=
+                    (n - clamped) / 2);
+    free(pts);
+    free(feet);
+    free(nm);
     cf_seedgrid_free(&sg);
     free(b.bc);
     free(b.P);
     cf_surf_free(&r);
 }
 
+/* A height field of waves 4 mm high, 9 mm apart: over a trough or a crest
+ * the distance has several valleys (points reach 3 mm from it). */
+static double *make_wavy(nf_surf_t *s)
+{
+    const int nu = 12, nv = 12;
+    double *mem = surf_new(s, nu, nv);
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++) {
+            const double a = greville(s->U, i, 3), b = greville(s->V, j, 3);
+            double *P = s->cp + 3 * (i + j * nu);
+            P[0] = 40.0 * a;
+            P[1] = 40.0 * b;
+            P[2] = 4.0 * sin(9.0 * a) * cos(7.0 * b);
+        }
+    return mem;
+}
+
 static void test_refined_start(void **state)
 {
     (void)state;
     nf_surf_t s;
+    double *wm = make_wavy(&s);
+    refined_part("wavy height field", &s, 801, 801, 1405);
+    free(wm);
     double *mem = make_twisted(&s);
     refined_part("twisted strip", &s, 1001, 51, 1403);
     free(mem);
