@@ -1002,8 +1002,11 @@ typedef struct surfs {
     nf_footprint_t fp; /* auto: where the points are */
     nf_robust_t rb;    /* the last robust pass's scale */
     /* A pruning trial: pass 0 projects onto this fit (the check's feet are
-     * on it) instead of cur, the knot-removed start; NULL: cur. */
+     * on it) instead of cur, the knot-removed start; NULL: cur. src0: pass
+     * 0 reads these rows instead (u v x y z: the feet themselves, which
+     * Newton on proj0 would return; NULL: the job's source). */
     const nf_surf_t *proj0;
+    const cf_fitsrc_t *src0;
 } surfs_t;
 
 static void surfs_free(surfs_t *s)
@@ -1061,7 +1064,12 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
                 r->total = po->points;
         } else {
             const nf_surf_t *pj = pass == 0 && S->proj0 ? S->proj0 : &S->prev;
-            rc = fit_pass(r, &S->cur, uv ? NULL : pj, NULL, pass == 0 && k > 0, &S->fit, po);
+            const cf_fitsrc_t *own = r->src;
+            if (pass == 0 && S->src0)
+                r->src = S->src0;
+            rc = fit_pass(r, &S->cur, r->src->cols == 5 ? NULL : pj, NULL, pass == 0 && k > 0,
+                          &S->fit, po);
+            r->src = own;
         }
         if (rc)
             return rc;
@@ -1223,6 +1231,60 @@ static int auto_verdict(const cf_fitjob_opts_t *o, nf_loopctl_t *lc, const nf_kn
     }
 }
 
+/* The job's source with each point's kept foot in front (u v x y z): a
+ * pruning trial's first fit pass at the feet the last check found on the
+ * fit it projects onto, without projecting again (Newton would end at
+ * once where it starts). */
+typedef struct feet_src {
+    const cf_fitjob_t *j;
+    const cf_fitsrc_t *in;
+    long next;
+} feet_src_t;
+
+static int feet_rewind(void *ctx, char *msg, size_t ml)
+{
+    feet_src_t *f = ctx;
+    f->next = 0;
+    return f->in->rewind(f->in->ctx, msg, ml);
+}
+
+static long feet_read(void *ctx, double *rows, long max, char *msg, size_t ml)
+{
+    feet_src_t *f = ctx;
+    long got = f->in->read(f->in->ctx, rows, max, msg, ml);
+    if (got <= 0)
+        return got;
+    if (f->next + got > f->j->nfeet)
+        return cf_fail(msg, ml, CF_EARG, "%s: more points than feet kept", f->in->name);
+    /* x y z rows widened in place from the last: row k's 5 doubles start
+     * at or after row k's 3 for k >= 1, and row 0's are copied first. */
+    for (long k = got - 1; k >= 0; k--) {
+        const double x = rows[3 * k], y = rows[3 * k + 1], z = rows[3 * k + 2];
+        const double *ft = f->j->feet + FOOT * (f->next + k);
+        rows[5 * k] = ft[0], rows[5 * k + 1] = ft[1];
+        rows[5 * k + 2] = x, rows[5 * k + 3] = y, rows[5 * k + 4] = z;
+    }
+    f->next += got;
+    return got;
+}
+
+static void feet_where(void *ctx, long k, char *buf, size_t n)
+{
+    const feet_src_t *f = ctx;
+    f->in->where(f->in->ctx, k, buf, n);
+}
+
+/* 1 when every point has a finite kept foot (the feet source serves). */
+static int feet_all(const cf_fitjob_t *j, long points)
+{
+    if (j->nfeet != points || points <= 0)
+        return 0;
+    for (long i = 0; i < FOOT * j->nfeet; i++)
+        if (!isfinite(j->feet[i]))
+            return 0;
+    return 1;
+}
+
 /* The round just measured (rd, its passes po and check ck) as the job's
  * result: its fit (moved when there is no loop), figures, footprint and
  * deviations (swapped into *best_st). */
@@ -1354,14 +1416,22 @@ static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_
         check_t ck;
         j->o.alpha = nf_loopctl_alpha(alpha0, &j->base, &S->cur, NF_LOOPCTL_ALPHA_K);
         S->proj0 = b;
+        /* The feet as given parameters, unless far points are dropped (a
+         * projection decides that). */
+        feet_src_t fs = {j, r->src, 0};
+        cf_fitsrc_t fsrc = {5,          r->src->total, r->src->name, feet_rewind, feet_read,
+                            feet_where, &fs,           NULL,         NULL};
+        S->src0 = r->src->cols == 3 && !j->o.drop_far && feet_all(j, out->points) ? &fsrc : NULL;
         rc = one_round(r, k0 + (int)t, S, &res, &po, &cut_c, &rejected, &ck, &sr, out);
         S->proj0 = NULL;
+        S->src0 = NULL;
         if (rc)
             break;
         cf_round_t *rd = &out->rounds[out->nrounds++];
         round_record(rd, S, &res, cut_c, rejected, tr);
         rd->prune_dir = c.dir;
         rd->prune_knot = c.x;
+        rd->prune_err = err;
         if (rd->within_pct >= j->o.within) {
             rd->prune = 1;
             out->pruned++;
@@ -1560,6 +1630,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     if (o->loop && o->refine == CF_REFINE_AUTO && out->status == CF_FITJOB_MET && o->prune > 0 &&
         (rc = prune(&r, &S, out->nrounds, alpha0, &best_st, out)))
         goto fail;
+    if (out->pruned > 0) /* the result is a pruning trial's fit now */
+        best_share = out->points > 0 ? (double)out->outliers / (double)out->points : 0.0;
     if (o->holdout >= 2 && (rc = holdout_check(&r, all, out)))
         goto fail;
     char *w;

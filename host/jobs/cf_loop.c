@@ -149,6 +149,7 @@ void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust)
             cf_json_bool(j, "pruned", r[i].prune > 0);
             cf_json_str(j, "removed_dir", r[i].prune_dir ? "v" : "u");
             cf_json_num(j, "removed_knot", r[i].prune_knot);
+            cf_json_num(j, "removal_error", r[i].prune_err);
         }
         cf_json_close(j);
     }

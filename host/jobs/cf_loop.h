@@ -69,10 +69,12 @@ typedef struct cf_round {
     int prune;         /* 0: a round of the loop; a pruning trial: 1 kept, -1 undone */
     int prune_dir;     /* the trial's knot line: 0 in u, 1 in v */
     double prune_knot; /* its knot */
+    double prune_err;  /* the knot removal error of the fit it was taken from (nf_prune) */
 } cf_round_t;
 
 /* "rounds": [{round, nu, nv, control_points, within_tol_pct, rms, max_abs,
- * [sigma, rejected,] seconds [, pruned, removed_dir, removed_knot]}, ...] as
+ * [sigma, rejected,] seconds [, pruned, removed_dir, removed_knot,
+ * removal_error]}, ...] as
  * a field of an open JSON object; a pruning trial has pruned (true: kept,
  * false: undone) and the knot line it took out. */
 void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust);

@@ -158,7 +158,7 @@ static void test_rank(void **state)
 #define SU 5
 #define SV 4
 static nf_surf_t star, bez;
-static char starfile[600];
+static char starfile[600], starxyz[600];
 
 static int prune_setup(void)
 {
@@ -180,25 +180,27 @@ static int prune_setup(void)
     const char *d = getenv("CF_TEST_TMP");
     snprintf(starfile, sizeof starfile, "%s/cf_prune_%ld.uvxyz", d && *d ? d : "/tmp",
              (long)getpid());
-    FILE *f = fopen(starfile, "w");
-    if (!f)
+    snprintf(starxyz, sizeof starxyz, "%s/cf_prune_%ld.xyz", d && *d ? d : "/tmp", (long)getpid());
+    FILE *f = fopen(starfile, "w"), *g = fopen(starxyz, "w");
+    if (!f || !g)
         return -1;
     for (int j = 0; j < 48; j++)
         for (int i = 0; i < 48; i++) {
             double u = (i + 0.5) / 48.0, v = (j + 0.5) / 48.0, P[3];
             nf_surf_eval(&star, u, v, P);
             fprintf(f, "%.17g %.17g %.17g %.17g %.17g\n", u, v, P[0], P[1], P[2]);
+            fprintf(g, "%.17g %.17g %.17g\n", P[0], P[1], P[2]);
         }
-    return fclose(f);
+    return fclose(f) | fclose(g);
 }
 
-static int run_prune(long prune, cf_fitjob_result_t *r)
+static int run_prune(const char *file, int cols, double tol, long prune, cf_fitjob_result_t *r)
 {
     cf_fitjob_opts_t o;
     cf_fitjob_defaults(&o);
     o.alpha = o.beta = 0.0;
     o.solver = NF_SOLVER_CHOL;
-    o.tol = 1e-6;
+    o.tol = tol;
     o.loop = 1;
     o.refine = CF_REFINE_AUTO;
     o.prune = prune;
@@ -207,11 +209,11 @@ static int run_prune(long prune, cf_fitjob_result_t *r)
     if (rc)
         return rc;
     cf_points_t *pr = NULL;
-    rc = cf_points_open(&pr, starfile, 5, msg, sizeof msg);
+    rc = cf_points_open(&pr, file, cols, msg, sizeof msg);
     if (!rc) {
         cf_fitsrc_t src;
         cf_fitsrc_points_t pc;
-        cf_fitsrc_points(&src, &pc, pr, starfile);
+        cf_fitsrc_points(&src, &pc, pr, file);
         rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, msg, sizeof msg);
     }
     cf_points_close(pr);
@@ -238,57 +240,72 @@ static void test_job_prunes_back(void **state)
 {
     (void)state;
     assert_int_equal(prune_setup(), 0);
-    /* Without pruning the loop meets the tolerance with more lines than S*. */
-    cf_fitjob_result_t r0, r;
-    if (run_prune(0, &r0))
-        fail_msg("%s", msg);
-    assert_int_equal(r0.status, CF_FITJOB_MET);
-    assert_int_equal(r0.pruned, 0);
-    const long cp0 = (long)r0.surf.nu * r0.surf.nv;
-    assert_true(cp0 > SU * SV);
-    for (int i = 0; i < r0.nrounds; i++)
-        assert_int_equal(r0.rounds[i].prune, 0);
-    /* With it (budget enough for every line: the stage ends when none is
-     * left to try): back to S*'s 5 x 4, still within, and the fit is S*. */
-    if (run_prune(40, &r))
-        fail_msg("%s", msg);
-    assert_int_equal(r.status, CF_FITJOB_MET);
-    assert_int_equal(r.surf.nu, SU);
-    assert_int_equal(r.surf.nv, SV);
-    assert_true(r.within_pct >= 100.0);
-    assert_true(r.max_abs < 1e-8);
-    assert_true(gap(&r.surf, &star) < 1e-8);
-    for (int i = 0; i < SU + 3 + 1; i++)
-        assert_near(r.surf.U[i], star.U[i], 0.0);
-    for (int i = 0; i < SV + 3 + 1; i++)
-        assert_near(r.surf.V[i], star.V[i], 0.0);
-    /* The rounds say it: the loop's as without, then one kept trial per
-     * line pruned (each one line fewer than the last kept), the undone
-     * ones with the net of the best fit less one line. */
-    int kept = 0;
-    long last = cp0;
-    for (int i = 0; i < r.nrounds; i++) {
-        if (i < r0.nrounds) {
-            assert_int_equal(r.rounds[i].prune, 0);
-            assert_int_equal(r.rounds[i].nu, r0.rounds[i].nu);
-            continue;
+    /* Given parameters, then x y z (projected: the trials' first pass at
+     * the kept feet, their check a projection). */
+    for (int cols = 5; cols >= 3; cols -= 2) {
+        const char *file = cols == 5 ? starfile : starxyz;
+        const double tol = cols == 5 ? 1e-6 : 1e-4;
+        /* Without pruning the loop meets the tolerance with more lines than S*. */
+        cf_fitjob_result_t r0, r;
+        if (run_prune(file, cols, tol, 0, &r0))
+            fail_msg("%s", msg);
+        assert_int_equal(r0.status, CF_FITJOB_MET);
+        assert_int_equal(r0.pruned, 0);
+        const long cp0 = (long)r0.surf.nu * r0.surf.nv;
+        assert_true(cp0 > SU * SV);
+        for (int i = 0; i < r0.nrounds; i++)
+            assert_int_equal(r0.rounds[i].prune, 0);
+        /* With it (budget enough for every line: the stage ends when none is
+         * left to try, or two in a row are undone): given parameters, back
+         * to S*'s 5 x 4, and the fit is S*; projected (the loop takes other
+         * knots there), fewer lines, still all within tol. */
+        if (run_prune(file, cols, tol, 40, &r))
+            fail_msg("%s", msg);
+        assert_int_equal(r.status, CF_FITJOB_MET);
+        assert_true(r.within_pct >= 100.0);
+        assert_true(r.max_abs <= tol);
+        assert_true(r.pruned > 0);
+        if (cols == 5) {
+            assert_int_equal(r.surf.nu, SU);
+            assert_int_equal(r.surf.nv, SV);
+            assert_true(r.max_abs < 1e-8);
+            assert_true(gap(&r.surf, &star) < 1e-8);
+            for (int i = 0; i < SU + 3 + 1; i++)
+                assert_near(r.surf.U[i], star.U[i], 0.0);
+            for (int i = 0; i < SV + 3 + 1; i++)
+                assert_near(r.surf.V[i], star.V[i], 0.0);
         }
-        assert_true(r.rounds[i].prune == 1 || r.rounds[i].prune == -1);
-        long cp = (long)r.rounds[i].nu * r.rounds[i].nv;
-        assert_true(cp < last);
-        if (r.rounds[i].prune > 0) {
-            kept++;
-            last = cp;
-            assert_true(r.rounds[i].within_pct >= 100.0);
-        } else
-            assert_true(r.rounds[i].within_pct < 100.0);
+        /* The rounds say it: the loop's as without, then one kept trial per
+         * line pruned (each one line fewer than the last kept), the undone
+         * ones with the net of the best fit less one line. */
+        int kept = 0;
+        long last = cp0;
+        for (int i = 0; i < r.nrounds; i++) {
+            if (i < r0.nrounds) {
+                assert_int_equal(r.rounds[i].prune, 0);
+                assert_int_equal(r.rounds[i].nu, r0.rounds[i].nu);
+                continue;
+            }
+            assert_true(r.rounds[i].prune == 1 || r.rounds[i].prune == -1);
+            long cp = (long)r.rounds[i].nu * r.rounds[i].nv;
+            assert_true(cp < last);
+            if (r.rounds[i].prune > 0) {
+                kept++;
+                last = cp;
+                assert_true(r.rounds[i].within_pct >= 100.0);
+            } else
+                assert_true(r.rounds[i].within_pct < 100.0);
+        }
+        assert_int_equal(kept, r.pruned);
+        assert_int_equal(last, (long)r.surf.nu * r.surf.nv);
+        if (cols == 5)
+            assert_int_equal(last, SU * SV);
+        assert_non_null(strstr(r.why, "pruned"));
+        cf_fitjob_result_free(&r0);
+        cf_fitjob_result_free(&r);
     }
-    assert_int_equal(kept, r.pruned);
-    assert_int_equal(last, SU * SV);
-    assert_non_null(strstr(r.why, "pruned"));
-    cf_fitjob_result_free(&r0);
-    cf_fitjob_result_free(&r);
     remove(starfile);
+    remove(starxyz);
     cf_surf_free(&star);
     cf_surf_free(&bez);
 }
