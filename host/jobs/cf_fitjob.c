@@ -1345,7 +1345,8 @@ static void round_record(cf_round_t *rd, const surfs_t *S, const resid_t *res, d
  * at those knots, from the knot-removed surface (the space and P0; pass 0
  * projects onto the best fit, whose feet the last check kept). A trial
  * that still meets `within` becomes the best fit, else it is undone (the
- * feet of the best fit put back) and its knot not tried again; after
+ * feet of the best fit put back) and its knot not tried again. Only lines
+ * of at least 1 / CF_FITJOB_PRUNE_MIN_LINE of the net are tried; after
  * CF_FITJOB_PRUNE_MISSES undone in a row the rest rank worse still and the
  * stage ends. Rounds k0, k0 + 1, ... */
 static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_st,
@@ -1373,7 +1374,10 @@ static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_
             break;
         }
         int pick = -1;
+        const long ncp = (long)b->nu * b->nv;
         for (int i = 0; i < n && pick < 0; i++) {
+            if (CF_FITJOB_PRUNE_MIN_LINE * (cand[i].dir ? b->nu : b->nv) < ncp)
+                continue; /* a trial costs about a round: not for a line this small */
             pick = i;
             for (int u = 0; u < nundone; u++)
                 if (undone[2 * u] == cand[i].dir && undone[2 * u + 1] == cand[i].x)
