@@ -1343,7 +1343,8 @@ static void round_record(cf_round_t *rd, const surfs_t *S, const resid_t *res, d
  * line the loop inserted out of the best fit (nf_prune_rank: the least
  * removal error per control point saved first) and fit the data afresh
  * at those knots, from the knot-removed surface (the space and P0; pass 0
- * projects onto the best fit, whose feet the last check kept). A trial
+ * at the best fit's feet, which the last check kept: feet_src, else by
+ * projection onto the best fit). A trial
  * that still meets `within` becomes the best fit, else it is undone (the
  * feet of the best fit put back) and its knot not tried again. Only lines
  * of at least 1 / CF_FITJOB_PRUNE_MIN_LINE of the net are tried; after
@@ -1355,11 +1356,11 @@ static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_
     cf_fitjob_t *j = r->j;
     const long trials = j->o.prune;
     nf_prune_cand_t *cand = NULL;
-    double undone[2 * 64]; /* dir, knot of the trials undone */
+    double undone[2 * CF_FITJOB_MAX_ROUNDS]; /* dir, knot of the trials undone */
     int nundone = 0, misses = 0, rc = 0;
     double *feet = NULL; /* the best fit's feet while a trial overwrites them */
-    for (long t = 0; t < trials && t < 64 && misses < CF_FITJOB_PRUNE_MISSES &&
-                     out->nrounds < CF_FITJOB_MAX_ROUNDS;
+    for (long t = 0;
+         t < trials && misses < CF_FITJOB_PRUNE_MISSES && out->nrounds < CF_FITJOB_MAX_ROUNDS;
          t++) {
         const nf_surf_t *b = &out->surf;
         int n = 0, cap = NF_PRUNE_CANDS(b->nu, b->nv, b->p, b->q);
@@ -1384,7 +1385,7 @@ static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_
                     pick = -1;
         }
         if (pick < 0)
-            break; /* every line the loop inserted is needed */
+            break; /* every line the loop inserted is needed or too small */
         const nf_prune_cand_t c = cand[pick];
         nf_surf_t cut;
         double err;
