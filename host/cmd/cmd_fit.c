@@ -257,10 +257,12 @@ static void print_text(const fit_args_t *a, const cf_fitjob_result_t *r, double 
                o->drop_far ? "dropped" : "kept; --drop-far drops them");
     printf("\n  alpha %g  beta %g  solver %s  iterations %d  relative residual %.2e\n", o->alpha,
            o->beta, nf_solver_name(r->solve.solver), r->solve.iterations, r->solve.rel_residual);
+    int last = r->nrounds - 1; /* the result's round: not a pruning trial undone */
+    while (last > 0 && r->rounds[last].prune < 0)
+        last--;
     if (o->robust)
         printf("  robust: %ld Tukey passes, sigma %.3g mm, %ld points rejected as outliers\n",
-               o->robust_iters, r->rounds[r->nrounds - 1].sigma,
-               r->rounds[r->nrounds - 1].rejected);
+               o->robust_iters, r->rounds[last].sigma, r->rounds[last].rejected);
     printf("  rms %.6g  max %.6g  (%s)\n", r->rms, r->max_abs,
            a->uv ? "|Q - S(u,v)| at the given parameters" : "normal distance to the fit");
     if (o->loop)

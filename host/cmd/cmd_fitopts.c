@@ -74,6 +74,15 @@ int cmd_fitopts_table(cf_opt_t *t, cf_fitjob_opts_t *o, cmd_fitopts_t *a, const 
          .lo = 1e-12,
          .hi = 100,
          .given = &a->loop_opt},
+        {.name = "prune",
+         .kind = CF_OPT_LONG,
+         .dst = &o->prune,
+         .arg = "N",
+         .help = "--refine auto, once met: at most N trial fits each with one inserted knot "
+                 "line taken out again, kept while --within is still met (0: none)",
+         .lo = 0,
+         .hi = CF_FITJOB_MAX_ROUNDS,
+         .given = &a->loop_opt},
         {.name = "noise",
          .kind = CF_OPT_DOUBLE,
          .dst = &o->noise,
@@ -134,12 +143,18 @@ void cmd_fitopts_json(cf_json_t *j, const cf_fitjob_opts_t *o, const cf_fitjob_r
             cf_json_int(j, "outline", r->fp_outline);
             cf_json_close(j);
         }
+        if (o->refine == CF_REFINE_AUTO)
+            cf_json_int(j, "pruned", r->pruned);
         cf_rounds_json(j, r->rounds, r->nrounds, o->robust);
     }
+    /* The last round the result came from: a pruning trial undone is not it. */
+    int last = r->nrounds - 1;
+    while (last > 0 && r->rounds[last].prune < 0)
+        last--;
     if (o->robust && r->nrounds > 0) {
         cf_json_int(j, "robust_iters", o->robust_iters);
-        cf_json_num(j, "robust_sigma", r->rounds[r->nrounds - 1].sigma);
-        cf_json_int(j, "outliers", r->rounds[r->nrounds - 1].rejected);
+        cf_json_num(j, "robust_sigma", r->rounds[last].sigma);
+        cf_json_int(j, "outliers", r->rounds[last].rejected);
         cf_json_num(j, "robust_floor", r->robust_floor);
     }
 }

@@ -12,7 +12,7 @@
 #include "cf_json.h"
 #include "cf_opt.h"
 
-#define CMD_FITOPTS_N 10 /* rows cmd_fitopts_table writes */
+#define CMD_FITOPTS_N 11 /* rows cmd_fitopts_table writes */
 
 /* What was given, for the checks. */
 typedef struct cmd_fitopts {

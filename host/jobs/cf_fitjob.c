@@ -19,6 +19,7 @@
 #include "nf_knotsel.h"
 #include "nf_loopctl.h"
 #include "nf_project.h"
+#include "nf_prune.h"
 #include "nf_refine.h"
 #include "nf_robust.h"
 #include "rig_err.h"
@@ -89,6 +90,7 @@ void cf_fitjob_defaults(cf_fitjob_opts_t *o)
     o->refine = CF_REFINE_AUTO;
     o->robust_iters = 3;
     o->min_gain = NF_LOOPCTL_MIN_GAIN;
+    o->prune = CF_FITJOB_PRUNE_TRIALS;
 }
 
 const char *cf_fitjob_status_name(cf_fitjob_status_t s)
@@ -1082,6 +1084,12 @@ typedef struct surfs {
     nf_knotsel_t ks;   /* auto: the check pass's spans (in srmem) */
     nf_footprint_t fp; /* auto: where the points are */
     nf_robust_t rb;    /* the last robust pass's scale */
+    /* A pruning trial: pass 0 projects onto this fit (the check's feet are
+     * on it) instead of cur, the knot-removed start; NULL: cur. src0: pass
+     * 0 reads these rows instead (u v x y z: the feet themselves, which
+     * Newton on proj0 would return; NULL: the job's source). */
+    const nf_surf_t *proj0;
+    const cf_fitsrc_t *src0;
 } surfs_t;
 
 static void surfs_free(surfs_t *s)
@@ -1137,8 +1145,15 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
                 rc = cf_fail(r->msg, r->ml, CF_EEMPTY, "no measured points to fit");
             if (!rc && r->total < 0)
                 r->total = po->points;
-        } else
-            rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, NULL, pass == 0 && k > 0, &S->fit, po);
+        } else {
+            const nf_surf_t *pj = pass == 0 && S->proj0 ? S->proj0 : &S->prev;
+            const cf_fitsrc_t *own = r->src;
+            if (pass == 0 && S->src0)
+                r->src = S->src0;
+            rc = fit_pass(r, &S->cur, r->src->cols == 5 ? NULL : pj, NULL, pass == 0 && k > 0,
+                          &S->fit, po);
+            r->src = own;
+        }
         if (rc)
             return rc;
         if (k == 0 && pass == 0) {
@@ -1299,6 +1314,243 @@ static int auto_verdict(const cf_fitjob_opts_t *o, nf_loopctl_t *lc, const nf_kn
     }
 }
 
+/* The job's source with each point's kept foot in front (u v x y z): a
+ * pruning trial's first fit pass at the feet the last check found on the
+ * fit it projects onto, without projecting again (Newton would end at
+ * once where it starts). */
+typedef struct feet_src {
+    const cf_fitjob_t *j;
+    const cf_fitsrc_t *in;
+    long next;
+} feet_src_t;
+
+static int feet_rewind(void *ctx, char *msg, size_t ml)
+{
+    feet_src_t *f = ctx;
+    f->next = 0;
+    return f->in->rewind(f->in->ctx, msg, ml);
+}
+
+static long feet_read(void *ctx, double *rows, long max, char *msg, size_t ml)
+{
+    feet_src_t *f = ctx;
+    long got = f->in->read(f->in->ctx, rows, max, msg, ml);
+    if (got <= 0)
+        return got;
+    if (f->next + got > f->j->nfeet)
+        return cf_fail(msg, ml, CF_EARG, "%s: more points than feet kept", f->in->name);
+    /* x y z rows widened in place from the last: row k's 5 doubles start
+     * at or after row k's 3 for k >= 1, and row 0's are copied first. */
+    for (long k = got - 1; k >= 0; k--) {
+        const double x = rows[3 * k], y = rows[3 * k + 1], z = rows[3 * k + 2];
+        const double *ft = f->j->feet + FOOT * (f->next + k);
+        rows[5 * k] = ft[0], rows[5 * k + 1] = ft[1];
+        rows[5 * k + 2] = x, rows[5 * k + 3] = y, rows[5 * k + 4] = z;
+    }
+    f->next += got;
+    return got;
+}
+
+static void feet_where(void *ctx, long k, char *buf, size_t n)
+{
+    const feet_src_t *f = ctx;
+    f->in->where(f->in->ctx, k, buf, n);
+}
+
+/* 1 when every point has a finite kept foot (the feet source serves). */
+static int feet_all(const cf_fitjob_t *j, long points)
+{
+    if (j->nfeet != points || points <= 0)
+        return 0;
+    for (long i = 0; i < FOOT * j->nfeet; i++)
+        if (!isfinite(j->feet[i]))
+            return 0;
+    return 1;
+}
+
+/* The round just measured (rd, its passes po and check ck) as the job's
+ * result: its fit (moved when there is no loop), figures, footprint and
+ * deviations (swapped into *best_st). */
+static int keep_round(cf_fitjob_t *j, surfs_t *S, const cf_round_t *rd, const pass_t *po,
+                      const check_t *ck, cf_stats_t **best_st, cf_fitjob_result_t *out)
+{
+    if (!j->o.loop) { /* the only round: its fit is the result, moved */
+        cf_surf_free(&out->surf);
+        out->surf = S->fit;
+        memset(&S->fit, 0, sizeof S->fit);
+    } else if (replace_copy(&out->surf, &S->fit))
+        return CF_ENOMEM;
+    out->within_pct = rd->within_pct;
+    out->rms = rd->rms;
+    out->max_abs = rd->mx;
+    out->sigma = rd->sigma;
+    out->outliers = rd->rejected;
+    out->solve = po->fp.st;
+    out->store_bytes = cf_fitpass_store_bytes(&po->fp);
+    out->bytes = j->need;
+    out->threads = j->used2 ? 2 : 1;
+    out->pinned = po->ed.pinned;
+    if (ck->fp) {
+        nf_footprint_stats_t fs;
+        nf_footprint_stats(ck->fp, &fs);
+        out->fp_cells = fs.cells;
+        out->fp_filled = fs.filled;
+        out->fp_empty = fs.empty;
+        out->fp_outline = fs.outline;
+    }
+    if (S->st) {
+        cf_stats_t *t = *best_st;
+        *best_st = S->st;
+        S->st = t;
+    }
+    return 0;
+}
+
+/* The figures of the round just measured into rd. */
+static void round_record(cf_round_t *rd, const surfs_t *S, const resid_t *res, double c,
+                         long rejected, double t0)
+{
+    memset(rd, 0, sizeof *rd);
+    rd->nu = S->fit.nu;
+    rd->nv = S->fit.nv;
+    rd->within_pct = 100.0 * (double)res->within / (double)res->n;
+    rd->rms = sqrt(res->ss / (double)res->n);
+    rd->mx = res->mx;
+    rd->sigma = c > 0 ? S->rb.scale : 0.0;
+    rd->rejected = rejected;
+    rd->seconds = cli_now() - t0;
+}
+
+/* The pruning stage (auto, once met; issue 14): the loop's knot choice
+ * overshoots by whole lines, so up to o->prune trials each take one knot
+ * line the loop inserted out of the best fit (nf_prune_rank: the least
+ * removal error per control point saved first) and fit the data afresh
+ * at those knots, from the knot-removed surface (the space and P0; pass 0
+ * at the best fit's feet, which the last check kept: feet_src, else by
+ * projection onto the best fit). A trial
+ * that still meets `within` becomes the best fit, else it is undone (the
+ * feet of the best fit put back) and its knot not tried again. Only lines
+ * of at least 1 / CF_FITJOB_PRUNE_MIN_LINE of the net are tried; after
+ * CF_FITJOB_PRUNE_MISSES undone in a row the rest rank worse still and the
+ * stage ends. Rounds k0, k0 + 1, ... */
+static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_st,
+                 cf_fitjob_result_t *out)
+{
+    cf_fitjob_t *j = r->j;
+    const long trials = j->o.prune;
+    nf_prune_cand_t *cand = NULL;
+    double undone[2 * CF_FITJOB_MAX_ROUNDS]; /* dir, knot of the trials undone */
+    int nundone = 0, misses = 0, rc = 0;
+    double *feet = NULL; /* the best fit's feet while a trial overwrites them */
+    for (long t = 0;
+         t < trials && misses < CF_FITJOB_PRUNE_MISSES && out->nrounds < CF_FITJOB_MAX_ROUNDS;
+         t++) {
+        const nf_surf_t *b = &out->surf;
+        int n = 0, cap = NF_PRUNE_CANDS(b->nu, b->nv, b->p, b->q);
+        nf_prune_cand_t *cc = realloc(cand, sizeof *cand * (size_t)(cap > 0 ? cap : 1));
+        if (!cc) {
+            rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+            break;
+        }
+        cand = cc;
+        if ((rc = nf_prune_rank(b, &j->base, cand, cap, &n))) {
+            rc = cf_fail(r->msg, r->ml, rc, "pruning: %s", nf_strerror(rc));
+            break;
+        }
+        int pick = -1;
+        const long ncp = (long)b->nu * b->nv;
+        for (int i = 0; i < n && pick < 0; i++) {
+            if (CF_FITJOB_PRUNE_MIN_LINE * (cand[i].dir ? b->nu : b->nv) < ncp)
+                continue; /* a trial costs about a round: not for a line this small */
+            pick = i;
+            for (int u = 0; u < nundone; u++)
+                if (undone[2 * u] == cand[i].dir && undone[2 * u + 1] == cand[i].x)
+                    pick = -1;
+        }
+        if (pick < 0)
+            break; /* every line the loop inserted is needed or too small */
+        const nf_prune_cand_t c = cand[pick];
+        nf_surf_t cut;
+        double err;
+        if (cf_surf_alloc(&cut, b->p, b->q, b->nu - (c.dir == 0), b->nv - (c.dir == 1))) {
+            rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+            break;
+        }
+        if ((rc = nf_prune_remove(b, c.dir, c.index, &cut, &err))) {
+            cf_surf_free(&cut);
+            rc = cf_fail(r->msg, r->ml, rc, "pruning: %s", nf_strerror(rc));
+            break;
+        }
+        if (!S->cur_is_base)
+            cf_surf_free(&S->cur);
+        S->cur = cut;
+        S->cur_is_base = 0;
+        /* The best fit's feet, put back when the trial is undone. */
+        const long nf = j->nfeet;
+        if (nf > 0) {
+            double *f = realloc(feet, sizeof(double) * FOOT * (size_t)nf);
+            if (!f) {
+                rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+                break;
+            }
+            feet = f;
+            memcpy(feet, j->feet, sizeof(double) * FOOT * (size_t)nf);
+        }
+        double tr = cli_now(), cut_c = 0.0;
+        resid_t res;
+        pass_t po;
+        long rejected = 0;
+        nf_spanres_t sr;
+        check_t ck;
+        j->o.alpha = nf_loopctl_alpha(alpha0, &j->base, &S->cur, NF_LOOPCTL_ALPHA_K);
+        S->proj0 = b;
+        /* The feet as given parameters, unless far points are dropped (a
+         * projection decides that). */
+        feet_src_t fs = {j, r->src, 0};
+        cf_fitsrc_t fsrc = {5,          r->src->total, r->src->name, feet_rewind, feet_read,
+                            feet_where, &fs,           NULL,         NULL};
+        S->src0 = r->src->cols == 3 && !j->o.drop_far && feet_all(j, out->points) ? &fsrc : NULL;
+        rc = one_round(r, k0 + (int)t, S, &res, &po, &cut_c, &rejected, &ck, &sr, out);
+        S->proj0 = NULL;
+        S->src0 = NULL;
+        if (rc)
+            break;
+        cf_round_t *rd = &out->rounds[out->nrounds++];
+        round_record(rd, S, &res, cut_c, rejected, tr);
+        rd->prune_dir = c.dir;
+        rd->prune_knot = c.x;
+        rd->prune_err = err;
+        if (rd->within_pct >= j->o.within) {
+            rd->prune = 1;
+            out->pruned++;
+            misses = 0;
+            if (keep_round(j, S, rd, &po, &ck, best_st, out)) {
+                rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+                break;
+            }
+        } else {
+            rd->prune = -1;
+            misses++;
+            undone[2 * nundone] = c.dir;
+            undone[2 * nundone + 1] = c.x;
+            nundone++;
+            if (nf > 0 && j->fcap >= nf) {
+                memcpy(j->feet, feet, sizeof(double) * FOOT * (size_t)nf);
+                j->nfeet = nf;
+            } else
+                j->nfeet = 0; /* the next trial searches every foot */
+        }
+    }
+    free(cand);
+    free(feet);
+    j->o.alpha = alpha0;
+    if (!rc && out->pruned > 0)
+        snprintf(out->why, sizeof out->why,
+                 "met: %.3f %% within (need %g %%), %d knot line%s pruned", out->within_pct,
+                 j->o.within, out->pruned, out->pruned > 1 ? "s" : "");
+    return rc;
+}
+
 /* The held-out rows measured against the best fit (opts.holdout). */
 static int holdout_check(run_t *r, const cf_fitsrc_t *in, cf_fitjob_result_t *out)
 {
@@ -1384,50 +1636,16 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         if ((rc = one_round(&r, k, &S, &res, &po, &c, &rejected, &ck, &sr, out)))
             goto fail;
         cf_round_t *rd = &out->rounds[out->nrounds++];
-        rd->nu = S.fit.nu;
-        rd->nv = S.fit.nv;
-        rd->within_pct = 100.0 * (double)res.within / (double)res.n;
-        rd->rms = sqrt(res.ss / (double)res.n);
-        rd->mx = res.mx;
-        rd->sigma = c > 0 ? S.rb.scale : 0.0;
-        rd->rejected = rejected;
-        rd->seconds = cli_now() - tr;
+        round_record(rd, &S, &res, c, rejected, tr);
         /* Keep the best fit: most points within tolerance, then lowest rms. */
         if (rd->within_pct > best_within || (rd->within_pct == best_within && rd->rms < best_rms)) {
-            if (!o->loop) { /* the only round: its fit is the result, moved */
-                cf_surf_free(&out->surf);
-                out->surf = S.fit;
-                memset(&S.fit, 0, sizeof S.fit);
-            } else if (replace_copy(&out->surf, &S.fit)) {
+            if (keep_round(j, &S, rd, &po, &ck, &best_st, out)) {
                 rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
                 goto fail;
             }
             best_within = rd->within_pct;
             best_rms = rd->rms;
             best_share = po.points > 0 ? (double)rejected / (double)po.points : 0.0;
-            out->within_pct = rd->within_pct;
-            out->rms = rd->rms;
-            out->max_abs = rd->mx;
-            out->sigma = rd->sigma;
-            out->outliers = rd->rejected;
-            out->solve = po.fp.st;
-            out->store_bytes = cf_fitpass_store_bytes(&po.fp);
-            out->bytes = j->need;
-            out->threads = j->used2 ? 2 : 1;
-            out->pinned = po.ed.pinned;
-            if (ck.fp) {
-                nf_footprint_stats_t fs;
-                nf_footprint_stats(ck.fp, &fs);
-                out->fp_cells = fs.cells;
-                out->fp_filled = fs.filled;
-                out->fp_empty = fs.empty;
-                out->fp_outline = fs.outline;
-            }
-            if (S.st) {
-                cf_stats_t *t = best_st;
-                best_st = S.st;
-                S.st = t;
-            }
         }
         if (!o->loop) {
             out->status = CF_FITJOB_PLAIN;
@@ -1496,6 +1714,12 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         memset(&S.nxt, 0, sizeof S.nxt);
     }
     j->o.alpha = alpha0;
+    /* Met with auto: knot lines the loop need not have inserted go again. */
+    if (o->loop && o->refine == CF_REFINE_AUTO && out->status == CF_FITJOB_MET && o->prune > 0 &&
+        (rc = prune(&r, &S, out->nrounds, alpha0, &best_st, out)))
+        goto fail;
+    if (out->pruned > 0) /* the result is a pruning trial's fit now */
+        best_share = out->points > 0 ? (double)out->outliers / (double)out->points : 0.0;
     if (o->holdout >= 2 && (rc = holdout_check(&r, all, out)))
         goto fail;
     char *w;

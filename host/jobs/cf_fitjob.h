@@ -97,7 +97,20 @@ typedef struct cf_fitjob_opts {
                        * support follow the nominal (cf_edges) */
     double stats_tol; /* the statistics' tolerance when it is not the loop's (0: tol); the
                        * cell's verdict tolerance beside its fit loop's goal */
+    long prune;       /* auto, once met: at most this many trial fits with one knot line
+                       * the loop inserted taken out again (nf_prune), each kept only if
+                       * it still meets the tolerance; 0: none */
 } cf_fitjob_opts_t;
+
+/* Pruning trials by default (opts.prune): each costs about one round
+ * (docs/loop.md, "Pruning the knot lines"). The stage also ends after
+ * CF_FITJOB_PRUNE_MISSES trials in a row were undone. */
+#define CF_FITJOB_PRUNE_TRIALS 4
+#define CF_FITJOB_PRUNE_MISSES 2
+/* A line is tried only when it holds at least 1 / this of the net's control
+ * points: on a fine net (the narrow ridge's 3,420, lines of 57) a trial
+ * costs as much as the loop's last round (0.4 s) and saves 2 %. */
+#define CF_FITJOB_PRUNE_MIN_LINE 32
 
 /* The robust scale's floor as a share of tol: max(noise, this tol). Points
  * keep weight > 0 up to NF_ROBUST_CUT floors (1.5 tol): a fit short of the
@@ -107,7 +120,7 @@ typedef struct cf_fitjob_opts {
 /* The shell's defaults: alpha, beta of the paper, solver auto, 1e-12 and
  * 20000 iterations with the probe, one core, within 100 %, max_cp the
  * board's, 12 rounds, auto refinement with min_gain NF_LOOPCTL_MIN_GAIN, 3
- * robust passes; everything else off. */
+ * robust passes, CF_FITJOB_PRUNE_TRIALS pruning trials; everything else off. */
 void cf_fitjob_defaults(cf_fitjob_opts_t *o);
 
 typedef struct cf_fitjob_result {
@@ -125,8 +138,9 @@ typedef struct cf_fitjob_result {
     nf_solve_stats_t solve;
     long bytes;  /* fitter memory of the best round */
     int threads; /* 2: some pass read its halves on two threads (opts.cores) */
-    cf_round_t rounds[CF_FITJOB_MAX_ROUNDS];
+    cf_round_t rounds[CF_FITJOB_MAX_ROUNDS]; /* the loop's, then its pruning trials */
     int nrounds;
+    int pruned; /* knot lines the pruning stage took out (rounds with prune 1) */
     double seconds, t_acc, t_solve;
     double t_rows, t_merge; /* of t_acc: inside the fitter's accumulation; the cores' merge */
     long store_bytes;       /* the stripes of Eq. 7's matrix, best round */

@@ -145,6 +145,12 @@ void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust)
             cf_json_int(j, "rejected", r[i].rejected);
         }
         cf_json_num(j, "seconds", r[i].seconds);
+        if (r[i].prune) {
+            cf_json_bool(j, "pruned", r[i].prune > 0);
+            cf_json_str(j, "removed_dir", r[i].prune_dir ? "v" : "u");
+            cf_json_num(j, "removed_knot", r[i].prune_knot);
+            cf_json_num(j, "removal_error", r[i].prune_err);
+        }
         cf_json_close(j);
     }
     cf_json_close(j);
@@ -152,14 +158,21 @@ void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust)
 
 void cf_round_print(FILE *f, int i, const cf_round_t *r, double tol, int robust)
 {
-    fprintf(f, "  round %d: %d x %d net (%ld control points)", i, r->nu, r->nv,
-            (long)r->nu * r->nv);
+    if (r->prune)
+        fprintf(f, "  prune %d: %s knot %g, %d x %d net (%ld control points)", i,
+                r->prune_dir ? "v" : "u", r->prune_knot, r->nu, r->nv, (long)r->nu * r->nv);
+    else
+        fprintf(f, "  round %d: %d x %d net (%ld control points)", i, r->nu, r->nv,
+                (long)r->nu * r->nv);
     if (tol > 0)
         fprintf(f, ", %.3f %% within %g mm", r->within_pct, tol);
     fprintf(f, ", rms %.6g, max %.6g", r->rms, r->mx);
     if (robust)
         fprintf(f, ", sigma %.3g, %ld rejected", r->sigma, r->rejected);
-    fprintf(f, " (%.2f s)\n", r->seconds);
+    fprintf(f, " (%.2f s)%s\n", r->seconds,
+            r->prune > 0   ? ": kept"
+            : r->prune < 0 ? ": undone (not met)"
+                           : "");
     fflush(f);
 }
 

@@ -66,10 +66,17 @@ typedef struct cf_round {
     double sigma;      /* robust scale of the last reweighting (0: none) */
     long rejected;     /* robust: points of weight 0 in the last pass */
     double seconds;
+    int prune;         /* 0: a round of the loop; a pruning trial: 1 kept, -1 undone */
+    int prune_dir;     /* the trial's knot line: 0 in u, 1 in v */
+    double prune_knot; /* its knot */
+    double prune_err;  /* the knot removal error of the fit it was taken from (nf_prune) */
 } cf_round_t;
 
 /* "rounds": [{round, nu, nv, control_points, within_tol_pct, rms, max_abs,
- * [sigma, rejected,] seconds}, ...] as a field of an open JSON object. */
+ * [sigma, rejected,] seconds [, pruned, removed_dir, removed_knot,
+ * removal_error]}, ...] as
+ * a field of an open JSON object; a pruning trial has pruned (true: kept,
+ * false: undone) and the knot line it took out. */
 void cf_rounds_json(cf_json_t *j, const cf_round_t *r, int n, int robust);
 
 /* One line for people: net, share within tol (if tol > 0), rms, max. */

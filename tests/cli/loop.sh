@@ -8,7 +8,8 @@
 # against the true part), residual-driven with fewer control points than
 # uniform; a robust fit recovers the part under 1 % gross outliers where
 # the plain fit is pulled; memory stays flat in the number of points.
-# --refine auto (the default, nf_knotsel) reaches it too.
+# --refine auto (the default, nf_knotsel) reaches it too, and its pruning
+# stage reports its trials honestly.
 set -u
 . "$(dirname "$0")/lib.sh"
 CF=$(realpath "$1")
@@ -86,6 +87,40 @@ ca=$(top "$T/auto.json" control_points)
 cu=$(top "$T/uniform.json" control_points)
 cr=$(top "$T/residual.json" control_points)
 echo "     control points to reach $TOL mm: uniform $cu, residual-driven $cr, auto $ca (start 120)"
+# The pruning stage (auto, once met): its trials follow the loop's rounds
+# in the JSON, each one knot line fewer than the fit it came from; the kept
+# ones meet the tolerance, the undone ones not, top-level "pruned" counts
+# the kept, and the result is the last kept trial's net. Against the same
+# fit with --prune 0 (no stage): the loop's rounds alike, and no more
+# control points with the stage than without.
+expect 0 "--prune 0: the loop without the pruning stage" "$CF" fit --base "$T/b/nominal.igs" \
+    --points "$T/b/points.xyz" --tol $TOL --prune 0 --out "$T/auto0.igs" --json
+cp "$T/out" "$T/auto0.json"
+msg=$(python3 -c "
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+tr = [r for r in a['rounds'] if 'pruned' in r]
+loop = a['rounds'][:len(a['rounds']) - len(tr)]
+e = []
+if any('pruned' in r for r in loop): e.append('a trial among the loop rounds')
+if any('pruned' in r for r in b['rounds']) or b['pruned'] != 0: e.append('--prune 0 pruned')
+if [(r['nu'], r['nv']) for r in loop] != [(r['nu'], r['nv']) for r in b['rounds']]: e.append('loop rounds differ')
+cp = loop[-1]['control_points']
+for r in tr:
+    if r['removed_dir'] not in ('u', 'v') or r['control_points'] >= cp: e.append('trial net %d from %d' % (r['control_points'], cp))
+    if r['pruned']:
+        cp = r['control_points']
+        if r['within_tol_pct'] < a['within']: e.append('kept trial below within')
+    elif r['within_tol_pct'] >= a['within']: e.append('undone trial met')
+if sum(r['pruned'] for r in tr) != a['pruned']: e.append('pruned count')
+if a['control_points'] != cp or a['control_points'] > b['control_points']: e.append('result net %d' % a['control_points'])
+if a['fit_status'] != 'met' or a['within_tol_pct'] < a['within']: e.append('status')
+print('%s: %d trials, %d kept, %d -> %d control points' % ('; '.join(e) or 'ok', len(tr), a['pruned'], b['control_points'], a['control_points']))
+" "$T/auto.json" "$T/auto0.json")
+case "$msg" in
+ok:*) ok "auto: pruning trials in the rounds, honest (${msg#ok: })" ;;
+*) no "auto: pruning rounds: $msg" ;;
+esac
 [ -n "$cu" ] && [ -n "$cr" ] && [ "$cr" -lt "$cu" ] && ok "residual-driven needs fewer control points ($cr < $cu)" ||
     no "residual $cr vs uniform $cu control points"
 
