@@ -22,8 +22,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* The read buffer: 1 MiB; the fuzz build takes a small one (mk/fuzz.mk), so
- * that lines cross refills often and an open costs little. */
+/* The read buffer: about 2 MiB; the fuzz build takes a small one
+ * (mk/fuzz.mk), so that lines cross refills often and an open costs little. */
 #ifndef CF_POINTS_BUF
 /* One huge page with cf_bigmem's header, the NUL and the pad: its first
  * touch is one fault, not 512 (about 3 ms in this project's VMs). */
@@ -909,9 +909,6 @@ static int cp_raw_cols(const char *path)
     return 0;
 }
 
-/* Whole records straight from the buffer into out: a memcpy on a
- * little-endian host (the file's order), so the reader runs at memory speed;
- * every value checked finite, like the text formats. */
 /* Values of points [k0, k0 + n) of out all finite, else the error. Branch
  * free over blocks of 4 values first: an exponent of all ones (inf, NaN)
  * plus one carries into the sign bit, OR-ed over all; the search only on a
@@ -945,8 +942,8 @@ static int cp_raw_finite(cf_points_t *r, const double *out, long k0, long n)
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 /* With the buffer empty, whole records straight from the file into out
- * (at most max, up to a first half's end): one copy fewer, a third of the
- * binary reader's time (issue 20). Bytes of a record cut by the file's end
+ * (at most max, up to a first half's end): one copy fewer (40 MB a pass
+ * for 10^6 u v x y z points, issue 20). Bytes of a record cut by the file's end
  * go to the buffer, where the caller's loop reports them. The count read,
  * 0 when direct reading does not apply, or an error. */
 static long cp_raw_direct(cf_points_t *r, double *out, long max)
@@ -976,6 +973,10 @@ static long cp_raw_direct(cf_points_t *r, double *out, long max)
 }
 #endif
 
+/* Whole records into out: straight from the file when the buffer is empty
+ * (cp_raw_direct), else a memcpy from the buffer on a little-endian host
+ * (the file's order), so the reader runs at memory speed; every value
+ * checked finite, like the text formats. */
 static long cp_raw_read(cf_points_t *r, double *out, long max)
 {
     size_t rec = sizeof(double) * (size_t)r->cols;
