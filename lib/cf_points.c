@@ -1306,13 +1306,15 @@ int cf_points_rewind(cf_points_t *r)
         return CF_EARG;
     if (r->is_stdin)
         return CF_EUNSUPPORTED;
-    /* The thread stops before the file moves, and starts again after. */
-    int threaded = r->mt != NULL;
-    cf_pmt_stop(r->mt);
-    r->mt = NULL;
+    /* The thread stops before the file moves, and starts again after, on
+     * the same ring. Without a thread it reads alike on this one. */
+    if (r->mt)
+        cf_pmt_pause(r->mt);
     int rc = cp_rewind(r);
-    if (!rc && threaded) /* without a thread (out of memory) it reads alike on this one */
-        (void)cf_pmt_start(&r->mt, r->cols, CP_MT_BLOCK, CP_MT_NBLK, cp_fill_block, r);
+    if (r->mt && (rc || cf_pmt_resume(r->mt))) {
+        cf_pmt_stop(r->mt);
+        r->mt = NULL;
+    }
     return rc;
 }
 

@@ -28,6 +28,7 @@ struct cf_pmt {
     pthread_mutex_t mu;
     pthread_cond_t data, space;
     int head, tail, full, stop; /* under mu: the thread fills head, the reader takes tail */
+    int running;                /* the thread started and not yet joined */
     /* the reader's own */
     long off, line;
     int done, err;
@@ -110,7 +111,40 @@ int cf_pmt_start(cf_pmt_t **tp, int cols, long block, int nblocks, cf_pmt_fill_f
         pmt_free(t);
         return CF_EIO;
     }
+    t->running = 1;
     *tp = t;
+    return CF_OK;
+}
+
+/* Stop the thread (it finishes the block it is filling) and join it. */
+static void pmt_join(cf_pmt_t *t)
+{
+    if (!t->running)
+        return;
+    pthread_mutex_lock(&t->mu);
+    t->stop = 1;
+    pthread_cond_signal(&t->space);
+    pthread_mutex_unlock(&t->mu);
+    pthread_join(t->th, NULL);
+    t->running = 0;
+}
+
+void cf_pmt_pause(cf_pmt_t *t)
+{
+    pmt_join(t);
+    t->head = t->tail = t->full = t->stop = 0;
+    t->off = t->line = 0;
+    t->done = t->err = 0;
+    t->msg[0] = '\0';
+}
+
+int cf_pmt_resume(cf_pmt_t *t)
+{
+    if (t->running)
+        return CF_OK;
+    if (pthread_create(&t->th, NULL, pmt_main, t))
+        return CF_EIO;
+    t->running = 1;
     return CF_OK;
 }
 
@@ -161,11 +195,7 @@ void cf_pmt_stop(cf_pmt_t *t)
 {
     if (!t)
         return;
-    pthread_mutex_lock(&t->mu);
-    t->stop = 1;
-    pthread_cond_signal(&t->space);
-    pthread_mutex_unlock(&t->mu);
-    pthread_join(t->th, NULL);
+    pmt_join(t);
     pthread_cond_destroy(&t->space);
     pthread_cond_destroy(&t->data);
     pthread_mutex_destroy(&t->mu);
