@@ -4,6 +4,7 @@
  * waits for a free block, the reader for a full one; a block changes hands
  * once per `block` rows, so the locking costs nothing beside the parsing. */
 #include "cf_points_mt.h"
+#include "cf_bigmem.h"
 #include "cf_err.h"
 #include <pthread.h>
 #include <stdio.h>
@@ -22,6 +23,7 @@ struct cf_pmt {
     int cols, nblk;
     long cap;
     pmt_blk_t *blk;
+    void *mem; /* every block's rows and lines, one piece (cf_bigmem) */
     cf_pmt_fill_fn fill;
     void *ctx;
     pthread_t th;
@@ -63,10 +65,7 @@ static void *pmt_main(void *arg)
 
 static void pmt_free(cf_pmt_t *t)
 {
-    for (int i = 0; t->blk && i < t->nblk; i++) {
-        free(t->blk[i].rows);
-        free(t->blk[i].lines);
-    }
+    cf_bigmem_free(t->mem);
     free(t->blk);
     free(t);
 }
@@ -84,22 +83,21 @@ int cf_pmt_start(cf_pmt_t **tp, int cols, long block, int nblocks, cf_pmt_fill_f
     t->nblk = nblocks;
     t->fill = fill;
     t->ctx = ctx;
+    /* One piece for the ring (on a huge page when large enough: one first
+     * touch instead of hundreds), touched now: not a lazy calloc. */
+    const size_t nr = (size_t)block * (size_t)cols * sizeof(double),
+                 nl = (size_t)block * sizeof(long);
     t->blk = calloc((size_t)nblocks, sizeof *t->blk);
-    for (int i = 0; t->blk && i < nblocks; i++) {
-        size_t nr = (size_t)block * (size_t)cols * sizeof(double),
-               nl = (size_t)block * sizeof(long);
-        t->blk[i].rows = malloc(nr);
-        t->blk[i].lines = malloc(nl);
-        if (!t->blk[i].rows || !t->blk[i].lines) {
-            pmt_free(t);
-            return CF_ENOMEM;
-        }
-        memset(t->blk[i].rows, 0xff, nr); /* touched now: not a lazy calloc */
-        memset(t->blk[i].lines, 0xff, nl);
-    }
-    if (!t->blk) {
+    t->mem = cf_bigmem_alloc((nr + nl) * (size_t)nblocks);
+    if (!t->blk || !t->mem) {
         pmt_free(t);
         return CF_ENOMEM;
+    }
+    memset(t->mem, 0xff, (nr + nl) * (size_t)nblocks);
+    for (int i = 0; i < nblocks; i++) {
+        char *b = (char *)t->mem + (nr + nl) * (size_t)i; /* nr, nl: multiples of 8 */
+        t->blk[i].rows = (double *)(void *)b;
+        t->blk[i].lines = (long *)(void *)(b + nr);
     }
     pthread_mutex_init(&t->mu, NULL);
     pthread_cond_init(&t->data, NULL);
