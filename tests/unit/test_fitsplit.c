@@ -17,6 +17,7 @@
 #include "cf_test.h"
 #include "nf_err.h"
 #include "ref_dense.h"
+#include "ref_job.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -338,15 +339,7 @@ static int job_r(const char *path, int cores, int threads, int robust, cf_fitjob
     int rc = cf_fitjob_open(&j, &g_s, &o, m, ml);
     if (rc)
         return rc;
-    cf_points_t *pr = NULL;
-    rc = cf_points_open(&pr, path, 5, m, ml);
-    if (!rc) {
-        cf_fitsrc_t src;
-        cf_fitsrc_points_t pc;
-        cf_fitsrc_points(&src, &pc, pr, path);
-        rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, m, ml);
-    }
-    cf_points_close(pr);
+    rc = ref_job_file(j, path, 5, r, m, ml);
     cf_fitjob_close(j);
     return rc;
 }

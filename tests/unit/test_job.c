@@ -17,6 +17,7 @@
 #include "cf_test.h"
 #include "cf_uuid.h"
 #include "nf_err.h"
+#include "ref_job.h"
 #include "rig_err.h"
 #include <stdio.h>
 #include <stdlib.h>
@@ -372,32 +373,9 @@ static int run_loop(cf_refine_t how, long max_cp, long max_rounds, cf_fitjob_res
     int rc = cf_fitjob_open(&j, &bez, &o, msg, sizeof msg);
     if (rc)
         return rc;
-    cf_points_t *pr = NULL;
-    rc = cf_points_open(&pr, starfile, 5, msg, sizeof msg);
-    if (!rc) {
-        cf_fitsrc_t src;
-        cf_fitsrc_points_t pc;
-        cf_fitsrc_points(&src, &pc, pr, starfile);
-        rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, msg, sizeof msg);
-    }
-    cf_points_close(pr);
+    rc = ref_job_file(j, starfile, 5, r, msg, sizeof msg);
     cf_fitjob_close(j);
     return rc;
-}
-
-/* max |a - b| at a grid of parameters. */
-static double gap(const nf_surf_t *a, const nf_surf_t *b)
-{
-    double worst = 0;
-    for (int j = 0; j <= 20; j++)
-        for (int i = 0; i <= 20; i++) {
-            double A[3], B[3];
-            nf_surf_eval(a, i / 20.0, j / 20.0, A);
-            nf_surf_eval(b, i / 20.0, j / 20.0, B);
-            for (int c = 0; c < 3; c++)
-                worst = fmax(worst, fabs(A[c] - B[c]));
-        }
-    return worst;
 }
 
 static void test_fitjob_loop(void **state)
@@ -415,7 +393,7 @@ static void test_fitjob_loop(void **state)
         assert_int_equal(r.surf.nu, 5);
         assert_int_equal(r.surf.nv, 5);
         assert_true(r.max_abs < 1e-8);
-        assert_true(gap(&r.surf, &star) < 1e-8);
+        assert_true(ref_job_gap(&r.surf, &star) < 1e-8);
         assert_int_equal(r.points, 1600);
         assert_string_equal(cf_fitjob_status_name(r.status), "met");
         cf_fitjob_result_free(&r);
@@ -534,7 +512,7 @@ static void test_fitjob_held(void **state)
     assert_true(fabs(a.max_abs - b.max_abs) <= 1e-12);
     assert_true(fabs(a.nominal_rms - b.nominal_rms) <= 1e-12);
     assert_true(a.within_pct == b.within_pct);
-    assert_true(gap(&a.surf, &b.surf) <= 1e-10); /* 3e-12 mm on a 120 mm part seen */
+    assert_true(ref_job_gap(&a.surf, &b.surf) <= 1e-10); /* 3e-12 mm on a 120 mm part seen */
     assert_non_null(a.stats);
     assert_non_null(b.stats);
     assert_int_equal(a.stats->n, b.stats->n);

@@ -18,6 +18,7 @@
 #include "nf_prune.h"
 #include "nf_refine.h"
 #include "ref_dense.h"
+#include "ref_job.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -208,32 +209,9 @@ static int run_prune(const char *file, int cols, double tol, long prune, cf_fitj
     int rc = cf_fitjob_open(&j, &bez, &o, msg, sizeof msg);
     if (rc)
         return rc;
-    cf_points_t *pr = NULL;
-    rc = cf_points_open(&pr, file, cols, msg, sizeof msg);
-    if (!rc) {
-        cf_fitsrc_t src;
-        cf_fitsrc_points_t pc;
-        cf_fitsrc_points(&src, &pc, pr, file);
-        rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, msg, sizeof msg);
-    }
-    cf_points_close(pr);
+    rc = ref_job_file(j, file, cols, r, msg, sizeof msg);
     cf_fitjob_close(j);
     return rc;
-}
-
-/* max |a - b| at a grid of parameters. */
-static double gap(const nf_surf_t *a, const nf_surf_t *b)
-{
-    double worst = 0;
-    for (int j = 0; j <= 20; j++)
-        for (int i = 0; i <= 20; i++) {
-            double A[3], B[3];
-            nf_surf_eval(a, i / 20.0, j / 20.0, A);
-            nf_surf_eval(b, i / 20.0, j / 20.0, B);
-            for (int c = 0; c < 3; c++)
-                worst = fmax(worst, fabs(A[c] - B[c]));
-        }
-    return worst;
 }
 
 static void test_job_prunes_back(void **state)
@@ -269,7 +247,7 @@ static void test_job_prunes_back(void **state)
             assert_int_equal(r.surf.nu, SU);
             assert_int_equal(r.surf.nv, SV);
             assert_true(r.max_abs < 1e-8);
-            assert_true(gap(&r.surf, &star) < 1e-8);
+            assert_true(ref_job_gap(&r.surf, &star) < 1e-8);
             for (int i = 0; i < SU + 3 + 1; i++)
                 assert_near(r.surf.U[i], star.U[i], 0.0);
             for (int i = 0; i < SV + 3 + 1; i++)

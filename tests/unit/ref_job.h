@@ -1,0 +1,21 @@
+/* SPDX-License-Identifier: MIT */
+/* ref_job.h: what several fit-job tests share: one run of an open job over
+ * a points file, and the largest distance between two surfaces on a grid
+ * of parameters (the surfaces' own evaluation: a comparison, not a
+ * reference result). */
+#ifndef REF_JOB_H
+#define REF_JOB_H
+
+#include "cf_fitjob.h"
+#include "nf_surf.h"
+
+/* cf_fitjob_run of j over the points file path (cols values a point: 5
+ * given parameters, 3 projected), the file closed after; j stays open.
+ * 0 or the error (its text in m). */
+int ref_job_file(cf_fitjob_t *j, const char *path, int cols, cf_fitjob_result_t *r, char *m,
+                 size_t ml);
+
+/* max |a(u, v) - b(u, v)| over a 21 x 21 grid of the unit square. */
+double ref_job_gap(const nf_surf_t *a, const nf_surf_t *b);
+
+#endif
