@@ -870,15 +870,21 @@ static inline double resid_dist(resid_t *out, double d, double d2, double tol, d
     return d;
 }
 
+/* |Q - S(u, v)|^2 of one row (u v x y z) at its parameters. */
+static inline double resid_d2(cf_surfrow_t *ev, const double *q)
+{
+    double P[3];
+    cf_surfrow_eval(ev, q[0], q[1], P);
+    return (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
+           (q[4] - P[2]) * (q[4] - P[2]);
+}
+
 /* The distance of one row (u v x y z) to s at its parameters into the
  * sums: measure's, on either thread. */
 static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, double tol,
                                double cut, int want_hist)
 {
-    double P[3];
-    cf_surfrow_eval(ev, q[0], q[1], P);
-    const double d2 = (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
-                      (q[4] - P[2]) * (q[4] - P[2]);
+    const double d2 = resid_d2(ev, q);
     return resid_dist(out, sqrt(d2), d2, tol, cut, want_hist);
 }
 
@@ -888,10 +894,7 @@ static inline double resid_add(resid_t *out, cf_surfrow_t *ev, const double *q, 
  * correctly rounded); the caller takes it once. */
 static inline void resid_add2(resid_t *out, double *mx2, cf_surfrow_t *ev, const double *q)
 {
-    double P[3];
-    cf_surfrow_eval(ev, q[0], q[1], P);
-    const double d2 = (q[2] - P[0]) * (q[2] - P[0]) + (q[3] - P[1]) * (q[3] - P[1]) +
-                      (q[4] - P[2]) * (q[4] - P[2]);
+    const double d2 = resid_d2(ev, q);
     out->ss += d2;
     *mx2 = d2 > *mx2 ? d2 : *mx2;
 }
