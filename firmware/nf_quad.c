@@ -275,7 +275,8 @@ static double flat_dev(const dec_t *d, const rect_t *r, const double *C, int *di
         }
     }
 direction:
-    *dirv = split_dir(s, r, C);
+    /* Only a rectangle that is split needs the direction (four evaluations). */
+    *dirv = dev > d->tol ? split_dir(s, r, C) : 0;
     return dev;
 }
 
@@ -354,22 +355,39 @@ static int decompose(nf_quad_t *q, const dec_t *d)
     return NF_OK;
 }
 
+/* The blanket's vertices S(ul[i], vl[j]) into q->xyz. */
+static void vertices(nf_quad_t *q)
+{
+    for (int j = 0; j < q->nv; j++)
+        for (int i = 0; i < q->nu; i++)
+            nf_surf_eval(q->s, q->ul[i], q->vl[j], q->xyz + 3 * (i + (long)j * q->nu));
+}
+
 /* The blanket's quadrilaterals are sub-rectangles of flat ones, which
  * bounds their deviation by twice the tolerance only: every one is tested
- * again and the failing ones split (marks in scratch), until all pass. */
+ * again and the failing ones split (marks in scratch), until all pass.
+ * Each pass evaluates the vertices once (not four corners a quadrilateral);
+ * on return they are the final blanket's. */
 static int verify(nf_quad_t *q, const dec_t *d, double *scratch)
 {
     for (int pass = 0; pass < 64; pass++) {
         double *mu = scratch, *mv = scratch + q->nu;
         for (int i = 0; i < q->nu + q->nv; i++)
             scratch[i] = 0.0;
+        vertices(q);
         int any = 0;
         for (int j = 0; j + 1 < q->nv; j++)
             for (int i = 0; i + 1 < q->nu; i++) {
                 const rect_t r = {q->ul[i], q->ul[i + 1], q->vl[j], q->vl[j + 1]};
+                const double *P00 = q->xyz + 3 * (i + (long)j * q->nu), *P01 = P00 + 3L * q->nu;
                 double C[12];
                 int dirv;
-                corners(q->s, &r, C);
+                for (int c = 0; c < 3; c++) {
+                    C[c] = P00[c];
+                    C[3 + c] = P00[3 + c];
+                    C[6 + c] = P01[c];
+                    C[9 + c] = P01[3 + c];
+                }
                 if (!(flat_dev(d, &r, C, &dirv) > q->tol))
                     continue;
                 if (!splittable(q, &r, dirv))
@@ -398,6 +416,7 @@ static int verify(nf_quad_t *q, const dec_t *d, double *scratch)
             if (list_insert(q->vl, &q->nv, q->nu, q->maxq, xv[k]))
                 return NF_EBUDGET;
     }
+    vertices(q); /* the last pass split: the lists moved */
     return NF_OK;
 }
 
@@ -739,10 +758,7 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
         rc = verify(q, &d, q->qd); /* the per-quadrilateral storage is free yet */
     if (rc)
         return rc;
-    for (int j = 0; j < q->nv; j++)
-        for (int i = 0; i < q->nu; i++)
-            nf_surf_eval(s, q->ul[i], q->vl[j], q->xyz + 3 * (i + (long)j * q->nu));
-    max_area_plane(q);
+    max_area_plane(q); /* verify left the vertices in q->xyz */
     quad_data(q);
     return build_grid(q, im, im + 2 * maxq + 3);
 }
