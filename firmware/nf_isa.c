@@ -5,6 +5,7 @@
 #include "nf_accum.h"
 #include "nf_err.h"
 #include "nf_fit.h"
+#include "nf_quad.h"
 #include "nf_solve.h"
 #include "nf_stripe.h"
 #include "nf_surf.h"
@@ -97,6 +98,17 @@ int nf_isa_select(nf_isa_t isa)
     V(nf_stripe_add_outer, (nf_stripe_t * st, long base, const double *R, double wgt),             \
       (st, base, R, wgt))                                                                          \
     V(nf_stripe_matvec, (const nf_stripe_t *st, const double *x, double *y), (st, x, y))           \
+    R(int, nf_quad_init,                                                                           \
+      (nf_quad_t * q, const nf_surf_t *s, const nf_quad_params_t *prm, long maxq, void *mem,       \
+       size_t bytes),                                                                              \
+      (q, s, prm, maxq, mem, bytes))                                                               \
+    V(nf_quad_start, (const nf_quad_t *q, const double Q[3], double *u0, double *v0),              \
+      (q, Q, u0, v0))                                                                              \
+    R(int, nf_quad_newton,                                                                         \
+      (const nf_quad_t *q, const double Q[3], double tol, double *u, double *v, nf_proj_t *out),   \
+      (q, Q, tol, u, v, out))                                                                      \
+    R(int, nf_quad_project, (nf_quad_t * q, const double Q[3], double tol, nf_proj_t *out),        \
+      (q, Q, tol, out))                                                                            \
     V(nf_surf_eval, (const nf_surf_t *s, double u, double v, double out[3]), (s, u, v, out))       \
     R(int, nf_surf_rbasis, (const nf_surf_t *s, double u, double v, int *l, int *k, double *R),    \
       (s, u, v, l, k, R))                                                                          \

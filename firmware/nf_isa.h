@@ -2,7 +2,7 @@
 /* nf_isa.h: run-time choice of the instruction set of the hot kernels.
  * The default x86-64 build runs on every x86-64 CPU (baseline: SSE2). The
  * modules whose loops dominate a fit (nf_accum.c, nf_fit.c's point paths,
- * nf_pcg.c, nf_stripe.c, nf_surf.c) are compiled a second time for
+ * nf_pcg.c, nf_quad.c, nf_stripe.c, nf_surf.c) are compiled a second time for
  * x86-64-v3's vector part, AVX2 and FMA (nf_*_v3.c), and every hot entry
  * point forwards to one of the two copies: the v3 copy when the CPU and the
  * OS support AVX2 and FMA, chosen once (nf_isa_active), unless a caller

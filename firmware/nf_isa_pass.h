@@ -43,6 +43,11 @@
 /* nf_stripe.c */
 #define nf_stripe_add_outer NF_ISA_SFX(nf_stripe_add_outer)
 #define nf_stripe_matvec NF_ISA_SFX(nf_stripe_matvec)
+/* nf_quad.c */
+#define nf_quad_init NF_ISA_SFX(nf_quad_init)
+#define nf_quad_start NF_ISA_SFX(nf_quad_start)
+#define nf_quad_newton NF_ISA_SFX(nf_quad_newton)
+#define nf_quad_project NF_ISA_SFX(nf_quad_project)
 /* nf_surf.c */
 #define nf_surf_eval NF_ISA_SFX(nf_surf_eval)
 #define nf_surf_rbasis NF_ISA_SFX(nf_surf_rbasis)

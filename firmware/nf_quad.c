@@ -1,10 +1,14 @@
 /* SPDX-License-Identifier: MIT */
 /* nf_quad.c: quadrilateral decomposition, maximum-area plane, 2-D grid
  * range search, projection onto quadrilaterals and thinning (Piegl &
- * Tiller 2001, Sections 3.1-3.4), with Newton point inversion after it. */
-#include "nf_quad.h"
+ * Tiller 2001, Sections 3.1-3.4), with Newton point inversion after it.
+ * Its set-up, start and Newton have a v3 copy (nf_quad_v3.c, nf_isa.h):
+ * Newton's derivatives are most of a fitting loop's projections. */
+#include "nf_isa_pass.h" /* first: this pass's names (nf_isa.h) */
+
 #include "nf_basis.h"
 #include "nf_err.h"
+#include "nf_quad.h"
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -684,6 +688,7 @@ static void newton_setup(nf_quad_t *q, const nf_surf_t *s)
         q->rational |= s->w[k] != s->w[0];
 }
 
+#if NF_ISA_COLD
 int nf_quad_newton_init(nf_quad_t *q, const nf_surf_t *s, void *mem, size_t bytes)
 {
     if (!q || !s || !mem)
@@ -705,6 +710,8 @@ long nf_quad_count(const nf_quad_t *q)
 {
     return (long)(q->nu - 1) * (q->nv - 1);
 }
+
+#endif
 
 int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, long maxq,
                  void *mem, size_t bytes)
@@ -1074,6 +1081,96 @@ QINLINE void derivs_pq(const nf_quad_t *qd, int l, int k, double u, double v, co
     }
 }
 
+#if NF_ISA_COLD
+/* Taylor coefficients of the four cubic basis functions of span l at its
+ * left knot: B[a][m] = N_{l-3+a}^(m)(U[l]) / m!. */
+static void power_basis(int l, const double *U, double B[4][4])
+{
+    double d[4 * 4];
+    nf_ders_basis_funs(l, U[l], 3, 3, U, d);
+    static const double fact[4] = {1.0, 1.0, 2.0, 6.0};
+    for (int a = 0; a < 4; a++)
+        for (int m = 0; m < 4; m++)
+            B[a][m] = d[m * 4 + a] / fact[m];
+}
+
+int nf_quad_power(nf_quad_t *q, double *pf, size_t bytes)
+{
+    if (!q || !q->s || !pf)
+        return NF_EARG;
+    const nf_surf_t *s = q->s;
+    q->pf = NULL;
+    if (s->p != 3 || s->q != 3 || q->rational)
+        return NF_OK;
+    if (bytes < NF_QUAD_POWER_BYTES(s->nu, s->nv))
+        return NF_EARENA;
+    const long su = s->nu - 3;
+    for (int k = 3; k < s->nv; k++) {
+        double Bv[4][4];
+        if (s->V[k] < s->V[k + 1])
+            power_basis(k, s->V, Bv);
+        for (int l = 3; l < s->nu; l++) {
+            double *C = pf + NF_QUAD_POWER_SPAN * ((l - 3) + (long)(k - 3) * su);
+            for (int t = 0; t < NF_QUAD_POWER_SPAN; t++)
+                C[t] = 0.0;
+            if (!(s->U[l] < s->U[l + 1] && s->V[k] < s->V[k + 1]))
+                continue;                          /* empty: Newton's spans are never empty */
+            double Bu[4][4], R[4][4][3] = {{{0}}}; /* R[b][m]: row b in powers of s */
+            power_basis(l, s->U, Bu);
+            for (int b = 0; b < 4; b++)
+                for (int a = 0; a < 4; a++) {
+                    const double *P = s->cp + 3 * ((l - 3 + a) + (long)(k - 3 + b) * s->nu);
+                    for (int m = 0; m < 4; m++)
+                        for (int c = 0; c < 3; c++)
+                            R[b][m][c] += Bu[a][m] * P[c];
+                }
+            for (int n = 0; n < 4; n++)
+                for (int m = 0; m < 4; m++)
+                    for (int c = 0; c < 3; c++) {
+                        double t = 0.0;
+                        for (int b = 0; b < 4; b++)
+                            t += Bv[b][n] * R[b][m][c];
+                        C[16 * n + 4 * m + c] = t;
+                    }
+        }
+    }
+    q->pf = pf;
+    return NF_OK;
+}
+#endif
+
+/* S and its derivatives to order 2 from span (l, k)'s power form: Horner in
+ * s = u - U[l] per power of t, then in t = v - V[k]; x, y, z (and a zero)
+ * side by side, which the v3 copy does four at a time. */
+QINLINE void derivs_power(const nf_quad_t *qd, int l, int k, double u, double v, double d[6][3])
+{
+    const nf_surf_t *s = qd->s;
+    const double *C = qd->pf + NF_QUAD_POWER_SPAN * ((l - 3) + (long)(k - 3) * (s->nu - 3));
+    const double x = u - s->U[l], y = v - s->V[k];
+    double r0[4][4], r1[4][4], r2[4][4];
+    for (int n = 0; n < 4; n++) {
+        const double *Cn = C + 16 * n;
+        for (int c = 0; c < 4; c++) {
+            const double c0 = Cn[c], c1 = Cn[4 + c], c2 = Cn[8 + c], c3 = Cn[12 + c];
+            r0[n][c] = ((c3 * x + c2) * x + c1) * x + c0;
+            r1[n][c] = (3.0 * c3 * x + 2.0 * c2) * x + c1;
+            r2[n][c] = 6.0 * c3 * x + 2.0 * c2;
+        }
+    }
+    double o[6][4];
+    for (int c = 0; c < 4; c++) {
+        o[0][c] = ((r0[3][c] * y + r0[2][c]) * y + r0[1][c]) * y + r0[0][c];
+        o[1][c] = ((r1[3][c] * y + r1[2][c]) * y + r1[1][c]) * y + r1[0][c];
+        o[2][c] = (3.0 * r0[3][c] * y + 2.0 * r0[2][c]) * y + r0[1][c];
+        o[3][c] = ((r2[3][c] * y + r2[2][c]) * y + r2[1][c]) * y + r2[0][c];
+        o[4][c] = (3.0 * r1[3][c] * y + 2.0 * r1[2][c]) * y + r1[1][c];
+        o[5][c] = 6.0 * r0[3][c] * y + 2.0 * r0[2][c];
+    }
+    for (int e = 0; e < 6; e++)
+        for (int c = 0; c < 3; c++)
+            d[e][c] = o[e][c];
+}
+
 /* Span of x, trying the previous one first (Newton's iterates rarely
  * leave it). */
 static int span_hint(int n, int p, double x, const double *K, int *hint)
@@ -1089,7 +1186,9 @@ static void derivs(const nf_quad_t *qd, double u, double v, int *hl, int *hk, do
     const nf_surf_t *s = qd->s;
     const int l = span_hint(s->nu - 1, s->p, u, s->U, hl);
     const int k = span_hint(s->nv - 1, s->q, v, s->V, hk);
-    if (s->p == 3 && s->q == 3)
+    if (qd->pf)
+        derivs_power(qd, l, k, u, v, d);
+    else if (s->p == 3 && s->q == 3)
         derivs_pq(qd, l, k, u, v, 3, 3, d);
     else
         derivs_pq(qd, l, k, u, v, s->p, s->q, d);
@@ -1186,6 +1285,7 @@ int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out)
     return rc;
 }
 
+#if NF_ISA_COLD
 /* ---- thinning (Section 3.3) ---- */
 
 long nf_thin_verts(const nf_thin_t *t)
@@ -1254,3 +1354,4 @@ int nf_thin_add(nf_thin_t *t, const double P[3], long k)
         }
     return NF_OK;
 }
+#endif

@@ -294,9 +294,14 @@ typedef struct proj {
 static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj_t *out)
 {
     if (!p->nready) {
-        const size_t b = NF_QUAD_NEWTON_BYTES(p->s->nu, p->s->nv);
-        p->nqmem = malloc(b);
+        /* Newton's set-up, then the power form of the spans (its
+         * derivatives; without it the basis path, the same feet). */
+        const size_t b = NF_QUAD_NEWTON_BYTES(p->s->nu, p->s->nv),
+                     pb = NF_QUAD_POWER_BYTES(p->s->nu, p->s->nv);
+        p->nqmem = malloc(b + pb);
         p->nready = p->nqmem && nf_quad_newton_init(&p->nq, p->s, p->nqmem, b) == NF_OK ? 1 : -1;
+        if (p->nready > 0 && pb)
+            (void)nf_quad_power(&p->nq, (double *)(void *)((char *)p->nqmem + b), pb);
     }
     double un = u, vn = v;
     if ((p->nready < 0 || !nf_quad_newton(&p->nq, Q, PROJ_TOL, &un, &vn, out)) &&

@@ -40,6 +40,13 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
         rc = nf_quad_init(&g->quad, s, &paper, CF_SEEDGRID_MAXQ, g->qmem, qb);
     if (g->qmem && rc == NF_OK && !g->quad.folded) {
         g->use_quad = 1;
+        /* Without its memory Newton keeps the basis path: slower, the same feet. */
+        const size_t pb = NF_QUAD_POWER_BYTES(s->nu, s->nv);
+        g->pf = pb ? malloc(pb) : NULL;
+        if (g->pf && nf_quad_power(&g->quad, g->pf, pb) != NF_OK) {
+            free(g->pf);
+            g->pf = NULL;
+        }
         return CF_OK;
     }
     free(g->qmem);
@@ -335,6 +342,7 @@ int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj
 void cf_seedgrid_free(cf_seedgrid_t *g)
 {
     free(g->qmem);
+    free(g->pf);
     free(g->pts);
     free(g->next);
     free(g->head);

@@ -24,6 +24,7 @@ typedef struct cf_seedgrid {
     int use_quad;   /* 1: quad holds the decomposition; the rest is unused */
     nf_quad_t quad;
     void *qmem;
+    double *pf;  /* the quadrilaterals' Newton: its power form (nf_quad_power) */
     double *pts; /* the seed's samples (owned) */
     int dim[3];
     double lo[3], cell;

@@ -531,6 +531,109 @@ static void test_flags_and_budget(void **state)
     free(mem);
 }
 
+/* The power form of a polynomial bicubic's spans (nf_quad_power) against
+ * A4.4's derivatives (nf_surf_derivs) at random parameters, its layout as
+ * the header states it; Newton's feet with it as without it; and the
+ * surfaces it is not for left on the basis path. */
+static double power_eval(const double *C, double x, double y, int du, int dv, int c)
+{
+    static const double f[4][4] = {
+        {1, 1, 1, 1}, {0, 1, 2, 3}, {0, 0, 2, 6}}; /* d^k s^m / s^(m-k) */
+    double r = 0.0;
+    for (int n = dv; n < 4; n++)
+        for (int m = du; m < 4; m++)
+            r += C[16 * n + 4 * m + c] * f[du][m] * pow(x, m - du) * f[dv][n] * pow(y, n - dv);
+    return r;
+}
+
+static void test_power_form(void **state)
+{
+    (void)state;
+    ref_seed(21);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 9, 8, 0.0, 1.0, 0.0, 2.0, 1.0, 1.0);
+    wavy(&s, 4.0);
+    const size_t nb = NF_QUAD_NEWTON_BYTES(s.nu, s.nv), pb = NF_QUAD_POWER_BYTES(s.nu, s.nv);
+    assert_int_equal(pb, sizeof(double) * 64 * (s.nu - 3) * (s.nv - 3));
+    void *m1 = malloc(nb), *m2 = malloc(nb);
+    double *pf = malloc(pb);
+    assert_true(m1 && m2 && pf);
+    nf_quad_t a, b;
+    assert_int_equal(nf_quad_newton_init(&a, &s, m1, nb), NF_OK);
+    assert_int_equal(nf_quad_newton_init(&b, &s, m2, nb), NF_OK);
+    assert_int_equal(nf_quad_power(&a, pf, pb - 1), NF_EARENA);
+    assert_null(a.pf);
+    assert_int_equal(nf_quad_power(&a, pf, pb), NF_OK);
+    assert_ptr_equal(a.pf, pf);
+    double u0, u1, v0, v1, size = 0.0;
+    nf_surf_domain(&s, &u0, &u1, &v0, &v1);
+    for (long k = 0; k < 3L * s.nu * s.nv; k++)
+        size = fmax(size, fabs(s.cp[k]));
+    /* (order in u, order in v) -> nf_surf_derivs's index (k u, l v: 3 (3 k + l)) */
+    static const int ord[6][2] = {{0, 0}, {1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}};
+    for (int t = 0; t < 2000; t++) {
+        const double u = ref_rand(u0, u1), v = ref_rand(v0, v1);
+        const int l = nf_find_span(s.nu - 1, 3, u, s.U), k = nf_find_span(s.nv - 1, 3, v, s.V);
+        const double *C = pf + 64 * ((l - 3) + (long)(k - 3) * (s.nu - 3));
+        double d[27];
+        nf_surf_derivs(&s, u, v, 2, d);
+        for (int e = 0; e < 6; e++)
+            for (int c = 0; c < 3; c++) {
+                const double want = d[3 * (3 * ord[e][0] + ord[e][1]) + c];
+                const double got = power_eval(C, u - s.U[l], v - s.V[k], ord[e][0], ord[e][1], c);
+                const double sc = size * pow(s.nu, ord[e][0]) * pow(s.nv, ord[e][1]);
+                if (!(fabs(got - want) <= 1e-11 * sc))
+                    fail_msg("(%g, %g) order (%d, %d) coordinate %d: power form %.17g, A4.4 %.17g",
+                             u, v, ord[e][0], ord[e][1], c, got, want);
+            }
+        assert_true(C[16 * (t % 4) + 4 * ((t / 4) % 4) + 3] == 0.0);
+    }
+    /* Newton from the same starts: the same feet to the tolerance. */
+    int both = 0;
+    for (int t = 0; t < 500; t++) {
+        const double u = ref_rand(u0, u1), v = ref_rand(v0, v1), h = ref_rand(-0.1, 0.1);
+        double d[27], Q[3];
+        nf_surf_derivs(&s, u, v, 1, d);
+        const double *Su = d + 9, *Sv = d + 3;
+        const double n[3] = {Su[1] * Sv[2] - Su[2] * Sv[1], Su[2] * Sv[0] - Su[0] * Sv[2],
+                             Su[0] * Sv[1] - Su[1] * Sv[0]};
+        for (int c = 0; c < 3; c++)
+            Q[c] = d[c] + h * n[c] / sqrt(dot3(n, n));
+        double ua = u + ref_rand(-0.02, 0.02) * (u1 - u0),
+               va = v + ref_rand(-0.02, 0.02) * (v1 - v0);
+        ua = fmin(fmax(ua, u0 + 1e-3), u1 - 1e-3);
+        va = fmin(fmax(va, v0 + 1e-3), v1 - 1e-3);
+        double ub = ua, vb = va;
+        nf_proj_t pa, pbf;
+        const int ra = nf_quad_newton(&a, Q, TOL, &ua, &va, &pa);
+        const int rb = nf_quad_newton(&b, Q, TOL, &ub, &vb, &pbf);
+        assert_int_equal(ra, rb);
+        if (!ra)
+            continue;
+        both++;
+        assert_true(fabs(pa.u - pbf.u) <= 10 * TOL * (u1 - u0));
+        assert_true(fabs(pa.v - pbf.v) <= 10 * TOL * (v1 - v0));
+        assert_near(pa.dist, pbf.dist, 1e-9 * (1.0 + fabs(pbf.dist)));
+    }
+    assert_true(both > 400);
+    ref_surf_free(&s);
+    /* Rational, or not bicubic: the basis path (no power form, NF_OK). */
+    ref_surf_random(&s, 3, 3, 6, 6, 0.0, 1.0, 0.0, 1.0, 0.5, 2.0);
+    assert_int_equal(nf_quad_newton_init(&a, &s, m1, nb), NF_OK);
+    assert_int_equal(nf_quad_power(&a, pf, pb), NF_OK);
+    assert_null(a.pf);
+    ref_surf_free(&s);
+    ref_surf_random(&s, 3, 2, 6, 6, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    assert_int_equal(nf_quad_newton_init(&a, &s, m1, nb), NF_OK);
+    assert_int_equal(nf_quad_power(&a, pf, pb), NF_OK);
+    assert_null(a.pf);
+    assert_int_equal(nf_quad_power(&a, NULL, pb), NF_EARG);
+    ref_surf_free(&s);
+    free(m1);
+    free(m2);
+    free(pf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -538,7 +641,7 @@ int main(void)
         cmocka_unit_test(test_rational_exact),   cmocka_unit_test(test_flatness),
         cmocka_unit_test(test_crack_free),       cmocka_unit_test(test_memory_flat),
         cmocka_unit_test(test_thin_nearest),     cmocka_unit_test(test_fold),
-        cmocka_unit_test(test_flags_and_budget),
+        cmocka_unit_test(test_flags_and_budget), cmocka_unit_test(test_power_form),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
