@@ -241,8 +241,9 @@ static void touch(void *p, size_t n)
 /* Batch buffers for n rows (at most BATCH), touched whole when allocated so
  * that memory never follows the points: a journal of a few hundred points
  * (the cell's scans) needs no 5 MB of them, a file of unknown length gets
- * BATCH. rows and src serve projection (proj); given parameters need one
- * row of rows (the residual pass's copy) and no src: 3 MB less. */
+ * BATCH. rows and src serve projection (proj: the fit pass's rows, the
+ * check pass's feet); given parameters without statistics need one row of
+ * rows and no src: 3 MB less. */
 static int buffers(cf_fitjob_t *j, long n, int proj)
 {
     n = n < 1 ? BATCH : n > BATCH ? BATCH : n;
@@ -280,7 +281,8 @@ typedef struct proj {
     const nf_surf_t *s;
     cf_seedgrid_t g;
     int ready;
-    int rc; /* the last projection's code */
+    int borrowed; /* g is another proj_t's (read only but for its counters): not freed */
+    int rc;       /* the last projection's code */
     nf_quad_t nq;
     void *nqmem;
     int nready; /* 1: nq set up; -1: no memory for it */
@@ -318,6 +320,8 @@ static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
             return CF_ENOMEM;
         p->ready = 1;
     }
+    if (!Q)
+        return 0;                                         /* the grid only */
     p->rc = cf_seedgrid_project(&p->g, Q, PROJ_TOL, out); /* best point kept on ENOCONV */
     return 0;
 }
@@ -344,9 +348,9 @@ static int feet_room(cf_fitjob_t *j, long n)
 
 static void proj_free(proj_t *p)
 {
-    if (p->ready)
+    if (p->ready && !p->borrowed)
         cf_seedgrid_free(&p->g);
-    p->ready = 0;
+    p->ready = p->borrowed = 0;
     free(p->nqmem);
     p->nqmem = NULL;
     p->nready = 0;
@@ -963,6 +967,73 @@ static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2
     return rc;
 }
 
+/* The feet of a batch's points k0 .. k1 - 1 (point n0 + k of the pass),
+ * on either thread: Newton from the last check's foot where there is one,
+ * else the search; per point u, v, the signed distance, clamped, and 1
+ * when converged, into res (5 doubles a point). Each thread its own
+ * proj_t (the search's grid built where it is first needed). */
+typedef struct feet_part {
+    proj_t *pj;
+    const double *buf, *feet;
+    int cols;
+    long k0, k1, n0, nin;
+    double *res;
+    int rc;
+} feet_part_t;
+
+static void *feet_part(void *arg)
+{
+    feet_part_t *fp = arg;
+    for (long k = fp->k0; k < fp->k1; k++) {
+        const double *Q = fp->buf + (long)fp->cols * k + (fp->cols - 3);
+        const long n = fp->n0 + k;
+        const double *f = n < fp->nin ? fp->feet + FOOT * n : NULL;
+        nf_proj_t pr;
+        if (!(f && f[0] == f[0] && proj_newton(fp->pj, Q, f[0], f[1], &pr)) &&
+            proj_foot(fp->pj, Q, &pr)) {
+            fp->rc = CF_ENOMEM;
+            return NULL;
+        }
+        double *o = fp->res + 5 * k;
+        o[0] = pr.u, o[1] = pr.v, o[2] = pr.dist, o[3] = pr.clamped, o[4] = fp->pj->rc == NF_OK;
+    }
+    return NULL;
+}
+
+/* Below this many points a batch's feet stay on one thread. */
+#define FEET_SPLIT 512
+
+/* The feet of a batch of got points (the first is point n0 of the pass)
+ * into res: on two threads when the job has two cores (opts.cores), the
+ * second half with pj2; the same feet either way. */
+static int feet_batch(const cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const double *buf, int cols,
+                      long got, long n0, long nin, double *res)
+{
+    feet_part_t fp[2] = {{pj, buf, j->feet, cols, 0, got, n0, nin, res, 0},
+                         {pj2, buf, j->feet, cols, got, got, n0, nin, res, 0}};
+    pthread_t th;
+    int on = 0;
+    if (j->o.cores > 1 && got >= FEET_SPLIT) {
+        /* One search grid for both: built here when some point of the
+         * batch has no start (the grid's counters are each thread's). */
+        int rc;
+        if (!pj->ready && nin < n0 + got && (rc = proj_foot(pj, NULL, NULL)))
+            return rc;
+        if (pj->ready && !pj2->ready) {
+            pj2->g = pj->g;
+            pj2->ready = pj2->borrowed = 1;
+        }
+        fp[0].k1 = fp[1].k0 = got / 2;
+        on = !cf_thread_start(&th, feet_part, &fp[1]);
+    }
+    feet_part(&fp[0]);
+    if (on)
+        pthread_join(th, NULL);
+    else
+        feet_part(&fp[1]);
+    return fp[0].rc ? fp[0].rc : fp[1].rc;
+}
+
 static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, resid_t *out,
                    cf_stats_t *st, int want_hist)
 {
@@ -972,9 +1043,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     double tol = j->o.tol;
     memset(out, 0, sizeof *out);
     nf_rhist_init(&out->hist);
-    proj_t pj;
+    proj_t pj, pj2;
     memset(&pj, 0, sizeof pj);
-    pj.s = s;
+    memset(&pj2, 0, sizeof pj2);
+    pj.s = pj2.s = s;
     int uv = src->cols == 5;
     /* The check's feet: the next round's fit pass starts from them. The
      * feet before (the last check's, on the previous fit) start this
@@ -1002,22 +1074,25 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
             rc = RIG_EABORTED;
             break;
         }
+        /* The batch's feet first (j->rows: 5 doubles a point), then the
+         * sums in the points' order. */
+        const int proj = !uv || st;
+        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, out->n, nin, j->rows)) {
+            rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+            break;
+        }
         for (long k = 0; k < got; k++) {
             const double *Q = j->buf + (long)src->cols * k + (src->cols - 3);
-            double *q = j->rows, sd = 0.0;
+            double q[5], sd = 0.0;
             int clamped = 0;
             if (uv)
                 memcpy(q, j->buf + 5 * k, sizeof(double) * 5);
-            if (!uv || st) {
+            if (proj) {
+                const double *f = j->rows + 5 * k;
                 nf_proj_t pr;
-                const double *f = out->n < nin ? j->feet + FOOT * out->n : NULL;
-                if (!(f && f[0] == f[0] && proj_newton(&pj, Q, f[0], f[1], &pr)) &&
-                    proj_foot(&pj, Q, &pr)) {
-                    rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
-                    break;
-                }
+                pr.u = f[0], pr.v = f[1], pr.dist = f[2], pr.clamped = (int)f[3];
                 if (keep)
-                    foot_keep(j, out->n, &pr, pj.rc == NF_OK);
+                    foot_keep(j, out->n, &pr, f[4] != 0.0);
                 sd = pr.dist;
                 clamped = !uv && pr.clamped;
                 if (!uv)
@@ -1049,9 +1124,10 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     if (keep && (rc || out->n != j->nfeet))
         j->nfeet = 0; /* not every point's: no starts */
     cf_surfrow_free(&ev);
-    if (pj.ready)
-        j->flat = pj.g.use_quad;
+    if (pj.ready || pj2.ready)
+        j->flat = pj.ready ? pj.g.use_quad : pj2.g.use_quad;
     proj_free(&pj);
+    proj_free(&pj2);
     return rc;
 }
 
@@ -1623,7 +1699,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
      * changes: it is read in place, not copied (issue 20). */
     S.cur = j->base;
     S.cur_is_base = 1;
-    if (buffers(j, src->total, src->cols != 5)) {
+    /* rows: also the feet of a check pass's batch, with stats too */
+    if (buffers(j, src->total, src->cols != 5 || o->stats)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }

@@ -18,6 +18,7 @@
 #include "nf_err.h"
 #include "ref_dense.h"
 #include "ref_job.h"
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -416,6 +417,75 @@ static void test_job_two_cores(void **state)
     unlink(p[1]);
 }
 
+/* The tolerance loop on projected points (x y z) with two cores: each
+ * check pass's feet on two threads (the search grid shared, the warm
+ * starts from the last check's feet), summed in the points' order: one
+ * core's fit bit for bit, round by round, pruning trials included; with
+ * statistics (the signed distances) too. A flat plane base, a wavy part:
+ * the loop must insert knots. */
+static void test_job_projected_loop(void **state)
+{
+    (void)state;
+    char p[700], m[1024];
+    path_of(p, sizeof p, "l.xyz");
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    for (long k = 0; k < MPTS; k++) {
+        const double x = ref_rand(0.0, 100.0), y = ref_rand(0.0, 80.0);
+        fprintf(f, "%.17g %.17g %.17g\n", x, y,
+                3.0 * sin(x / 11.0) * cos(y / 13.0) + ref_rand(-0.005, 0.005));
+    }
+    fclose(f);
+    double mem[4 * 8 + 3 * 16 + 16];
+    nf_surf_t base;
+    nf_surf_wire(&base, 3, 3, 4, 4, mem);
+    for (int i = 0; i < 8; i++) {
+        base.U[i] = i < 4 ? 0.0 : 1.0;
+        base.V[i] = i < 4 ? 0.0 : 1.0;
+    }
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            double *P = base.cp + 3 * (i + 4 * j);
+            P[0] = -5.0 + 110.0 * i / 3.0, P[1] = -5.0 + 90.0 * j / 3.0, P[2] = 0.0;
+        }
+    for (int stats = 0; stats < 2; stats++) {
+        cf_fitjob_result_t r[2];
+        for (int c = 0; c < 2; c++) {
+            cf_fitjob_opts_t o;
+            cf_fitjob_defaults(&o);
+            o.tol = 0.05;
+            o.loop = 1;
+            o.within = 99;
+            o.stats = stats;
+            o.cores = c + 1;
+            cf_fitjob_t *j;
+            if (cf_fitjob_open(&j, &base, &o, m, sizeof m) ||
+                ref_job_file(j, p, 3, &r[c], m, sizeof m))
+                fail_msg("%s", m);
+            cf_fitjob_close(j);
+        }
+        assert_true(r[0].nrounds >= 3); /* knots were inserted */
+        assert_int_equal(r[1].nrounds, r[0].nrounds);
+        for (int k = 0; k < r[0].nrounds; k++) {
+            assert_int_equal(r[1].rounds[k].nu, r[0].rounds[k].nu);
+            assert_int_equal(r[1].rounds[k].nv, r[0].rounds[k].nv);
+            assert_int_equal(r[1].rounds[k].prune, r[0].rounds[k].prune);
+            assert_true(r[1].rounds[k].within_pct == r[0].rounds[k].within_pct);
+            assert_true(r[1].rounds[k].rms == r[0].rounds[k].rms);
+            assert_true(r[1].rounds[k].mx == r[0].rounds[k].mx);
+        }
+        assert_int_equal(r[1].surf.nu, r[0].surf.nu);
+        assert_int_equal(r[1].surf.nv, r[0].surf.nv);
+        assert_memory_equal(r[1].surf.cp, r[0].surf.cp,
+                            sizeof(double) * 3 * r[0].surf.nu * r[0].surf.nv);
+        assert_true(r[1].max_abs == r[0].max_abs);
+        assert_int_equal(r[1].status, r[0].status);
+        cf_fitjob_result_free(&r[0]);
+        cf_fitjob_result_free(&r[1]);
+    }
+    unlink(p);
+}
+
 /* One line (an empty second half) and a few points, through the job:
  * two cores give one core's net. */
 static void test_job_small(void **state)
@@ -489,9 +559,10 @@ static void test_job_errors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_text_halves), cmocka_unit_test(test_small_files),
-        cmocka_unit_test(test_raw_halves),  cmocka_unit_test(test_job_two_cores),
-        cmocka_unit_test(test_job_errors),  cmocka_unit_test(test_job_small),
+        cmocka_unit_test(test_text_halves),        cmocka_unit_test(test_small_files),
+        cmocka_unit_test(test_raw_halves),         cmocka_unit_test(test_job_two_cores),
+        cmocka_unit_test(test_job_errors),         cmocka_unit_test(test_job_small),
+        cmocka_unit_test(test_job_projected_loop),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
