@@ -188,6 +188,13 @@ static int apply(void *ctx, const char *k, const char *v, char *msg, size_t ml)
         if (cli_int(v, 1, CF_FITJOB_MAX_ROUNDS, &r->fit.max_rounds))
             return cf_fail(msg, ml, CF_EARG, "max_rounds '%s': need 1 .. %d", v,
                            CF_FITJOB_MAX_ROUNDS);
+    } else if (!strcmp(k, "prune")) {
+        if (cli_int(v, 0, CF_FITJOB_MAX_ROUNDS, &r->fit.prune))
+            return cf_fail(msg, ml, CF_EARG, "prune '%s': need 0 (none) .. %d", v,
+                           CF_FITJOB_MAX_ROUNDS);
+    } else if (!strcmp(k, "min_gain")) {
+        if (cli_double(v, &r->fit.min_gain) || !(r->fit.min_gain >= 1e-12) || r->fit.min_gain > 100)
+            return cf_fail(msg, ml, CF_EARG, "min_gain '%s': need 1e-12 .. 100 (points of %%)", v);
     } else if (!strcmp(k, "robust_iters")) {
         if (cli_int(v, 1, 100, &r->fit.robust_iters))
             return cf_fail(msg, ml, CF_EARG, "robust_iters '%s': need 1 .. 100", v);
@@ -332,6 +339,14 @@ static const serve_key_t keys[] = {
     {"within", "PCT", "with fit_to_tol: the share of points within tol (FIT_WITHIN)", "100"},
     {"max_cp", "N", "with fit_to_tol: control points the loop may reach at most", "the board's"},
     {"max_rounds", "N", "with fit_to_tol: rounds of the loop at most", "12"},
+    {"min_gain", "PTS",
+     "with fit_to_tol, refine auto: stop after two rounds in a row gaining less than this many "
+     "points of the share within tol",
+     "0.1"},
+    {"prune", "N",
+     "with fit_to_tol, refine auto, once met: trial fits each with one inserted knot line taken "
+     "out again, kept while within holds (0: none)",
+     "4"},
     {"refine", "HOW",
      "with fit_to_tol: auto (knot lines scored per control point added), uniform or residual "
      "knot insertion (FIT_REFINE 2, 0, 1)",

@@ -167,6 +167,20 @@ echo "     control points: cell auto ${c_auto:-?} / shell auto ${s_auto:-?}; cel
     ok "FIT_REFINE 2 = --refine auto ($c_auto), 1 = --refine residual ($c_res)" ||
     no "refine: cell $c_auto/$c_res, shell $s_auto/$s_res"
 stop_one "$pid"
+# The pruning stage's config key (prune): a cell with prune 0 keeps every
+# inserted knot line, as `cellfit fit --prune 0` does (here more control
+# points than with the default 4 trials).
+serve_start p --nominal "$T/coarse/nominal.igs" --points "$T/fine/points.xyz" --results "$T/resp" --prune 0
+py refine "$port" "$T/prune.cps"
+read -r c_p0 c_p0res <"$T/prune.cps" 2>/dev/null
+"$CF" fit --base "$T/coarse/nominal.igs" --points "$T/fine/points.xyz" --tol 0.01 --within 99 \
+    --refine auto --prune 0 --json --out "$T/shell_p0.igs" >"$T/shell_p0.json" 2>"$T/err"
+s_p0=$(json "$T/shell_p0.json" control_points)
+[ -n "${c_p0:-}" ] && [ "$c_p0" = "$s_p0" ] && [ "$c_p0" != "$c_auto" ] &&
+    ok "serve --prune 0 = cellfit fit --prune 0 ($c_p0 control points; $c_auto with the default)" ||
+    no "prune 0: cell ${c_p0:-?}, shell ${s_p0:-?}, default ${c_auto:-?}"
+stop_one "$pid"
+expect 2 "serve --prune -1: exit 2" "$CF" serve --plc tcp:127.0.0.1:0 --prune -1
 serve_start u --nominal "$T/coarse/nominal.igs" --refine uniform --fit-to-tol
 grep -q "fit defaults (FIT_TOL .. FIT_REPARAM): loop to 0.05 mm (uniform)" "$T/u.log" &&
     ok "--refine uniform still taken (FIT_REFINE 0)" || no "refine uniform: $(grep 'fit defaults' "$T/u.log")"
