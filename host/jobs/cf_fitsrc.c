@@ -27,7 +27,7 @@ static int cache_add(cf_fitsrc_points_t *p, const double *rows, long got)
     if (got > p->limit - p->n)
         return -1;
     if (p->n + got > p->cap) {
-        long cap = p->cap ? p->cap : 4096;
+        long cap = p->cap ? p->cap : p->limit < 4096 ? p->limit : 4096;
         while (cap < p->n + got)
             cap = cap > p->limit / 2 ? p->limit : 2 * cap;
         double *q = realloc(p->rows, sizeof(double) * (size_t)p->cols * (size_t)cap);

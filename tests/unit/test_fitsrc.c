@@ -250,18 +250,19 @@ static void test_abandoned_pass(void **state)
     }
 }
 
-/* (b) A bound one row short: no cache, the file read every pass (still
- * right); the bound exactly: cached. */
+/* (b) A bound one row short (or of 100 rows): no cache, the file read
+ * every pass (still right); the bound exactly: cached. */
 static void test_over_bound(void **state)
 {
     (void)state;
     for (int cols = 3; cols <= 5; cols += 2) {
         const char *path = cols == 3 ? f3 : f5;
         const size_t all = sizeof(double) * (size_t)cols * NPTS;
-        src_t u, c, e;
+        src_t u, c, e, t;
         src_open(&u, path, 0);
         src_open(&c, path, all - sizeof(double) * (size_t)cols);
         src_open(&e, path, all);
+        src_open(&t, path, 100 * sizeof(double) * (size_t)cols); /* below the first block */
         pass_t a, b;
         pass_init(&a), pass_init(&b);
         for (int k = 0; k < 3; k++) {
@@ -269,6 +270,9 @@ static void test_over_bound(void **state)
             one_pass(&c.s, 7, &b);
             same_pass(&a, &b, cols);
             assert_null(c.pc.rows);
+            one_pass(&t.s, 7, &b);
+            same_pass(&a, &b, cols);
+            assert_null(t.pc.rows);
             one_pass(&e.s, 7, &b);
             same_pass(&a, &b, cols);
             assert_int_equal(e.pc.n, NPTS);
@@ -277,6 +281,7 @@ static void test_over_bound(void **state)
         src_close(&u);
         src_close(&c);
         src_close(&e);
+        src_close(&t);
     }
 }
 
