@@ -319,8 +319,11 @@ int cmd_fit(int argc, char **argv)
     cf_fitsrc_t src;
     cf_fitsrc_points_t pc;
     cf_fitsrc_points(&src, &pc, pr, a.points);
+    if (a.o.loop) /* two passes a round: the file parsed once */
+        cf_fitsrc_points_cache(&pc, CF_FITSRC_CACHE_MAX);
     cf_fitjob_result_t r;
     rc = cf_fitjob_run(j, &src, NULL, 0, 100, &r, msg, sizeof msg);
+    cf_fitsrc_points_free(&pc);
     cf_points_close(pr);
     cf_fitjob_close(j);
     if (rc) {

@@ -3,26 +3,88 @@
 #include "cf_fitsrc.h"
 #include "cf_err.h"
 #include "rig_err.h"
+#include <limits.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+
+/* The cache's states: off (or dropped), idle (the next rewind starts a
+ * copy), fill (this pass's rows are copied), full (passes from memory). */
+enum { CF_FITSRC_CACHE_OFF, CF_FITSRC_CACHE_IDLE, CF_FITSRC_CACHE_FILL, CF_FITSRC_CACHE_FULL };
+
+static void cache_drop(cf_fitsrc_points_t *p)
+{
+    free(p->rows);
+    p->rows = NULL;
+    p->n = p->cap = p->limit = p->at = 0;
+    p->state = CF_FITSRC_CACHE_OFF;
+}
+
+/* got rows read from the file appended (fill): 0, or -1 when they would
+ * pass the bound or memory is short (the cache dropped). */
+static int cache_add(cf_fitsrc_points_t *p, const double *rows, long got)
+{
+    if (got > p->limit - p->n)
+        return -1;
+    if (p->n + got > p->cap) {
+        long cap = p->cap ? p->cap : p->limit < 4096 ? p->limit : 4096;
+        while (cap < p->n + got)
+            cap = cap > p->limit / 2 ? p->limit : 2 * cap;
+        double *q = realloc(p->rows, sizeof(double) * (size_t)p->cols * (size_t)cap);
+        if (!q)
+            return -1;
+        p->rows = q;
+        p->cap = cap;
+    }
+    memcpy(p->rows + (size_t)p->n * (size_t)p->cols, rows,
+           sizeof(double) * (size_t)p->cols * (size_t)got);
+    p->n += got;
+    return 0;
+}
 
 /* The whole file from its first point (after a split too); a text file
  * is parsed on a second thread while the job accumulates (or evaluates)
  * the rows it has: the same rows, lines and errors (cf_points.h). Without
- * a thread it reads on this one. */
+ * a thread it reads on this one. A full cache serves instead; a pass
+ * rewound before its end (fill) is copied again from the start. */
 static int pts_rewind(void *ctx, char *msg, size_t ml)
 {
     cf_fitsrc_points_t *p = ctx;
+    if (p->state == CF_FITSRC_CACHE_FULL) {
+        p->at = 0;
+        return 0;
+    }
     int rc = cf_points_whole(p->r);
     if (!rc)
         (void)cf_points_thread(p->r);
+    if (p->state != CF_FITSRC_CACHE_OFF) {
+        p->n = 0;
+        p->state = rc ? CF_FITSRC_CACHE_IDLE : CF_FITSRC_CACHE_FILL;
+    }
     return rc ? cf_fail(msg, ml, rc, "%s: cannot read the points again", p->path) : 0;
 }
 
 static long pts_read(void *ctx, double *rows, long max, char *msg, size_t ml)
 {
     cf_fitsrc_points_t *p = ctx;
-    return cf_points_read(p->r, rows, max, msg, ml);
+    if (p->state == CF_FITSRC_CACHE_FULL) {
+        if ((!rows && max > 0) || max < 0)
+            return cf_fail(msg, ml, CF_EARG, "cf_points_read: bad arguments");
+        long got = p->n - p->at < max ? p->n - p->at : max;
+        if (got > 0)
+            memcpy(rows, p->rows + (size_t)p->at * (size_t)p->cols,
+                   sizeof(double) * (size_t)p->cols * (size_t)got);
+        p->at += got;
+        return got;
+    }
+    long got = cf_points_read(p->r, rows, max, msg, ml);
+    if (p->state == CF_FITSRC_CACHE_FILL) {
+        if (got < 0 || (got > 0 && cache_add(p, rows, got)))
+            cache_drop(p);
+        else if (got == 0 && max > 0)
+            p->state = CF_FITSRC_CACHE_FULL, p->at = p->n;
+    }
+    return got;
 }
 
 static long part_read(void *ctx, double *rows, long max, char *msg, size_t ml)
@@ -55,9 +117,14 @@ static void where_in(cf_points_t *r, const char *path, long k, char *buf, size_t
     snprintf(buf, n, "%s:%ld", path, line);
 }
 
+/* From the whole file (a full cache may have left it split); a pass being
+ * copied is copied again at the next (the reader moved). */
 static void pts_where(void *ctx, long k, char *buf, size_t n)
 {
     cf_fitsrc_points_t *p = ctx;
+    if (p->state == CF_FITSRC_CACHE_FILL)
+        p->state = CF_FITSRC_CACHE_IDLE;
+    (void)cf_points_whole(p->r);
     where_in(p->r, p->path, k, buf, n);
 }
 
@@ -71,6 +138,8 @@ static int pts_split(void *ctx, cf_fitsrc_t *half, char *msg, size_t ml)
 {
     cf_fitsrc_points_t *p = ctx;
     cf_points_t *r2 = NULL;
+    if (p->state == CF_FITSRC_CACHE_FILL)
+        p->state = CF_FITSRC_CACHE_IDLE; /* the halves read the file, not this pass */
     int rc = cf_points_split(p->r, &r2, msg, ml);
     if (rc)
         return rc;
@@ -100,6 +169,7 @@ void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, c
     memset(ctx, 0, sizeof *ctx);
     ctx->r = r;
     ctx->path = path;
+    ctx->cols = cf_points_cols(r); /* the rows' width (0: an empty file, no cache) */
     /* The parse thread starts at the first rewind: a job that reads the
      * file in halves never starts it (the job rewinds before every pass). */
     *s = (cf_fitsrc_t){cf_points_cols(r) == 5 ? 5 : 3,
@@ -111,6 +181,21 @@ void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, c
                        ctx,
                        pts_split,
                        pts_join};
+}
+
+void cf_fitsrc_points_cache(cf_fitsrc_points_t *ctx, size_t max_bytes)
+{
+    cache_drop(ctx);
+    if (ctx->cols <= 0)
+        return;
+    size_t pts = max_bytes / (sizeof(double) * (size_t)ctx->cols);
+    ctx->limit = pts > (size_t)LONG_MAX ? LONG_MAX : (long)pts;
+    ctx->state = ctx->limit > 0 ? CF_FITSRC_CACHE_IDLE : CF_FITSRC_CACHE_OFF;
+}
+
+void cf_fitsrc_points_free(cf_fitsrc_points_t *ctx)
+{
+    cache_drop(ctx);
 }
 
 int cf_fitsrc_jnl_valid(const jnl_rec_t *r)

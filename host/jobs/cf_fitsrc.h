@@ -4,7 +4,8 @@
  * u v x y z with the parameters given) or a journal of measured points
  * (its valid point records, x y z). A live scan adds its points to the job
  * as they arrive (cf_fitjob_add) and hands the journal as the source of
- * every later pass. Nothing is kept per point. */
+ * every later pass. Nothing is kept per point, but for a points file's
+ * optional cache (cf_fitsrc_points_cache). */
 #ifndef CF_FITSRC_H
 #define CF_FITSRC_H
 
@@ -42,13 +43,39 @@ typedef struct cf_fitsrc_part {
 
 /* An open points file (cf_points_open; its column count decides cols). A
  * regular ASCII or raw file splits into halves (part; their readers are
- * r's, closed with it). */
+ * r's, closed with it). Optionally its rows kept in memory after the first
+ * whole pass (cf_fitsrc_points_cache). */
 typedef struct cf_fitsrc_points {
     cf_points_t *r;
     const char *path;
     cf_fitsrc_part_t part[2];
+    double *rows;    /* the cache: cols doubles a point (heap), NULL when none */
+    long n, cap;     /* points in it, room */
+    long limit;      /* most points it may hold; 0: no cache (off, or dropped) */
+    long at;         /* next point a cached pass serves */
+    int cols, state; /* values a point; CF_FITSRC_CACHE_* (cf_fitsrc.c) */
 } cf_fitsrc_points_t;
 void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, const char *path);
+
+/* The bound callers running a tolerance loop give the cache: every point of
+ * the project's ASCII fields (10^4-10^5 points: 0.24-4 MB at 5 columns) and
+ * 2.8 million x y z points, while a file of 10^7 or 10^8 points (the
+ * streaming fits) is read from the file each pass as before, its memory
+ * flat. */
+#define CF_FITSRC_CACHE_MAX (64L << 20)
+
+/* Keep the rows in memory, up to max_bytes (off by default). The first
+ * whole pass (a rewind, then reads up to the 0 at the end) reads the file
+ * and copies its rows; every later rewind + read serves them from memory:
+ * the same rows, order and batches (up to max a call, 0 at the end), no
+ * file read and no parse thread. A pass rewound before its end starts the
+ * copy again at the next pass (split or where too: they move the reader);
+ * rows beyond max_bytes or a read error drop the cache for good (the file
+ * read as without it). where and split read the file as always. */
+void cf_fitsrc_points_cache(cf_fitsrc_points_t *ctx, size_t max_bytes);
+
+/* The cache's memory back (ctx stays usable, without a cache). */
+void cf_fitsrc_points_free(cf_fitsrc_points_t *ctx);
 
 /* An open journal reader: its point records without JNL_F_NOSURF. */
 typedef struct cf_fitsrc_jnl {

@@ -55,7 +55,10 @@ int cf_job_fit(const cf_job_fit_opts_t *o, const cf_job_ctl_t *ctl, cf_job_resul
         cf_fitsrc_t src;
         cf_fitsrc_points_t pc;
         cf_fitsrc_points(&src, &pc, pr, o->points);
+        if (o->fit.loop) /* two passes a round: the file parsed once */
+            cf_fitsrc_points_cache(&pc, CF_FITSRC_CACHE_MAX);
         rc = cf_fitjob_run(j, &src, ctl, 0, 100, out, msg, ml);
+        cf_fitsrc_points_free(&pc);
     }
     cf_points_close(pr);
     cf_fitjob_close(j);

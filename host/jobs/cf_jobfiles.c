@@ -70,8 +70,10 @@ static int deviations(const cf_job_result_t *r, const cf_job_meta_t *meta, cf_ch
         cf_points_t *pr = NULL;
         cf_fitsrc_points_t pc;
         if (!(rc = cf_points_open(&pr, meta->points, 0, msg, ml))) {
+            /* One pass: no cache (cf_fitsrc_points_free in case one is set). */
             cf_fitsrc_points(&src, &pc, pr, meta->points);
             rc = write_csv(&r->surf, r->stats->tol, &src, cs, path, msg, ml);
+            cf_fitsrc_points_free(&pc);
         }
         cf_points_close(pr);
         return rc;

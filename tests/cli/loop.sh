@@ -211,12 +211,14 @@ le "$d" 0.002 && ok "robust and plain fits agree on data without outliers ($d mm
 # than one byte per added point; identical runs differ by a few hundred kB): same nets (uniform, two
 # rounds, a tolerance below the noise: never met, the finer fit the best),
 # 3 x 10^4 and 10^6 points (3 x 10^4: the second net, 10,179 control
-# points, within half the points).
+# points, within half the points). Two threads on any machine: every pass
+# reads the file's halves, so the points cache (one thread's whole passes,
+# up to 64 MiB) stays out; its cost is checked after.
 "$CF" gen --dir "$T/m4" --nu 60 --nv 45 --count 30000 >/dev/null &&
     "$CF" gen --dir "$T/m6" --nu 60 --nv 45 --count 1000000 >/dev/null
 for m in m4 m6; do
-    "$CF" fit --base "$T/$m/nominal.igs" --points "$T/$m/points.uvxyz" --uv --tol 0.004 --refine uniform \
-        --max-rounds 2 --out "$T/$m.igs" --json >"$T/$m.json" 2>/dev/null
+    "$CF" fit --base "$T/$m/nominal.igs" --points "$T/$m/points.uvxyz" --uv --threads 2 --tol 0.004 \
+        --refine uniform --max-rounds 2 --out "$T/$m.igs" --json >"$T/$m.json" 2>/dev/null
 done
 r4=$(top "$T/m4.json" peak_rss_bytes)
 r6=$(top "$T/m6.json" peak_rss_bytes)
@@ -228,6 +230,22 @@ if [ -n "$r4" ] && [ -n "$r6" ] && [ "$n4" = "$n6" ] && le "$diff" 1048576; then
     ok "--tol loop: peak RSS flat in points over the nets ($n4): 3 x 10^4 -> $r4 B, 10^6 -> $r6 B"
 else
     no "--tol loop: peak RSS 3 x 10^4 -> $r4 (nets $n4), 10^6 -> $r6 (nets $n6)"
+fi
+# One thread: the loop's passes from the points cache, which holds the rows
+# of 5 doubles (within its 64 MiB): 40 B a point more (within the same
+# 1 MiB), the same fits.
+for m in m4 m6; do
+    "$CF" fit --base "$T/$m/nominal.igs" --points "$T/$m/points.uvxyz" --uv --threads 1 --tol 0.004 \
+        --refine uniform --max-rounds 2 --out "$T/${m}c.igs" --json >"$T/${m}c.json" 2>/dev/null
+done
+r4c=$(top "$T/m4c.json" peak_rss_bytes)
+r6c=$(top "$T/m6c.json" peak_rss_bytes)
+more=$(awk -v a="$r4c" -v b="$r6c" 'BEGIN { print b - a - 40 * 970000 }')
+if [ -n "$r4c" ] && [ -n "$r6c" ] && [ "$(top "$T/m6c.json" control_points)" = "$(top "$T/m6.json" control_points)" ] &&
+    le -1048576 "$more" && le "$more" 1048576; then
+    ok "--tol loop, one thread: peak RSS 40 B a point more, the points cache (3 x 10^4 -> $r4c B, 10^6 -> $r6c B)"
+else
+    no "--tol loop, one thread: peak RSS 3 x 10^4 -> $r4c B, 10^6 -> $r6c B ($more B off 40 B a point)"
 fi
 echo "loop: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -8,13 +8,22 @@
 int ref_job_file(cf_fitjob_t *j, const char *path, int cols, cf_fitjob_result_t *r, char *m,
                  size_t ml)
 {
+    return ref_job_file_cache(j, path, cols, 0, r, m, ml);
+}
+
+int ref_job_file_cache(cf_fitjob_t *j, const char *path, int cols, size_t cache,
+                       cf_fitjob_result_t *r, char *m, size_t ml)
+{
     cf_points_t *pr = NULL;
     int rc = cf_points_open(&pr, path, cols, m, ml);
     if (!rc) {
         cf_fitsrc_t src;
         cf_fitsrc_points_t pc;
         cf_fitsrc_points(&src, &pc, pr, path);
+        if (cache)
+            cf_fitsrc_points_cache(&pc, cache);
         rc = cf_fitjob_run(j, &src, NULL, 0, 100, r, m, ml);
+        cf_fitsrc_points_free(&pc);
     }
     cf_points_close(pr);
     return rc;

@@ -8,12 +8,18 @@
 
 #include "cf_fitjob.h"
 #include "nf_surf.h"
+#include <stddef.h>
 
 /* cf_fitjob_run of j over the points file path (cols values a point: 5
  * given parameters, 3 projected), the file closed after; j stays open.
  * 0 or the error (its text in m). */
 int ref_job_file(cf_fitjob_t *j, const char *path, int cols, cf_fitjob_result_t *r, char *m,
                  size_t ml);
+
+/* ref_job_file with the points source's cache of cache bytes (0: none,
+ * cf_fitsrc_points_cache). */
+int ref_job_file_cache(cf_fitjob_t *j, const char *path, int cols, size_t cache,
+                       cf_fitjob_result_t *r, char *m, size_t ml);
 
 /* max |a(u, v) - b(u, v)| over a 21 x 21 grid of the unit square. */
 double ref_job_gap(const nf_surf_t *a, const nf_surf_t *b);
