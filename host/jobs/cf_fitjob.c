@@ -282,6 +282,7 @@ typedef struct proj {
     cf_seedgrid_t g;
     int ready;
     int borrowed; /* g is another proj_t's (read only but for its counters): not freed */
+    long points;  /* projections the pass makes at most (-1: not known), for g's blanket */
     int rc;       /* the last projection's code */
     nf_quad_t nq;
     void *nqmem;
@@ -316,7 +317,7 @@ static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj
 static int proj_foot(proj_t *p, const double Q[3], nf_proj_t *out)
 {
     if (!p->ready) {
-        if (cf_seedgrid_init(&p->g, p->s, SEEDS))
+        if (cf_seedgrid_init_n(&p->g, p->s, SEEDS, p->points))
             return CF_ENOMEM;
         p->ready = 1;
     }
@@ -419,6 +420,7 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
     if (rc)
         return rc;
     ps->pj.s = proj;
+    ps->pj.points = -1;
     if (!j->o.free_edges && (rc = cf_edges_begin(&ps->ed, cur)))
         return cf_fail(msg, ml, rc, "data footprint: %s", cf_strerror(rc));
     return 0;
@@ -797,6 +799,7 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
                         r->msg, r->ml);
     if (feet && ps->proj)
         ps->nin = j->nfeet;
+    ps->pj.points = r->total;
     if (two && !rc) {
         j->used2 = 1;
         rc = fit_halves(r, cur, half, ps);
@@ -1047,6 +1050,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     memset(&pj, 0, sizeof pj);
     memset(&pj2, 0, sizeof pj2);
     pj.s = pj2.s = s;
+    pj.points = pj2.points = r->total;
     int uv = src->cols == 5;
     /* The check's feet: the next round's fit pass starts from them. The
      * feet before (the last check's, on the previous fit) start this

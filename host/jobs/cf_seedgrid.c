@@ -25,6 +25,11 @@ static long cell_index(const cf_seedgrid_t *g, double x, double y, double z)
 
 int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
 {
+    return cf_seedgrid_init_n(g, s, per_span, -1);
+}
+
+int cf_seedgrid_init_n(cf_seedgrid_t *g, const nf_surf_t *s, int per_span, long points)
+{
     memset(g, 0, sizeof *g);
     g->seed.s = s;
     /* The quadrilaterals when the surface is projectable to a plane (the
@@ -33,10 +38,14 @@ int cf_seedgrid_init(cf_seedgrid_t *g, const nf_surf_t *s, int per_span)
      * cell need not be the nearest in space, so the 3-D grid is kept. */
     const size_t qb = NF_QUAD_BYTES(CF_SEEDGRID_MAXQ, s->nu, s->nv);
     g->qmem = malloc(qb);
-    /* the finer blanket for closer starts, the paper's when it does not fit */
+    /* the finer blanket for closer starts, the paper's when it does not fit
+     * or when too few points follow to repay it */
     const nf_quad_params_t fine = {NF_QUAD_SEED_TOL, 0.0, 0}, paper = {NF_QUAD_REL_TOL, 0.0, 0};
-    int rc = g->qmem ? nf_quad_init(&g->quad, s, &fine, CF_SEEDGRID_MAXQ, g->qmem, qb) : NF_EARG;
-    if (rc == NF_EBUDGET)
+    const int fine_first = !(points >= 0 && points < CF_SEEDGRID_FINE_POINTS);
+    int rc = g->qmem ? nf_quad_init(&g->quad, s, fine_first ? &fine : &paper, CF_SEEDGRID_MAXQ,
+                                    g->qmem, qb)
+                     : NF_EARG;
+    if (rc == NF_EBUDGET && fine_first)
         rc = nf_quad_init(&g->quad, s, &paper, CF_SEEDGRID_MAXQ, g->qmem, qb);
     if (g->qmem && rc == NF_OK && !g->quad.folded) {
         g->use_quad = 1;

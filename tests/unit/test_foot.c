@@ -273,8 +273,9 @@ static void random_point(const nf_surf_t *s, double Q[3])
  * 16..1024). It used to take only the nearest sample and nf_project from
  * it: 16 of the folded part's 10^4 feet in the wrong valley, up to 5.8 %
  * too far; now it takes every valley's start within the band. */
-enum { BY_SEEDED, BY_QUAD, BY_GRID, N_BY };
-static const char *by_name[N_BY] = {"nf_project_seeded", "nf_quad_project", "cf_seedgrid_project"};
+enum { BY_SEEDED, BY_QUAD, BY_GRID, BY_GRID_FEW, N_BY };
+static const char *by_name[N_BY] = {"nf_project_seeded", "nf_quad_project", "cf_seedgrid_project",
+                                    "cf_seedgrid_project (few points: the paper's blanket)"};
 
 typedef struct tally {
     long wrong;        /* distance not the brute-force minimum */
@@ -324,8 +325,11 @@ static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
     assert_non_null(spts);
     nf_seed_t g;
     nf_seed_init_uv(&g, s, nsu, nsv, spts);
-    cf_seedgrid_t sg;
+    cf_seedgrid_t sg, sgf;
     assert_int_equal(cf_seedgrid_init(&sg, s, 8), CF_OK);
+    assert_int_equal(cf_seedgrid_init_n(&sgf, s, 8, NPTS), CF_OK);
+    assert_int_equal(sgf.use_quad, sg.use_quad);
+    assert_true(!sg.use_quad || sgf.quad.tol > sg.quad.tol); /* the coarser blanket */
     print_message("%s: cf_seedgrid by %s\n", part,
                   sg.use_quad ? "quadrilaterals" : "its 3-D cell grid (the surface folds)");
     /* The quadrilaterals, as cellfit's fit uses them where the surface does
@@ -355,6 +359,8 @@ static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
         }
         assert_int_equal(cf_seedgrid_project(&sg, Q, TOL, &pr), NF_OK);
         check(part, BY_GRID, &pr, Q, db, dint, &t[BY_GRID]);
+        assert_int_equal(cf_seedgrid_project(&sgf, Q, TOL, &pr), NF_OK);
+        check(part, BY_GRID_FEW, &pr, Q, db, dint, &t[BY_GRID_FEW]);
     }
     long wrong = 0;
     for (int by = 0; by < N_BY; by++) {
@@ -369,6 +375,7 @@ static void run_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
     }
     free(qmem);
     cf_seedgrid_free(&sg);
+    cf_seedgrid_free(&sgf);
     free(spts);
     free(b.bc);
     free(b.P);
@@ -535,8 +542,11 @@ static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
     assert_int_equal(nf_surf_check(&r), NF_OK);
     brute_t b;
     brute_init(&b, &r, bnu, bnv);
-    cf_seedgrid_t sg;
+    cf_seedgrid_t sg, sgf;
     assert_int_equal(cf_seedgrid_init(&sg, s, 8), CF_OK);
+    assert_int_equal(cf_seedgrid_init_n(&sgf, s, 8, NPTS), CF_OK);
+    assert_int_equal(sgf.use_quad, sg.use_quad);
+    assert_true(!sg.use_quad || sgf.quad.tol > sg.quad.tol); /* the coarser blanket */
     const size_t nb = NF_QUAD_NEWTON_BYTES(r.nu, r.nv);
     void *nm = malloc(nb);
     assert_non_null(nm);
