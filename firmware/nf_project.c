@@ -703,6 +703,72 @@ static double sample_at(int i, int n, double a, double b)
     return i == n - 1 ? b : a + (b - a) * i / (n - 1);
 }
 
+/* u samples whose bases a chunk keeps for all rows, and the control point
+ * columns a chunk may span (at least one sample's p + 1 always fit). */
+#define SEED_CHUNK 32
+#define SEED_COLS (SEED_CHUNK + NF_MAX_ORDER)
+
+/* The grid as a tensor product, evaluated separably: the u bases and spans
+ * of a chunk of u samples once for all rows, per row the v basis once and
+ * the chunk's columns contracted with it (homogeneous for a rational
+ * surface), then each sample a (p + 1)-term sum. nf_surf_eval per sample
+ * found both spans and both bases every time. Bounded stack, no heap. */
+static void seed_eval(const nf_surf_t *s, int nsu, int nsv, double *pts)
+{
+    const int p = s->p, q = s->q, rat = s->w ? 1 : 0;
+    const long n2 = (long)nsu * nsv;
+    double ua, ub, va, vb;
+    nf_surf_domain(s, &ua, &ub, &va, &vb);
+    const double hu = (s->nu - p) / (ub - ua), hv = (s->nv - q) / (vb - va);
+    double Nu[SEED_CHUNK][NF_MAX_ORDER], Nv[NF_MAX_ORDER], H[SEED_COLS][4];
+    int lu[SEED_CHUNK];
+    int l = -1;
+    for (int i0 = 0; i0 < nsu;) {
+        int n = 0;
+        for (; n < SEED_CHUNK && i0 + n < nsu; n++) {
+            const double u = clampd(sample_at(i0 + n, nsu, ua, ub), ua, ub);
+            const int ln = nf_find_span_from(l, s->nu - 1, p, u, s->U, hu);
+            if (n > 0 && ln - lu[0] + p + 1 > SEED_COLS)
+                break; /* the next chunk starts with it */
+            l = lu[n] = ln;
+            nf_basis_funs(ln, u, p, s->U, Nu[n]);
+        }
+        const int c0 = lu[0] - p, nc = lu[n - 1] - c0 + 1;
+        int k = -1;
+        for (int j = 0; j < nsv; j++) {
+            const double v = clampd(sample_at(j, nsv, va, vb), va, vb);
+            k = nf_find_span_from(k, s->nv - 1, q, v, s->V, hv);
+            nf_basis_funs(k, v, q, s->V, Nv);
+            for (int c = 0; c < nc; c++)
+                H[c][0] = H[c][1] = H[c][2] = H[c][3] = 0.0;
+            for (int b = 0; b <= q; b++) {
+                const long row = (long)(k - q + b) * s->nu + c0;
+                const double *P = s->cp + 3 * row;
+                for (int c = 0; c < nc; c++) {
+                    const double f = rat ? Nv[b] * s->w[row + c] : Nv[b];
+                    H[c][0] += f * P[3 * c];
+                    H[c][1] += f * P[3 * c + 1];
+                    H[c][2] += f * P[3 * c + 2];
+                    H[c][3] += f;
+                }
+            }
+            for (int t = 0; t < n; t++) {
+                const double(*h)[4] = H + (lu[t] - p - c0);
+                double X[4] = {0.0, 0.0, 0.0, 0.0};
+                for (int a = 0; a <= p; a++)
+                    for (int c = 0; c < 4; c++)
+                        X[c] += Nu[t][a] * h[a][c];
+                const double inv = rat ? 1.0 / X[3] : 1.0;
+                const long kk = i0 + t + (long)j * nsu;
+                pts[kk] = X[0] * inv;
+                pts[n2 + kk] = X[1] * inv;
+                pts[2 * n2 + kk] = X[2] * inv;
+            }
+        }
+        i0 += n;
+    }
+}
+
 void nf_seed_init_uv(nf_seed_t *g, const nf_surf_t *s, int nsu, int nsv, double *pts)
 {
     nsu = nsu < 1 ? 1 : (nsu > NF_SEED_MAX_NS ? NF_SEED_MAX_NS : nsu);
@@ -713,19 +779,7 @@ void nf_seed_init_uv(nf_seed_t *g, const nf_surf_t *s, int nsu, int nsv, double 
     g->nsv = nsv;
     g->pts = pts;
     const long n2 = (long)nsu * nsv;
-    double ua, ub, va, vb;
-    nf_surf_domain(s, &ua, &ub, &va, &vb);
-    for (int j = 0; j < nsv; j++) {
-        const double v = sample_at(j, nsv, va, vb);
-        for (int i = 0; i < nsu; i++) {
-            double P[3];
-            nf_surf_eval(s, sample_at(i, nsu, ua, ub), v, P);
-            const long k = i + (long)j * nsu;
-            pts[k] = P[0];
-            pts[n2 + k] = P[1];
-            pts[2 * n2 + k] = P[2];
-        }
-    }
+    seed_eval(s, nsu, nsv, pts);
     double h2 = 0.0;
     for (long k = 0; k < n2; k++) {
         const int i = (int)(k % nsu);
