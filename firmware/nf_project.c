@@ -705,7 +705,7 @@ static double sample_at(int i, int n, double a, double b)
 
 /* u samples whose bases a chunk keeps for all rows, and the control point
  * columns a chunk may span (at least one sample's p + 1 always fit). */
-#define SEED_CHUNK 32
+#define SEED_CHUNK 16
 #define SEED_COLS (SEED_CHUNK + NF_MAX_ORDER)
 
 /* The grid as a tensor product, evaluated separably: the u bases and spans

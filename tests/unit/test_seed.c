@@ -282,7 +282,7 @@ static void test_seed_long_nets(void **state)
     nf_surf_t s;
     ref_seed(66);
     ref_surf_random(&s, 3, 2, 200, 6, 0.0, 1.0, 0.0, 1.0, 0.5, 2.0);
-    const int counts[] = {2, 5, 31, 32, 33, 64, 65, 197, 1601};
+    const int counts[] = {2, 5, 15, 16, 17, 31, 32, 33, 64, 65, 197, 1601};
     for (size_t t = 0; t < sizeof counts / sizeof counts[0]; t++)
         check_grid(&s, counts[t], 7, 0, "200 x 6 net");
     check_grid(&s, 65, 7, 41, "200 x 6 net");
