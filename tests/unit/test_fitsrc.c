@@ -323,34 +323,9 @@ static char loop3[600], loop5[600];
 
 static int loop_setup(void)
 {
-    if (cf_surf_alloc(&star, 3, 3, 5, 4) || cf_surf_alloc(&bez, 3, 3, 4, 4))
-        return -1;
-    static const double KU[] = {0, 0, 0, 0, 0.5, 1, 1, 1, 1}, K4[] = {0, 0, 0, 0, 1, 1, 1, 1};
-    memcpy(star.U, KU, sizeof KU), memcpy(star.V, K4, sizeof K4);
-    memcpy(bez.U, K4, sizeof K4), memcpy(bez.V, K4, sizeof K4);
-    for (int j = 0; j < 4; j++)
-        for (int i = 0; i < 5; i++) {
-            double *P = star.cp + 3 * (i + 5 * j);
-            P[0] = 10.0 * i, P[1] = 10.0 * j, P[2] = 2.0 * sin(1.3 * i + 0.4 * j);
-        }
-    for (int j = 0; j < 4; j++)
-        for (int i = 0; i < 4; i++) {
-            double *P = bez.cp + 3 * (i + 4 * j);
-            P[0] = 50.0 * i / 3.0, P[1] = 40.0 * j / 3.0, P[2] = 0.0;
-        }
     tmp_path(loop3, sizeof loop3, "loop.xyz");
     tmp_path(loop5, sizeof loop5, "loop.uvxyz");
-    FILE *f = fopen(loop5, "w"), *g = fopen(loop3, "w");
-    if (!f || !g)
-        return -1;
-    for (int j = 0; j < 48; j++)
-        for (int i = 0; i < 48; i++) {
-            double u = (i + 0.5) / 48.0, v = (j + 0.5) / 48.0, P[3];
-            nf_surf_eval(&star, u, v, P);
-            fprintf(f, "%.17g %.17g %.17g %.17g %.17g\n", u, v, P[0], P[1], P[2]);
-            fprintf(g, "%.17g %.17g %.17g\n", P[0], P[1], P[2]);
-        }
-    return fclose(f) | fclose(g);
+    return ref_job_star(&star, &bez, loop5, loop3);
 }
 
 static int run_loop(const char *file, int cols, int cores, size_t cache, cf_fitjob_result_t *r)

@@ -156,43 +156,18 @@ static void test_rank(void **state)
  * from a 4 x 4 plane, auto, within 100 % of 1e-6, alpha = beta = 0: the
  * loop meets it at 7 x 7 (0.5 with its side knots 0.25 and 0.75 in u,
  * three knots in v). */
-#define SU 5
-#define SV 4
+#define SU REF_JOB_SU
+#define SV REF_JOB_SV
 static nf_surf_t star, bez;
 static char starfile[600], starxyz[600];
 
 static int prune_setup(void)
 {
-    if (cf_surf_alloc(&star, 3, 3, SU, SV) || cf_surf_alloc(&bez, 3, 3, 4, 4))
-        return -1;
-    static const double KU[] = {0, 0, 0, 0, 0.5, 1, 1, 1, 1}, K4[] = {0, 0, 0, 0, 1, 1, 1, 1};
-    memcpy(star.U, KU, sizeof KU), memcpy(star.V, K4, sizeof K4);
-    memcpy(bez.U, K4, sizeof K4), memcpy(bez.V, K4, sizeof K4);
-    for (int j = 0; j < SV; j++)
-        for (int i = 0; i < SU; i++) {
-            double *P = star.cp + 3 * (i + SU * j);
-            P[0] = 10.0 * i, P[1] = 10.0 * j, P[2] = 2.0 * sin(1.3 * i + 0.4 * j);
-        }
-    for (int j = 0; j < 4; j++)
-        for (int i = 0; i < 4; i++) {
-            double *P = bez.cp + 3 * (i + 4 * j);
-            P[0] = 50.0 * i / 3.0, P[1] = 40.0 * j / 3.0, P[2] = 0.0;
-        }
     const char *d = getenv("CF_TEST_TMP");
     snprintf(starfile, sizeof starfile, "%s/cf_prune_%ld.uvxyz", d && *d ? d : "/tmp",
              (long)getpid());
     snprintf(starxyz, sizeof starxyz, "%s/cf_prune_%ld.xyz", d && *d ? d : "/tmp", (long)getpid());
-    FILE *f = fopen(starfile, "w"), *g = fopen(starxyz, "w");
-    if (!f || !g)
-        return -1;
-    for (int j = 0; j < 48; j++)
-        for (int i = 0; i < 48; i++) {
-            double u = (i + 0.5) / 48.0, v = (j + 0.5) / 48.0, P[3];
-            nf_surf_eval(&star, u, v, P);
-            fprintf(f, "%.17g %.17g %.17g %.17g %.17g\n", u, v, P[0], P[1], P[2]);
-            fprintf(g, "%.17g %.17g %.17g\n", P[0], P[1], P[2]);
-        }
-    return fclose(f) | fclose(g);
+    return ref_job_star(&star, &bez, starfile, starxyz);
 }
 
 static int run_prune(const char *file, int cols, double tol, long prune, cf_fitjob_result_t *r)
