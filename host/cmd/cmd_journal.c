@@ -25,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #define CMD "journal"
 
@@ -328,6 +329,7 @@ static int do_fit(int argc, char **argv)
     int json = 0, force = 0;
     cf_fitjob_opts_t fo;
     cf_fitjob_defaults(&fo);
+    fo.cores = sysconf(_SC_NPROCESSORS_ONLN) >= 2 ? 2 : 1; /* the check pass in halves */
     const cf_opt_t own[] = {
         {.name = "nominal",
          .kind = CF_OPT_STR,

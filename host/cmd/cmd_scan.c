@@ -136,6 +136,7 @@ static int parse(int argc, char **argv, scan_opts_t *o)
     o->sync_every = JNL_SYNC_EVERY_DEFAULT;
     o->job_id = (long)time(NULL);
     cf_fitjob_defaults(&o->fo);
+    o->fo.cores = sysconf(_SC_NPROCESSORS_ONLN) >= 2 ? 2 : 1; /* the check pass in halves */
     o->period_us = 50;
     const cf_opt_t own[] = {
         {.name = "stage",

@@ -29,6 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #define SERVE_MAX_STRS 32
 #define CF_SERVE_SIM_ARGS "--speed 5000 --seed 1" /* --sim without sim_args */
@@ -473,6 +474,8 @@ int cmd_serve(int argc, char **argv)
     c.max_rate = 1000;
     c.run.z0 = 50.0; /* cellsim's beam height */
     cf_fitjob_defaults(&c.run.fit);
+    /* FIT's passes on two cores where there are two (as cellfit fit's) */
+    c.run.fit.cores = sysconf(_SC_NPROCESSORS_ONLN) >= 2 ? 2 : 1;
     int print_map = 0, ec = parse(argc, argv, &c, &print_map);
     if (ec) {
         ec = cf_opt_exit(ec);

@@ -804,7 +804,6 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
                         r->msg, r->ml);
     if (feet && ps->proj)
         ps->nin = j->nfeet;
-    ps->pj.points = r->total;
     if (two && !rc) {
         j->used2 = 1;
         rc = fit_halves(r, cur, half, ps);
@@ -1055,6 +1054,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     memset(&pj, 0, sizeof pj);
     memset(&pj2, 0, sizeof pj2);
     pj.s = pj2.s = s;
+    /* Known from the first pass for any source (a fit pass projects with -1:
+     * a journal, whose count is known before, fits as its points file). */
     pj.points = pj2.points = r->total;
     int uv = src->cols == 5;
     /* The check's feet: the next round's fit pass starts from them. The
