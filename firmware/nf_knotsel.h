@@ -83,6 +83,7 @@ typedef struct nf_knotsel {
     double *su, *sv;    /* spans l = p .. nu-1 (slot l - p), k = q .. nv-1 */
     long n, out;        /* points seen; out of tolerance */
     double rss, g;      /* sum of d^2 over all points; over those out of tolerance */
+    double hu, hv;      /* spans per unit parameter: nf_find_span_from's first guess */
 } nf_knotsel_t;
 
 /* Clear the counts for s (after nf_surf_check) and tolerance tol > 0; mem

@@ -1172,13 +1172,15 @@ QINLINE void derivs_power(const nf_quad_t *qd, int l, int k, double u, double v,
 }
 
 /* Span of x, trying the previous one first (Newton's iterates rarely
- * leave it). */
+ * leave it), then the uniform guess (a new point's first step). */
 static int span_hint(int n, int p, double x, const double *K, int *hint)
 {
     const int h = *hint;
     if (h >= p && h <= n && K[h] <= x && (x < K[h + 1] || (h == n && x <= K[h + 1])))
         return h;
-    return *hint = nf_find_span(n, p, x, K);
+    if (!(x >= K[p] && x <= K[n + 1]))
+        return *hint = nf_find_span(n, p, x, K); /* its clamping, as before */
+    return *hint = nf_find_span_from(-1, n, p, x, K, (double)(n - p + 1) / (K[n + 1] - K[p]));
 }
 
 static void derivs(const nf_quad_t *qd, double u, double v, int *hl, int *hk, double d[6][3])

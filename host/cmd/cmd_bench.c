@@ -453,7 +453,7 @@ int cmd_bench(int argc, char **argv)
         double t0 = cli_now();
         gen_chunk(&o, k, n, rows);
         double t1 = cli_now();
-        rc = cf_accum_rows(&f, o.threads > 1 ? &sh : NULL, rows, n, NULL);
+        rc = cf_accum_rows(&f, o.threads > 1 ? &sh : NULL, 0, rows, n, NULL);
         t_acc += cli_now() - t1;
         t_gen += t1 - t0;
     }

@@ -147,10 +147,11 @@ static int parse(int argc, char **argv, fit_args_t *a)
          .kind = CF_OPT_LONG,
          .dst = &a->threads,
          .arg = "N",
-         .help = "cores for a fit: 2 projects the points of each check pass in two halves (the "
-                 "same fit as 1), and with given parameters (--uv) from a regular ASCII or raw "
-                 "file reads, accumulates and checks each half of the file on its own (nets up "
-                 "to about 1.8e4 control points; the check pass at any size); 1 one thread",
+         .help = "cores for a fit: 2 projects the points of each pass and accumulates each "
+                 "fit pass in two halves (the same fit as 1), and with given parameters (--uv) "
+                 "from a regular ASCII or raw file reads, accumulates and checks each half of "
+                 "the file on its own (nets up to about 1.8e4 control points; the check pass at "
+                 "any size); 1 one thread",
          .lo = 1,
          .hi = 2,
          .def = "2 with two cores online"},

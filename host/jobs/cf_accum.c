@@ -19,17 +19,20 @@ static void *run_half(void *arg)
     return 0;
 }
 
-int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, const double *rows, long n, long *bad)
+int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows, long n, long *bad)
 {
     if (!sh || n < 2)
         return nf_fit_add_rows(f, rows, n, bad);
     const long n1 = n / 2;
     half_t a = {f, rows, n1, -1, 0}, b = {sh, rows + 5 * n1, n - n1, -1, 0};
     pthread_t th;
-    if (pthread_create(&th, 0, run_half, &b))
-        return nf_fit_add_rows(f, rows, n, bad); /* no thread: one core */
+    /* Without a thread the halves run in turn: the grouping stays. */
+    const int on = !serial && !pthread_create(&th, 0, run_half, &b);
     run_half(&a);
-    pthread_join(th, 0);
+    if (on)
+        pthread_join(th, 0);
+    else if (!a.rc)
+        run_half(&b);
     if (a.rc) {
         if (bad)
             *bad = a.bad;

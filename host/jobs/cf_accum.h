@@ -8,8 +8,10 @@
 
 #include "nf_fit.h"
 
-/* n rows of 5 doubles (u v x y z). sh NULL: f alone, on this thread. On
- * error *bad is the index (into rows) of the first offending row found. */
-int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, const double *rows, long n, long *bad);
+/* n rows of 5 doubles (u v x y z). sh NULL: f alone, on this thread.
+ * serial: both halves on this thread, one after the other: the same sums
+ * as two cores give (a fit the same for any core count). On error *bad
+ * is the index (into rows) of the first offending row found. */
+int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows, long n, long *bad);
 
 #endif

@@ -53,6 +53,10 @@ struct cf_fitjob {
     long cap;  /* rows buf holds */
     long rcap; /* rows rows and src hold: cap when projecting or weighting, else 1 (issue 20) */
     int two;   /* the round's fit passes may read in halves: a second accumulator in mem */
+    /* The round's fit passes of projected points add each batch in two
+     * halves, the second into the shard: on the second core, or after the
+     * first on one (cf_accum: the same sums, so the same fit either way). */
+    int shard;
     int used2; /* some pass read in halves */
     /* The first pass when points arrive live (cf_fitjob_add). */
     int live;
@@ -366,7 +370,7 @@ static void proj_free(proj_t *p)
  * the job's arena), parameters given or by projection onto proj. */
 typedef struct pass {
     cf_fitpass_t fp;
-    proj_t pj;
+    proj_t pj, pj2; /* pj2: the second core's searches (feet_batch) */
     const nf_surf_t *proj;
     const weigh_t *wt;
     long nin;      /* the first nin of the job's feet are on proj (Boehm): Newton from them */
@@ -414,6 +418,80 @@ static double dist_at(const nf_surf_t *s, const double *q)
                 (q[4] - P[2]) * (q[4] - P[2]));
 }
 
+/* The feet of a batch's points k0 .. k1 - 1 (point n0 + k of the pass),
+ * on either thread: Newton from the last check's foot where there is one
+ * (direct: that foot itself, foot_from's), else the search; per point u,
+ * v, the signed distance, clamped, and 1 when converged, into res (5
+ * doubles a point). Each thread its own proj_t (the search's grid built
+ * where it is first needed). */
+typedef struct feet_part {
+    proj_t *pj;
+    const double *buf, *feet;
+    int cols;
+    long k0, k1, n0, nin;
+    double *res;
+    int rc;
+    int direct;
+} feet_part_t;
+
+static void *feet_part(void *arg)
+{
+    feet_part_t *fp = arg;
+    for (long k = fp->k0; k < fp->k1; k++) {
+        const double *Q = fp->buf + (long)fp->cols * k + (fp->cols - 3);
+        const long n = fp->n0 + k;
+        const double *f = n < fp->nin ? fp->feet + FOOT * n : NULL;
+        nf_proj_t pr;
+        double *o = fp->res + 5 * k;
+        if (fp->direct && f && f[0] == f[0]) {
+            o[0] = f[0], o[1] = f[1], o[2] = fabs(f[2]), o[3] = signbit(f[2]) != 0, o[4] = 1.0;
+            continue;
+        }
+        if (!(f && f[0] == f[0] && !fp->direct && proj_newton(fp->pj, Q, f[0], f[1], &pr)) &&
+            proj_foot(fp->pj, Q, &pr)) {
+            fp->rc = CF_ENOMEM;
+            return NULL;
+        }
+        o[0] = pr.u, o[1] = pr.v, o[2] = pr.dist, o[3] = pr.clamped, o[4] = fp->pj->rc == NF_OK;
+    }
+    return NULL;
+}
+
+/* Below this many points a batch's feet stay on one thread. */
+#define FEET_SPLIT 512
+
+/* The feet of a batch of got points (the first is point n0 of the pass)
+ * into res: on two threads when the job has two cores (opts.cores), the
+ * second half with pj2; the same feet either way. direct: a kept foot as
+ * it is (a fit pass's, foot_from). */
+static int feet_batch(const cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const double *buf, int cols,
+                      long got, long n0, long nin, int direct, double *res)
+{
+    feet_part_t fp[2] = {{pj, buf, j->feet, cols, 0, got, n0, nin, res, 0, direct},
+                         {pj2, buf, j->feet, cols, got, got, n0, nin, res, 0, direct}};
+    pthread_t th;
+    int on = 0;
+    if (j->o.cores > 1 && got >= FEET_SPLIT) {
+        /* One search grid for both: built here when some point of the
+         * batch has no start (the grid's counters are each thread's). */
+        int rc;
+        if (!pj->ready && nin < n0 + got && (rc = proj_foot(pj, NULL, NULL)))
+            return rc;
+        if (pj->ready && !pj2->ready) {
+            pj2->g = pj->g;
+            pj2->ready = pj2->borrowed = 1;
+        }
+        fp[0].k1 = fp[1].k0 = got / 2;
+        on = !cf_thread_start(&th, feet_part, &fp[1]);
+    }
+    feet_part(&fp[0]);
+    if (on)
+        pthread_join(th, NULL);
+    else
+        feet_part(&fp[1]);
+    return fp[0].rc ? fp[0].rc : fp[1].rc;
+}
+
 static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf_surf_t *proj,
                       const weigh_t *wt, int threads, const char *name, char *msg, size_t ml)
 {
@@ -424,8 +502,8 @@ static int pass_begin(cf_fitjob_t *j, pass_t *ps, const nf_surf_t *cur, const nf
                               j->o.solver, threads, name, msg, ml);
     if (rc)
         return rc;
-    ps->pj.s = proj;
-    ps->pj.points = -1;
+    ps->pj.s = ps->pj2.s = proj;
+    ps->pj.points = ps->pj2.points = -1;
     if (!j->o.free_edges && (rc = cf_edges_begin(&ps->ed, cur)))
         return cf_fail(msg, ml, rc, "data footprint: %s", cf_strerror(rc));
     return 0;
@@ -440,6 +518,15 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
     const double *uv = in;
     long m = n;
     int cols = ps->wt ? 6 : 5;
+    /* Searches (a point without a kept foot) on two cores: the batch's
+     * feet into rows first, 5 doubles at each point's index, read before
+     * its row is written (m <= k); the same feet as one thread's. */
+    const int pre = ps->proj && !ps->wt && j->o.cores > 1 && n >= FEET_SPLIT &&
+                    ps->nin < ps->points + n && j->rcap >= n;
+    if (pre && feet_batch(j, &ps->pj, &ps->pj2, in, 3, n, ps->points, ps->nin, 1, j->rows)) {
+        *bad = 0;
+        return CF_ENOMEM;
+    }
     if (ps->proj || ps->wt) {
         m = 0;
         for (long k = 0; k < n; k++) {
@@ -447,7 +534,10 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
             if (ps->proj) {
                 const double *Q = in + 3 * k;
                 nf_proj_t pr;
-                if (!foot_from(j, ps, ps->points + k, &pr) && proj_foot(&ps->pj, Q, &pr)) {
+                if (pre) {
+                    const double *f = j->rows + 5 * k;
+                    pr.u = f[0], pr.v = f[1], pr.dist = f[2], pr.clamped = (int)f[3];
+                } else if (!foot_from(j, ps, ps->points + k, &pr) && proj_foot(&ps->pj, Q, &pr)) {
                     *bad = k;
                     return CF_ENOMEM;
                 }
@@ -500,6 +590,7 @@ static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *na
 static void pass_free(pass_t *ps)
 {
     proj_free(&ps->pj);
+    proj_free(&ps->pj2);
     cf_edges_free(&ps->ed);
 }
 
@@ -617,13 +708,27 @@ static int rewind_src(const run_t *r)
 /* Room for a pass in halves on cur's net (opts.cores): a second
  * accumulator of at most CF_FITJOB_SHARD_MAX bytes within the board's
  * arena, for a source that may split (given parameters). */
+/* A second accumulator for cur's net is small (CF_FITJOB_SHARD_MAX) and
+ * the pass with it within the board's bytes. */
+static int shard_fits(const cf_fitjob_t *j, const nf_surf_t *cur)
+{
+    long sh = nf_fit_shard_bytes(cur->nu, cur->nv, cur->p, cur->q),
+         need = cf_fitpass_bytes(cur, j->o.solver, 2);
+    return sh >= 0 && sh <= CF_FITJOB_SHARD_MAX && need > 0 && need <= NF_ARENA_BYTES;
+}
+
 static int halves_room(const cf_fitjob_t *j, const run_t *r, const nf_surf_t *cur)
 {
     if (j->o.cores < 2 || j->o.threads > 1 || !r->src->split || r->src->cols != 5)
         return 0;
-    long sh = nf_fit_shard_bytes(cur->nu, cur->nv, cur->p, cur->q),
-         need = cf_fitpass_bytes(cur, j->o.solver, 2);
-    return sh >= 0 && sh <= CF_FITJOB_SHARD_MAX && need > 0 && need <= NF_ARENA_BYTES;
+    return shard_fits(j, cur);
+}
+
+/* Projected points (x y z) accumulate with the shard whatever the cores
+ * (j->shard), so that one core's fit is two cores' bit for bit. */
+static int shard_room(const cf_fitjob_t *j, const run_t *r, const nf_surf_t *cur)
+{
+    return j->o.threads == 1 && r->src->cols == 3 && shard_fits(j, cur);
 }
 
 /* The source in two halves for two threads (opts.cores): 1 and half[],
@@ -800,8 +905,13 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
     /* Given parameters, unweighted, the second accumulator in the arena:
      * each half read and accumulated on its own core (issue 20). */
     const int two = j->two && !wt && halves(r, half);
-    int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, two ? 2 : j->o.threads, s->name,
-                        r->msg, r->ml);
+    const int shard = !two && !wt && j->shard;
+    int rc = pass_begin(j, ps, cur, s->cols == 5 ? NULL : proj, wt, two || shard ? 2 : j->o.threads,
+                        s->name, r->msg, r->ml);
+    if (!rc && shard) {
+        ps->fp.serial = j->o.cores < 2;
+        j->used2 |= !ps->fp.serial;
+    }
     if (feet && ps->proj)
         ps->nin = j->nfeet;
     if (two && !rc) {
@@ -974,73 +1084,6 @@ static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2
     return rc;
 }
 
-/* The feet of a batch's points k0 .. k1 - 1 (point n0 + k of the pass),
- * on either thread: Newton from the last check's foot where there is one,
- * else the search; per point u, v, the signed distance, clamped, and 1
- * when converged, into res (5 doubles a point). Each thread its own
- * proj_t (the search's grid built where it is first needed). */
-typedef struct feet_part {
-    proj_t *pj;
-    const double *buf, *feet;
-    int cols;
-    long k0, k1, n0, nin;
-    double *res;
-    int rc;
-} feet_part_t;
-
-static void *feet_part(void *arg)
-{
-    feet_part_t *fp = arg;
-    for (long k = fp->k0; k < fp->k1; k++) {
-        const double *Q = fp->buf + (long)fp->cols * k + (fp->cols - 3);
-        const long n = fp->n0 + k;
-        const double *f = n < fp->nin ? fp->feet + FOOT * n : NULL;
-        nf_proj_t pr;
-        if (!(f && f[0] == f[0] && proj_newton(fp->pj, Q, f[0], f[1], &pr)) &&
-            proj_foot(fp->pj, Q, &pr)) {
-            fp->rc = CF_ENOMEM;
-            return NULL;
-        }
-        double *o = fp->res + 5 * k;
-        o[0] = pr.u, o[1] = pr.v, o[2] = pr.dist, o[3] = pr.clamped, o[4] = fp->pj->rc == NF_OK;
-    }
-    return NULL;
-}
-
-/* Below this many points a batch's feet stay on one thread. */
-#define FEET_SPLIT 512
-
-/* The feet of a batch of got points (the first is point n0 of the pass)
- * into res: on two threads when the job has two cores (opts.cores), the
- * second half with pj2; the same feet either way. */
-static int feet_batch(const cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const double *buf, int cols,
-                      long got, long n0, long nin, double *res)
-{
-    feet_part_t fp[2] = {{pj, buf, j->feet, cols, 0, got, n0, nin, res, 0},
-                         {pj2, buf, j->feet, cols, got, got, n0, nin, res, 0}};
-    pthread_t th;
-    int on = 0;
-    if (j->o.cores > 1 && got >= FEET_SPLIT) {
-        /* One search grid for both: built here when some point of the
-         * batch has no start (the grid's counters are each thread's). */
-        int rc;
-        if (!pj->ready && nin < n0 + got && (rc = proj_foot(pj, NULL, NULL)))
-            return rc;
-        if (pj->ready && !pj2->ready) {
-            pj2->g = pj->g;
-            pj2->ready = pj2->borrowed = 1;
-        }
-        fp[0].k1 = fp[1].k0 = got / 2;
-        on = !cf_thread_start(&th, feet_part, &fp[1]);
-    }
-    feet_part(&fp[0]);
-    if (on)
-        pthread_join(th, NULL);
-    else
-        feet_part(&fp[1]);
-    return fp[0].rc ? fp[0].rc : fp[1].rc;
-}
-
 static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, resid_t *out,
                    cf_stats_t *st, int want_hist)
 {
@@ -1087,7 +1130,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
         /* The batch's feet first (j->rows: 5 doubles a point), then the
          * sums in the points' order. */
         const int proj = !uv || st;
-        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, out->n, nin, j->rows)) {
+        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, out->n, nin, 0, j->rows)) {
             rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
             break;
         }
@@ -1214,7 +1257,8 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     /* Round k fits in the space of cur with P0 = cur's net: the base
      * first, then the previous fit refined (Section 2.2). */
     j->two = !(k == 0 && j->live) && halves_room(j, r, &S->cur);
-    j->need = cf_fitpass_bytes(&S->cur, o->solver, j->two ? 2 : o->threads);
+    j->shard = !(k == 0 && j->live) && !j->two && shard_room(j, r, &S->cur);
+    j->need = cf_fitpass_bytes(&S->cur, o->solver, j->two || j->shard ? 2 : o->threads);
     if (!(k == 0 && j->live)) {
         cf_bigmem_free(j->mem);
         j->mem = cf_bigmem_alloc((size_t)j->need);

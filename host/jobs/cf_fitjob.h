@@ -77,9 +77,11 @@ typedef struct cf_fitjob_opts {
     int cores;        /* 2: a pass of given parameters (u v x y z) over a points file read
                        * in halves on two threads, each its reader and (fit) its
                        * accumulator, when that second accumulator is small
-                       * (CF_FITJOB_SHARD_MAX); and a check pass's projections
-                       * (the feet) of each batch in halves, summed in order: the
-                       * same fit; 1: the present one reader, one thread */
+                       * (CF_FITJOB_SHARD_MAX); and a pass's projections (the
+                       * feet) of each batch in halves, summed in order, and a
+                       * fit pass's halves of projected points accumulated at
+                       * once (their grouping is one core's too): the same fit;
+                       * 1: the present one reader, one thread */
     int net_u, net_v; /* 0: the base's net; else the base refined to it first */
     long reparam;     /* reprojection passes per round (Section 2.2) */
     double far;       /* projected points farther than this are counted (mm; 0: 5 % of the net) */

@@ -21,6 +21,8 @@ typedef struct cf_fitpass {
     nf_fit_t *sh; /* threads 2: the second core's accumulator (cf_accum), its
                    * state at the start of the block */
     int threads;
+    int serial;         /* threads 2 on one core: the shard's half after the first's
+                         * (the sums two cores give; set by the caller after begin) */
     const nf_surf_t *s; /* the space fitted in (names control points in messages) */
     long rejected;      /* rows of weight 0, left out */
     nf_solve_stats_t st;

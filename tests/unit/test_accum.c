@@ -146,21 +146,30 @@ static void check_paths(int p, int q, int nu, int nv, double wlo)
         long M;
         double *pts = points(&s, kind, &M), *A, *b;
         ref_eq7(&s, pts, M, 0.0, 0.0, &A, &b);
-        job_t fast, plain, two;
+        job_t fast, plain, two, ser;
         job_start(&fast, &s, 0);
         job_start(&plain, &s, 1);
         job_start(&two, &s, 0);
+        job_start(&ser, &s, 0);
         assert_int_equal(nf_fit_add_rows(&fast.f, pts, M, NULL), NF_OK);
         for (long t = 0; t < M; t++) /* the plain path, one point at a time */
             assert_int_equal(nf_fit_add(&plain.f, pts[5 * t], pts[5 * t + 1], pts + 5 * t + 2, 1.0),
                              NF_OK);
         assert_int_equal(nf_fit_shard_init(&two.sh, &two.f, &two.ar), NF_OK);
+        assert_int_equal(nf_fit_shard_init(&ser.sh, &ser.f, &ser.ar), NF_OK);
         for (long t0 = 0; t0 < M; t0 += 100) { /* chunks of 100, halves on two threads */
             long n = M - t0 < 100 ? M - t0 : 100;
-            assert_int_equal(cf_accum_rows(&two.f, &two.sh, pts + 5 * t0, n, NULL), NF_OK);
+            assert_int_equal(cf_accum_rows(&two.f, &two.sh, 0, pts + 5 * t0, n, NULL), NF_OK);
+            /* the same halves in turn on this thread */
+            assert_int_equal(cf_accum_rows(&ser.f, &ser.sh, 1, pts + 5 * t0, n, NULL), NF_OK);
         }
         assert_int_equal(nf_fit_shard_merge(&two.f, &two.sh), NF_OK);
+        assert_int_equal(nf_fit_shard_merge(&ser.f, &ser.sh), NF_OK);
         assert_int_equal(two.f.npoints, M);
+        /* One core in turn sums as two cores do, bit for bit. */
+        assert_int_equal(ser.f.npoints, M);
+        assert_memory_equal(ser.f.A.S, two.f.A.S, sizeof(double) * (size_t)(two.f.n * two.f.A.K));
+        assert_memory_equal(ser.f.rhs, two.f.rhs, sizeof(double) * (size_t)(3 * two.f.n));
         assert_int_equal(nf_fit_finish(&fast.f), NF_OK);
         assert_int_equal(nf_fit_finish(&plain.f), NF_OK);
         assert_int_equal(nf_fit_finish(&two.f), NF_OK);
@@ -179,6 +188,7 @@ static void check_paths(int p, int q, int nu, int nv, double wlo)
         free(fast.mem);
         free(plain.mem);
         free(two.mem);
+        free(ser.mem);
     }
     ref_surf_free(&s);
 }
@@ -318,7 +328,7 @@ static void test_shard_budget(void **state)
     assert_int_equal(nf_fit_shard_init(&sh, &f, &ar), NF_OK);
     long M;
     double *pts = points(&s, 0, &M);
-    assert_int_equal(cf_accum_rows(&f, &sh, pts, M, NULL), NF_OK);
+    assert_int_equal(cf_accum_rows(&f, &sh, 0, pts, M, NULL), NF_OK);
     assert_int_equal(nf_fit_finish(&sh), NF_ESTATE); /* a shard is merged, never finished */
     assert_int_equal(nf_fit_shard_merge(&f, &sh), NF_OK);
     assert_int_equal(nf_fit_add(&sh, pts[0], pts[1], pts + 2, 1.0), NF_ESTATE);
@@ -391,7 +401,7 @@ static void test_bad_row_index(void **state)
         job_start(&j, &s, 0);
         assert_int_equal(nf_fit_shard_init(&j.sh, &j.f, &j.ar), NF_OK);
         bad = -1;
-        assert_int_equal(cf_accum_rows(&j.f, &j.sh, pts, M, &bad), NF_EDOMAIN);
+        assert_int_equal(cf_accum_rows(&j.f, &j.sh, 0, pts, M, &bad), NF_EDOMAIN);
         assert_int_equal(bad, at);
         free(j.mem);
         pts[5 * at] = 0.5;
