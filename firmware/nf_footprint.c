@@ -72,6 +72,19 @@ int nf_footprint_add(nf_footprint_t *fp, double u, double v)
     return NF_OK;
 }
 
+int nf_footprint_merge(nf_footprint_t *a, const nf_footprint_t *b)
+{
+    if (!a || !b || a->s != b->s || a->cu != b->cu || a->cv != b->cv)
+        return NF_EARG;
+    const long n = (long)a->cu * a->cv;
+    for (long i = 0; i < n; i++) {
+        const uint64_t c = (uint64_t)a->count[i] + b->count[i];
+        a->count[i] = c > UINT32_MAX ? UINT32_MAX : (uint32_t)c;
+    }
+    a->points += b->points;
+    return NF_OK;
+}
+
 long nf_footprint_add_rows(nf_footprint_t *fp, const double *rows, long n, int stride)
 {
     const nf_surf_t *s = fp->s;

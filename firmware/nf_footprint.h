@@ -52,6 +52,11 @@ int nf_footprint_init(nf_footprint_t *fp, const nf_surf_t *s, void *mem, size_t 
  * NF_ENONFINITE for NaN/Inf. */
 int nf_footprint_add(nf_footprint_t *fp, double u, double v);
 
+/* b's counts (the same surface's footprint) into a's, saturating as
+ * nf_footprint_add does: a pass counted in parts. NF_EARG for null
+ * pointers or footprints of different surfaces. */
+int nf_footprint_merge(nf_footprint_t *a, const nf_footprint_t *b);
+
 /* Mark n points whose u, v are the first two of every stride doubles from
  * rows: nf_footprint_add's cells, those it refuses skipped. The count
  * marked. (One call per batch: issue 20's pass over every point.) */

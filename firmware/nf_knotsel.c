@@ -113,6 +113,33 @@ double nf_knotsel_span_rss(const nf_knotsel_t *a, int dir, int i)
     return span_slot(a, dir, i)[S_RSS];
 }
 
+int nf_knotsel_merge(nf_knotsel_t *a, const nf_knotsel_t *b)
+{
+    if (!a || !b || a->s != b->s || a->tol != b->tol)
+        return NF_EARG;
+    const long slots = (a->s->nu - a->s->p) + (a->s->nv - a->s->q);
+    for (long i = 0; i < slots; i++) { /* su and sv are one run (nf_knotsel_init) */
+        double *d = a->su + NF_KNOTSEL_SPAN * i;
+        const double *e = b->su + NF_KNOTSEL_SPAN * i;
+        for (int k = 0; k < NF_KNOTSEL_BINS; k++) {
+            double *c = d + NF_KNOTSEL_BIN * k;
+            const double *x = e + NF_KNOTSEL_BIN * k;
+            c[B_N] += x[B_N];
+            c[B_LO] = x[B_LO] < c[B_LO] ? x[B_LO] : c[B_LO];
+            c[B_HI] = x[B_HI] > c[B_HI] ? x[B_HI] : c[B_HI];
+            c[B_G] += x[B_G];
+            c[B_GT] += x[B_GT];
+        }
+        d[S_RSS] += e[S_RSS];
+        d[S_OUT] += e[S_OUT];
+    }
+    a->n += b->n;
+    a->out += b->out;
+    a->rss += b->rss;
+    a->g += b->g;
+    return NF_OK;
+}
+
 int nf_knotsel_merge_span(nf_knotsel_t *a, const nf_knotsel_t *b, int dir, int i)
 {
     if (!a || !b || a->s != b->s || i < 0 || i >= (dir ? a->s->nv - a->s->q : a->s->nu - a->s->p))

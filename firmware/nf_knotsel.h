@@ -101,6 +101,11 @@ long nf_knotsel_span_points(const nf_knotsel_t *a, int dir, int i);
 /* Sum of d^2 of all points of the span (FITPACK's interval sum). */
 double nf_knotsel_span_rss(const nf_knotsel_t *a, int dir, int i);
 
+/* Every count, bound and sum of b (the same surface and tolerance: a
+ * check pass counted in parts) into a's: a then holds the points of both.
+ * NF_EARG for null pointers or another surface or tolerance. */
+int nf_knotsel_merge(nf_knotsel_t *a, const nf_knotsel_t *b);
+
 /* Add the misfit of b's span slot i of direction dir (its points out of
  * tolerance: sums of d^2 and d^2 t per sub-bin, the count out) to a's, and
  * to a's totals. b counts, on the same surface, points a holds as data

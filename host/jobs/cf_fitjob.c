@@ -343,6 +343,8 @@ static int feet_room(cf_fitjob_t *j, long n)
     if (n <= j->fcap)
         return 1;
     long cap = j->fcap ? 2 * j->fcap : 4096;
+    while (cap < n && cap <= CF_FITJOB_HOLD_ROWS)
+        cap *= 2;
     double *f =
         cap <= CF_FITJOB_HOLD_ROWS ? realloc(j->feet, sizeof(double) * FOOT * (size_t)cap) : NULL;
     if (!f) {
@@ -397,15 +399,21 @@ static int foot_from(const cf_fitjob_t *j, const pass_t *ps, long i, nf_proj_t *
     return 1;
 }
 
+/* Foot i (NaN u: none) into room the job's feet have. */
+static void foot_set(cf_fitjob_t *j, long i, const nf_proj_t *pr, int ok)
+{
+    double *f = j->feet + FOOT * i;
+    f[0] = ok ? pr->u : NAN;
+    f[1] = pr->v;
+    f[2] = pr->clamped ? -fabs(pr->dist) : fabs(pr->dist);
+}
+
 /* Foot i (NaN u: none) into the job's feet, in order. */
 static void foot_keep(cf_fitjob_t *j, long i, const nf_proj_t *pr, int ok)
 {
     if (i > j->nfeet || (i == j->nfeet && !feet_room(j, i + 1)))
         return;
-    double *f = j->feet + FOOT * i;
-    f[0] = ok ? pr->u : NAN;
-    f[1] = pr->v;
-    f[2] = pr->clamped ? -fabs(pr->dist) : fabs(pr->dist);
+    foot_set(j, i, pr, ok);
     j->nfeet += i == j->nfeet;
 }
 
@@ -440,7 +448,7 @@ static void *feet_part(void *arg)
     for (long k = fp->k0; k < fp->k1; k++) {
         const double *Q = fp->buf + (long)fp->cols * k + (fp->cols - 3);
         const long n = fp->n0 + k;
-        const double *f = n < fp->nin ? fp->feet + FOOT * n : NULL;
+        const double *f = n < fp->nin && fp->feet ? fp->feet + FOOT * n : NULL;
         nf_proj_t pr;
         double *o = fp->res + 5 * k;
         if (fp->direct && f && f[0] == f[0]) {
@@ -1057,6 +1065,132 @@ static void *measure_half(void *arg)
 
 /* measure of given parameters with nothing per span, in halves: the sums
  * of each merged (the histogram by its bins). */
+/* b's sums into out's (a pass measured in parts). */
+static void resid_merge(resid_t *out, const resid_t *b)
+{
+    out->ss += b->ss;
+    out->mx = b->mx > out->mx ? b->mx : out->mx;
+    out->n += b->n;
+    out->within += b->within;
+    out->outliers += b->outliers;
+    out->hist.n += b->hist.n;
+    out->hist.zero += b->hist.zero;
+    out->hist.over += b->hist.over;
+    out->hist.max = b->hist.max > out->hist.max ? b->hist.max : out->hist.max;
+    for (int i = 0; i < NF_RHIST_BINS; i++)
+        out->hist.bin[i] += b->hist.bin[i];
+}
+
+/* The loop's check pass in two parts (auto refinement, neither robust
+ * nor with statistics): each batch of FEET_SPLIT points or more in
+ * halves, each half's feet and then its sums (distances, the knot
+ * chooser's spans, the footprint) into its own part, the second part
+ * merged into the first after the pass. On two cores the halves run at
+ * once, on one in turn: the sums are grouped alike, so the fit is the
+ * same. feet: the half's feet are kept (Newton's starts next round). */
+typedef struct check_part {
+    feet_part_t fp;
+    cf_fitjob_t *j;
+    int feet;
+    double tol;
+    resid_t *res;
+    nf_knotsel_t *ks;
+    nf_footprint_t *foot;
+} check_part_t;
+
+static void *check_half(void *arg)
+{
+    check_part_t *c = arg;
+    feet_part(&c->fp);
+    if (c->fp.rc)
+        return NULL;
+    for (long k = c->fp.k0; k < c->fp.k1; k++) {
+        const double *f = c->fp.res + 5 * k;
+        nf_proj_t pr;
+        pr.u = f[0], pr.v = f[1], pr.dist = f[2], pr.clamped = (int)f[3];
+        if (c->feet)
+            foot_set(c->j, c->fp.n0 + k, &pr, f[4] != 0.0);
+        const double d = resid_dist(c->res, fabs(f[2]), f[2] * f[2], c->tol, 0.0, 0);
+        nf_knotsel_add(c->ks, f[0], f[1], d);
+        if (!pr.clamped)
+            nf_footprint_add(c->foot, f[0], f[1]); /* outside the domain: not counted */
+    }
+    return NULL;
+}
+
+/* The second part's counts (check_half), or none (mem NULL). */
+typedef struct check_two {
+    resid_t res;
+    nf_knotsel_t ks;
+    nf_footprint_t foot;
+    double *ksmem;
+    void *fmem;
+} check_two_t;
+
+static int check_two_init(check_two_t *t, const nf_surf_t *s, double tol)
+{
+    memset(t, 0, sizeof *t);
+    nf_rhist_init(&t->res.hist);
+    const long fb = nf_footprint_bytes(s->nu, s->nv, s->p, s->q);
+    t->ksmem = malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(s->nu, s->nv, s->p, s->q));
+    t->fmem = fb > 0 ? malloc((size_t)fb) : NULL;
+    if (!t->ksmem || !t->fmem || nf_knotsel_init(&t->ks, s, tol, t->ksmem) ||
+        nf_footprint_init(&t->foot, s, t->fmem, (size_t)fb)) {
+        free(t->ksmem);
+        free(t->fmem);
+        t->ksmem = NULL;
+        t->fmem = NULL;
+        return 0;
+    }
+    return 1;
+}
+
+static void check_two_free(check_two_t *t)
+{
+    free(t->ksmem);
+    free(t->fmem);
+}
+
+/* One batch of got points (the first is point n0 of the pass) in two
+ * parts: a into out, ck's chooser and footprint; b into t. */
+static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *ck, check_two_t *t,
+                       resid_t *out, int cols, long got, long n0, long nin, int keep)
+{
+    if (!pj->ready && nin < n0 + got && proj_foot(pj, NULL, NULL))
+        return CF_ENOMEM;
+    if (pj->ready && !pj2->ready) { /* one search grid for both (feet_batch) */
+        pj2->g = pj->g;
+        pj2->ready = pj2->borrowed = 1;
+    }
+    /* Kept feet in place when they follow on: room for the batch first. */
+    const int feet = keep && j->nfeet == n0 && feet_room(j, n0 + got);
+    const long h = got / 2;
+    check_part_t c[2] = {{{pj, j->buf, j->feet, cols, 0, h, n0, nin, j->rows, 0, 0},
+                          j,
+                          feet,
+                          j->o.tol,
+                          out,
+                          ck->ks,
+                          ck->fp},
+                         {{pj2, j->buf, j->feet, cols, h, got, n0, nin, j->rows, 0, 0},
+                          j,
+                          feet,
+                          j->o.tol,
+                          &t->res,
+                          &t->ks,
+                          &t->foot}};
+    pthread_t th;
+    const int on = j->o.cores > 1 && !cf_thread_start(&th, check_half, &c[1]);
+    check_half(&c[0]);
+    if (on)
+        pthread_join(th, NULL);
+    else
+        check_half(&c[1]);
+    if (feet && !c[0].fp.rc && !c[1].fp.rc)
+        j->nfeet = n0 + got;
+    return c[0].fp.rc ? c[0].fp.rc : c[1].fp.rc;
+}
+
 static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2], double cut,
                           resid_t *out, int want_hist)
 {
@@ -1067,17 +1201,7 @@ static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2
     half_t h[2] = {{.s = s, .tol = j->o.tol, .cut = cut, .want_hist = want_hist, .res = out},
                    {.s = s, .tol = j->o.tol, .cut = cut, .want_hist = want_hist, .res = &b}};
     two_halves(r, half, h, measure_half);
-    out->ss += b.ss;
-    out->mx = b.mx > out->mx ? b.mx : out->mx;
-    out->n += b.n;
-    out->within += b.within;
-    out->outliers += b.outliers;
-    out->hist.n += b.hist.n;
-    out->hist.zero += b.hist.zero;
-    out->hist.over += b.hist.over;
-    out->hist.max = b.hist.max > out->hist.max ? b.hist.max : out->hist.max;
-    for (int i = 0; i < NF_RHIST_BINS; i++)
-        out->hist.bin[i] += b.hist.bin[i];
+    resid_merge(out, &b);
     int rc = halves_error(r, half, h);
     if (rc == CF_ENOMEM)
         return cf_fail(r->msg, r->ml, rc, "out of memory");
@@ -1120,17 +1244,31 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     cf_surfrow_t ev; /* S(u, v) a row of one v at a time (issue 20) */
     if (cf_surfrow_init(&ev, s))
         return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+    /* The loop's plain check in two parts (check_batch); without the
+     * second part's memory, one. */
+    check_two_t two;
+    const int parts = !uv && !st && ck && ck->ks && ck->fp && !ck->sr && !ck->kr && !(cut > 0) &&
+                      !want_hist && check_two_init(&two, s, tol);
     int rc = rewind_src(r);
-    long got = 0;
+    long got = 0, seen = 0;
     while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
         if (stopped(r)) {
             rc = RIG_EABORTED;
             break;
         }
+        if (parts && got >= FEET_SPLIT) {
+            if (check_batch(j, &pj, &pj2, ck, &two, out, src->cols, got, seen, nin, keep)) {
+                rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
+                break;
+            }
+            seen += got;
+            progress(r, seen);
+            continue;
+        }
         /* The batch's feet first (j->rows: 5 doubles a point), then the
          * sums in the points' order. */
         const int proj = !uv || st;
-        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, out->n, nin, 0, j->rows)) {
+        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, seen, nin, 0, j->rows)) {
             rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
             break;
         }
@@ -1145,7 +1283,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
                 nf_proj_t pr;
                 pr.u = f[0], pr.v = f[1], pr.dist = f[2], pr.clamped = (int)f[3];
                 if (keep)
-                    foot_keep(j, out->n, &pr, f[4] != 0.0);
+                    foot_keep(j, seen + k, &pr, f[4] != 0.0);
                 sd = pr.dist;
                 clamped = !uv && pr.clamped;
                 if (!uv)
@@ -1170,10 +1308,17 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
             if (st)
                 cf_stats_add(st, sd);
         }
-        progress(r, out->n);
+        seen += got;
+        progress(r, seen);
     }
     if (!rc && got < 0)
         rc = (int)got;
+    if (parts) { /* the second part after the first: the same sums on one core or two */
+        resid_merge(out, &two.res);
+        if (!rc && (nf_knotsel_merge(ck->ks, &two.ks) || nf_footprint_merge(ck->fp, &two.foot)))
+            rc = cf_fail(r->msg, r->ml, CF_EARG, "check pass: parts of other surfaces");
+        check_two_free(&two);
+    }
     if (keep && (rc || out->n != j->nfeet))
         j->nfeet = 0; /* not every point's: no starts */
     cf_surfrow_free(&ev);

@@ -16,6 +16,8 @@
 #include "cf_surf.h"
 #include "cf_test.h"
 #include "nf_err.h"
+#include "nf_project.h"
+#include "nf_surf.h"
 #include "ref_dense.h"
 #include "ref_job.h"
 #include <math.h>
@@ -423,6 +425,42 @@ static void test_job_two_cores(void **state)
  * core's fit bit for bit, round by round, pruning trials included; with
  * statistics (the signed distances) too. A flat plane base, a wavy part:
  * the loop must insert knots. */
+/* Points within tol of s and their sum of squared distances, each foot
+ * from the nearest of a 121 x 121 sample of s, finished by nf_project. */
+static void brute_check(const nf_surf_t *s, const double *xyz, long n, double tol, long *within,
+                        double *ss)
+{
+    enum { G = 121 };
+    double *smp = malloc(sizeof(double) * 3 * G * G), u0, u1, v0, v1;
+    assert_non_null(smp);
+    nf_surf_domain(s, &u0, &u1, &v0, &v1);
+    for (int b = 0; b < G; b++)
+        for (int a = 0; a < G; a++)
+            nf_surf_eval(s, u0 + (u1 - u0) * a / (G - 1), v0 + (v1 - v0) * b / (G - 1),
+                         smp + 3 * (a + G * b));
+    *within = 0;
+    *ss = 0.0;
+    for (long k = 0; k < n; k++) {
+        const double *q = xyz + 3 * k;
+        long best = 0;
+        double bd = HUGE_VAL;
+        for (long t = 0; t < G * G; t++) {
+            const double *P = smp + 3 * t;
+            const double d = (P[0] - q[0]) * (P[0] - q[0]) + (P[1] - q[1]) * (P[1] - q[1]) +
+                             (P[2] - q[2]) * (P[2] - q[2]);
+            if (d < bd)
+                bd = d, best = t;
+        }
+        nf_proj_t pr;
+        assert_int_equal(nf_project(s, q, u0 + (u1 - u0) * (double)(best % G) / (G - 1),
+                                    v0 + (v1 - v0) * (double)(best / G) / (G - 1), 1e-12, &pr),
+                         NF_OK);
+        *within += fabs(pr.dist) <= tol;
+        *ss += pr.dist * pr.dist;
+    }
+    free(smp);
+}
+
 static void test_job_projected_loop(void **state)
 {
     (void)state;
@@ -430,10 +468,13 @@ static void test_job_projected_loop(void **state)
     path_of(p, sizeof p, "l.xyz");
     FILE *f = fopen(p, "w");
     assert_non_null(f);
+    double *xyz = malloc(sizeof(double) * 3 * MPTS);
+    assert_non_null(xyz);
     for (long k = 0; k < MPTS; k++) {
-        const double x = ref_rand(0.0, 100.0), y = ref_rand(0.0, 80.0);
-        fprintf(f, "%.17g %.17g %.17g\n", x, y,
-                3.0 * sin(x / 11.0) * cos(y / 13.0) + ref_rand(-0.005, 0.005));
+        double *q = xyz + 3 * k;
+        q[0] = ref_rand(0.0, 100.0), q[1] = ref_rand(0.0, 80.0);
+        q[2] = 3.0 * sin(q[0] / 11.0) * cos(q[1] / 13.0) + ref_rand(-0.005, 0.005);
+        fprintf(f, "%.17g %.17g %.17g\n", q[0], q[1], q[2]);
     }
     fclose(f);
     double mem[4 * 8 + 3 * 16 + 16];
@@ -448,12 +489,13 @@ static void test_job_projected_loop(void **state)
             double *P = base.cp + 3 * (i + 4 * j);
             P[0] = -5.0 + 110.0 * i / 3.0, P[1] = -5.0 + 90.0 * j / 3.0, P[2] = 0.0;
         }
+    const double o_tol = 0.05;
     for (int stats = 0; stats < 2; stats++) {
         cf_fitjob_result_t r[2];
         for (int c = 0; c < 2; c++) {
             cf_fitjob_opts_t o;
             cf_fitjob_defaults(&o);
-            o.tol = 0.05;
+            o.tol = o_tol;
             o.loop = 1;
             o.within = 99;
             o.stats = stats;
@@ -480,9 +522,17 @@ static void test_job_projected_loop(void **state)
                             sizeof(double) * 3 * r[0].surf.nu * r[0].surf.nv);
         assert_true(r[1].max_abs == r[0].max_abs);
         assert_int_equal(r[1].status, r[0].status);
+        /* The check pass's sums (in two parts, merged) against feet found
+         * here without it: the nearest of a dense sample, then nf_project. */
+        long within = 0;
+        double ss = 0.0;
+        brute_check(&r[0].surf, xyz, MPTS, o_tol, &within, &ss);
+        assert_true(fabs(r[0].within_pct - 100.0 * (double)within / MPTS) <= 100.0 / MPTS);
+        assert_near(r[0].rms, sqrt(ss / MPTS), 1e-6 * r[0].rms);
         cf_fitjob_result_free(&r[0]);
         cf_fitjob_result_free(&r[1]);
     }
+    free(xyz);
     unlink(p);
 }
 

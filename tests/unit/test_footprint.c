@@ -100,6 +100,45 @@ static double *sample(const nf_surf_t *t, long M, double ua, double ub, double s
     return pts;
 }
 
+/* Two footprints of parts of the points merged (nf_footprint_merge) count
+ * what one footprint of all of them counts, cell by cell; a saturated
+ * cell stays saturated; another surface's footprint does not merge. */
+static void test_merge(void **state)
+{
+    (void)state;
+    ref_seed(1422);
+    nf_surf_t s, t;
+    double *sm = part(&s, 9, 7, 0.0), *tm = part(&t, 9, 7, 0.0);
+    size_t bytes;
+    void *m1 = fp_mem(&s, &bytes), *m2 = fp_mem(&s, &bytes), *m3 = fp_mem(&s, &bytes),
+         *m4 = fp_mem(&t, &bytes);
+    nf_footprint_t all, a, b, other;
+    assert_int_equal(nf_footprint_init(&all, &s, m1, bytes), NF_OK);
+    assert_int_equal(nf_footprint_init(&a, &s, m2, bytes), NF_OK);
+    assert_int_equal(nf_footprint_init(&b, &s, m3, bytes), NF_OK);
+    assert_int_equal(nf_footprint_init(&other, &t, m4, bytes), NF_OK);
+    for (int k = 0; k < 4000; k++) {
+        const double u = ref_rand(0.0, 0.7), v = ref_rand(0.2, 1.0);
+        assert_int_equal(nf_footprint_add(&all, u, v), NF_OK);
+        assert_int_equal(nf_footprint_add(k % 3 ? &a : &b, u, v), NF_OK);
+    }
+    assert_int_equal(nf_footprint_merge(&a, &b), NF_OK);
+    assert_true(all.points == 4000 && a.points == 4000);
+    assert_memory_equal(a.count, all.count, sizeof(uint32_t) * (size_t)(all.cu * all.cv));
+    a.count[0] = UINT32_MAX - 1;
+    b.count[0] = 5;
+    assert_int_equal(nf_footprint_merge(&a, &b), NF_OK);
+    assert_true(a.count[0] == UINT32_MAX);
+    assert_int_equal(nf_footprint_merge(&a, &other), NF_EARG);
+    assert_int_equal(nf_footprint_merge(&a, NULL), NF_EARG);
+    free(m1);
+    free(m2);
+    free(m3);
+    free(m4);
+    free(sm);
+    free(tm);
+}
+
 /* Counts per cell against the cell computed by hand (uniform knots: span
  * width 1 / (n - 3), cells half of it), and the statistics of a footprint
  * covering u < 0.5 exactly. */
@@ -427,9 +466,8 @@ static void test_rows_and_boundaries(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cells_and_stats),
-        cmocka_unit_test(test_pin_dense),
-        cmocka_unit_test(test_honest_edges),
+        cmocka_unit_test(test_cells_and_stats),     cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_pin_dense),           cmocka_unit_test(test_honest_edges),
         cmocka_unit_test(test_rows_and_boundaries),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -93,6 +93,66 @@ static void test_counts(void **state)
     ref_surf_free(&s);
 }
 
+/* A pass counted in two parts and merged (nf_knotsel_merge) holds what one
+ * pass over all points holds: the same counts, bounds and sums (to
+ * rounding), so the chooser picks the same knots. */
+static void test_merge_all(void **state)
+{
+    (void)state;
+    ref_seed(17);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 12, 10, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    const long nd = NF_KNOTSEL_DOUBLES(12, 10, 3, 3);
+    double *m1 = malloc(sizeof(double) * (size_t)nd), *m2 = malloc(sizeof(double) * (size_t)nd),
+           *m3 = malloc(sizeof(double) * (size_t)nd);
+    nf_knotsel_t all, one, two, other;
+    const double tol = 0.2;
+    assert_int_equal(nf_knotsel_init(&all, &s, tol, m1), NF_OK);
+    assert_int_equal(nf_knotsel_init(&one, &s, tol, m2), NF_OK);
+    assert_int_equal(nf_knotsel_init(&two, &s, tol, m3), NF_OK);
+    for (int k = 0; k < 6000; k++) {
+        /* misfit in one corner, as a feature draws knots */
+        const double u = ref_rand(0.0, 1.0), v = ref_rand(0.0, 1.0),
+                     d = (u > 0.6 && v < 0.3 ? 0.8 : 0.1) * ref_rand(-1.0, 1.0);
+        nf_knotsel_add(&all, u, v, d);
+        nf_knotsel_add(k < 2500 ? &one : &two, u, v, d);
+    }
+    assert_int_equal(nf_knotsel_merge(&one, &two), NF_OK);
+    assert_int_equal(one.n, all.n);
+    assert_int_equal(one.out, all.out);
+    assert_near(one.rss, all.rss, 1e-12 * all.rss);
+    assert_near(one.g, all.g, 1e-12 * all.g);
+    for (int dir = 0; dir < 2; dir++)
+        for (int i = 0; i < (dir ? 7 : 9); i++) {
+            assert_int_equal(nf_knotsel_span_points(&one, dir, i),
+                             nf_knotsel_span_points(&all, dir, i));
+            const double r = nf_knotsel_span_rss(&all, dir, i);
+            assert_near(nf_knotsel_span_rss(&one, dir, i), r, 1e-12 * (1 + r));
+        }
+    nf_knotsel_opts_t o;
+    memset(&o, 0, sizeof o);
+    nf_knotsel_cand_t ca[64], cb[64];
+    int na = 0, nb = 0, sa = 0, sb = 0;
+    nf_knotsel_choose(&all, &o, ca, 64, &na, &sa);
+    nf_knotsel_choose(&one, &o, cb, 64, &nb, &sb);
+    assert_true(na > 0);
+    assert_int_equal(nb, na);
+    assert_int_equal(sb, sa);
+    for (int i = 0; i < na; i++) {
+        assert_int_equal(cb[i].dir, ca[i].dir);
+        assert_int_equal(cb[i].span, ca[i].span);
+        assert_near(cb[i].x, ca[i].x, 1e-12);
+    }
+    /* Another surface's or tolerance's counts do not merge. */
+    assert_int_equal(nf_knotsel_init(&other, &s, 2 * tol, m3), NF_OK);
+    assert_int_equal(nf_knotsel_merge(&one, &other), NF_EARG);
+    assert_int_equal(nf_knotsel_merge(NULL, &one), NF_EARG);
+    free(m1);
+    free(m2);
+    free(m3);
+    ref_surf_free(&s);
+}
+
 /* Grid of gx x gy points within tolerance (d = 0), rows at (i + 0.5)/gx. */
 static void grid(nf_knotsel_t *a, int gx, int gy)
 {
@@ -790,13 +850,21 @@ static void test_loop_bump(void **state)
 int main(void)
 {
     const struct CMUnitTest t[] = {
-        cmocka_unit_test(test_counts),     cmocka_unit_test(test_concentrated),
-        cmocka_unit_test(test_sides),      cmocka_unit_test(test_side_balance),
-        cmocka_unit_test(test_side_depth), cmocka_unit_test(test_merge),
-        cmocka_unit_test(test_rows),       cmocka_unit_test(test_gain_order),
-        cmocka_unit_test(test_caps),       cmocka_unit_test(test_verdict),
-        cmocka_unit_test(test_budget),     cmocka_unit_test(test_budget_near_goal),
-        cmocka_unit_test(test_alpha),      cmocka_unit_test(test_loop_bump),
+        cmocka_unit_test(test_counts),
+        cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_sides),
+        cmocka_unit_test(test_side_balance),
+        cmocka_unit_test(test_side_depth),
+        cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_merge_all),
+        cmocka_unit_test(test_rows),
+        cmocka_unit_test(test_gain_order),
+        cmocka_unit_test(test_caps),
+        cmocka_unit_test(test_verdict),
+        cmocka_unit_test(test_budget),
+        cmocka_unit_test(test_budget_near_goal),
+        cmocka_unit_test(test_alpha),
+        cmocka_unit_test(test_loop_bump),
     };
     return cmocka_run_group_tests(t, NULL, NULL);
 }
