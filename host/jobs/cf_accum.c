@@ -9,6 +9,9 @@ typedef struct half {
     const double *rows;
     long n, bad;
     int rc;
+    int id;
+    cf_accum_hook_t hook;
+    void *ctx;
 } half_t;
 
 static void *run_half(void *arg)
@@ -16,15 +19,29 @@ static void *run_half(void *arg)
     half_t *h = arg;
     h->bad = -1;
     h->rc = nf_fit_add_rows(h->f, h->rows, h->n, &h->bad);
+    if (!h->rc && h->hook)
+        h->hook(h->ctx, h->id, h->rows, h->n);
     return 0;
 }
 
 int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows, long n, long *bad)
 {
-    if (!sh || n < 2)
-        return nf_fit_add_rows(f, rows, n, bad);
+    return cf_accum_rows_hook(f, sh, serial, rows, n, bad, NULL, NULL);
+}
+
+int cf_accum_rows_hook(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows, long n, long *bad,
+                       cf_accum_hook_t hook, void *ctx)
+{
+    if (!sh || n < 2) {
+        half_t a = {f, rows, n, -1, 0, 0, hook, ctx};
+        run_half(&a);
+        if (a.rc && bad)
+            *bad = a.bad;
+        return a.rc;
+    }
     const long n1 = n / 2;
-    half_t a = {f, rows, n1, -1, 0}, b = {sh, rows + 5 * n1, n - n1, -1, 0};
+    half_t a = {f, rows, n1, -1, 0, 0, hook, ctx},
+           b = {sh, rows + 5 * n1, n - n1, -1, 0, 1, hook, ctx};
     pthread_t th;
     /* Without a thread the halves run in turn: the grouping stays. */
     const int on = !serial && !pthread_create(&th, 0, run_half, &b);

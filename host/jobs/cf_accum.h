@@ -14,4 +14,13 @@
  * is the index (into rows) of the first offending row found. */
 int cf_accum_rows(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows, long n, long *bad);
 
+/* After each half's rows are in (half 0: f's, 1: sh's; a chunk not split
+ * is half 0), on that half's thread: the caller's own per-row work. */
+typedef void (*cf_accum_hook_t)(void *ctx, int half, const double *rows, long n);
+
+/* cf_accum_rows, then hook(ctx, half, ...) on each half accumulated
+ * without error (hook NULL: none). */
+int cf_accum_rows_hook(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows, long n, long *bad,
+                       cf_accum_hook_t hook, void *ctx);
+
 #endif

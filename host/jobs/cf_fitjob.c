@@ -375,8 +375,9 @@ typedef struct pass {
     proj_t pj, pj2; /* pj2: the second core's searches (feet_batch) */
     const nf_surf_t *proj;
     const weigh_t *wt;
-    long nin;      /* the first nin of the job's feet are on proj (Boehm): Newton from them */
-    cf_edges_t ed; /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
+    long nin;       /* the first nin of the job's feet are on proj (Boehm): Newton from them */
+    cf_edges_t ed;  /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
+    cf_edges_t ed2; /* with the shard: its half's footprint (edges_hook), merged into ed */
     long points, clamped, nfar, dropped;
     double ss0, mx0; /* |distance| to proj of the points projected */
 } pass_t;
@@ -574,7 +575,7 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
     if (rc)
         *bad = uv != in && b >= 0 ? j->src[b] : b;
     /* The footprint of the rows in the fit (weight > 0): where data are. */
-    if (!rc && cols == 5)
+    if (!rc && cols == 5 && !ps->fp.hook) /* with the hook: on the halves' threads */
         cf_edges_add_rows(&ps->ed, uv, m, 5);
     for (long k = 0; !rc && cols == 6 && ps->ed.mem && k < m; k++)
         if (uv[6 * k + 5] > 0)
@@ -583,10 +584,28 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
     return rc;
 }
 
+/* Footprint counts of the second half into the first's (cf_edges_add of
+ * every row: the same counts as one thread's, saturating alike). */
+static void edges_merge(cf_edges_t *a, const cf_edges_t *b)
+{
+    if (a->mem && b->mem)
+        (void)nf_footprint_merge(&a->fp, &b->fp); /* the same net: cannot fail */
+}
+
+/* A fit pass's rows with the shard: each half's footprint on its thread
+ * (cf_fitpass's hook), the second's merged before the pins. */
+static void edges_hook(void *ctx, int half, const double *rows, long n)
+{
+    struct pass *ps = ctx;
+    cf_edges_add_rows(half ? &ps->ed2 : &ps->ed, rows, n, 5);
+}
+
 static int pass_solve(cf_fitjob_t *j, pass_t *ps, nf_surf_t *out, const char *name, char *msg,
                       size_t ml)
 {
     nf_solve_opts_t so = {j->o.solve_tol, (int)j->o.max_iter, j->o.probe};
+    edges_merge(&ps->ed, &ps->ed2);
+    cf_edges_free(&ps->ed2);
     /* Outside the footprint the nominal, not an extrapolation (issue 14). */
     long np = cf_edges_pin(&ps->ed, &j->base, &ps->fp);
     if (np < 0)
@@ -600,6 +619,7 @@ static void pass_free(pass_t *ps)
     proj_free(&ps->pj);
     proj_free(&ps->pj2);
     cf_edges_free(&ps->ed);
+    cf_edges_free(&ps->ed2);
 }
 
 /* The live point xyz into the hold (doubling up to
@@ -862,20 +882,6 @@ static int halves_error(const run_t *r, const cf_fitsrc_t half[2], half_t h[2])
     return e->rc;
 }
 
-/* Footprint counts of the second half into the first's (cf_edges_add of
- * every row: the same counts as one thread's, saturating alike). */
-static void edges_merge(cf_edges_t *a, const cf_edges_t *b)
-{
-    if (!a->mem || !b->mem)
-        return;
-    long n = (long)a->fp.cu * a->fp.cv;
-    for (long i = 0; i < n; i++) {
-        uint64_t c = (uint64_t)a->fp.count[i] + b->fp.count[i];
-        a->fp.count[i] = c > UINT32_MAX ? UINT32_MAX : (uint32_t)c;
-    }
-    a->fp.points += b->fp.points;
-}
-
 /* A pass of given parameters read in halves: the first into the job's
  * fitter and footprint, the second into the shard and a footprint of its
  * own, merged (the solve merges the shard). */
@@ -919,6 +925,10 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
     if (!rc && shard) {
         ps->fp.serial = j->o.cores < 2;
         j->used2 |= !ps->fp.serial;
+        if (ps->ed.mem && !cf_edges_begin(&ps->ed2, cur)) { /* else one footprint, in pass_rows */
+            ps->fp.hook = edges_hook;
+            ps->fp.hook_ctx = ps;
+        }
     }
     if (feet && ps->proj)
         ps->nin = j->nfeet;

@@ -85,7 +85,8 @@ int cf_fitpass_rows(cf_fitpass_t *ps, const double *rows, long n, int cols, long
     int rc = 0;
     long b = -1;
     if (cols == 5)
-        rc = cf_accum_rows(&ps->f, ps->threads > 1 ? ps->sh : NULL, ps->serial, rows, n, &b);
+        rc = cf_accum_rows_hook(&ps->f, ps->threads > 1 ? ps->sh : NULL, ps->serial, rows, n, &b,
+                                ps->hook, ps->hook_ctx);
     else
         for (long k = 0; k < n && !rc; k++) {
             const double *q = rows + 6 * k;

@@ -21,8 +21,12 @@ typedef struct cf_fitpass {
     nf_fit_t *sh; /* threads 2: the second core's accumulator (cf_accum), its
                    * state at the start of the block */
     int threads;
-    int serial;         /* threads 2 on one core: the shard's half after the first's
+    int serial; /* threads 2 on one core: the shard's half after the first's
                          * (the sums two cores give; set by the caller after begin) */
+    /* Called on each half's thread after its rows of 5 are in (cf_accum_rows_hook); NULL:
+     * none. */
+    void (*hook)(void *ctx, int half, const double *rows, long n);
+    void *hook_ctx;
     const nf_surf_t *s; /* the space fitted in (names control points in messages) */
     long rejected;      /* rows of weight 0, left out */
     nf_solve_stats_t st;

@@ -342,6 +342,58 @@ static void test_shard_budget(void **state)
 
 /* The row kernel alone: it takes a raster whole (sums as the dense R^T R),
  * stops after a row of one v shorter than NF_ROW_MIN and at a bad row. */
+/* cf_accum_rows_hook: each row reaches the hook once, after it is
+ * accumulated, on its half (0: the job's, 1: the shard's), whether the
+ * halves run on two threads or in turn. */
+typedef struct marks {
+    const double *pts;
+    unsigned char *seen;
+    long per[2];
+} marks_t;
+
+static void mark_rows(void *ctx, int half, const double *rows, long n)
+{
+    marks_t *m = ctx;
+    const long i0 = (rows - m->pts) / 5;
+    for (long k = 0; k < n; k++)
+        m->seen[i0 + k] += (unsigned char)(1 + half);
+    m->per[half] += n;
+}
+
+static void test_hook(void **state)
+{
+    (void)state;
+    ref_seed(31);
+    nf_surf_t s;
+    ref_surf_random(&s, 3, 3, 9, 7, 0, 1, 0, 2, 1.0, 1.0);
+    long M;
+    double *pts = points(&s, 0, &M);
+    for (int serial = 0; serial < 2; serial++) {
+        job_t t;
+        job_start(&t, &s, 0);
+        assert_int_equal(nf_fit_shard_init(&t.sh, &t.f, &t.ar), NF_OK);
+        marks_t m = {pts, calloc((size_t)M, 1), {0, 0}};
+        assert_non_null(m.seen);
+        for (long t0 = 0; t0 < M; t0 += 101) {
+            long n = M - t0 < 101 ? M - t0 : 101;
+            assert_int_equal(
+                cf_accum_rows_hook(&t.f, &t.sh, serial, pts + 5 * t0, n, NULL, mark_rows, &m),
+                NF_OK);
+        }
+        assert_int_equal(m.per[0] + m.per[1], M);
+        for (long k = 0; k < M; k++) { /* once each; a chunk's second half on the shard */
+            const long c0 = k - k % 101, n = M - c0 < 101 ? M - c0 : 101;
+            assert_int_equal(m.seen[k], n >= 2 && k - c0 >= n / 2 ? 2 : 1);
+        }
+        assert_int_equal(nf_fit_shard_merge(&t.f, &t.sh), NF_OK);
+        assert_int_equal(t.f.npoints, M);
+        free(m.seen);
+        free(t.mem);
+    }
+    free(pts);
+    ref_surf_free(&s);
+}
+
 static void test_row_kernel(void **state)
 {
     (void)state;
@@ -484,7 +536,7 @@ int main(void)
         cmocka_unit_test(test_mixed_degrees),      cmocka_unit_test(test_weights_all_paths),
         cmocka_unit_test(test_span_search),        cmocka_unit_test(test_shard_budget),
         cmocka_unit_test(test_bad_row_index),      cmocka_unit_test(test_row_kernel),
-        cmocka_unit_test(test_binned_random),
+        cmocka_unit_test(test_binned_random),      cmocka_unit_test(test_hook),
     };
     return cmocka_run_group_tests_name("accum", tests, NULL, NULL);
 }
