@@ -733,9 +733,6 @@ static int rewind_src(const run_t *r)
     return r->src->rewind(r->src->ctx, r->msg, r->ml);
 }
 
-/* Room for a pass in halves on cur's net (opts.cores): a second
- * accumulator of at most CF_FITJOB_SHARD_MAX bytes within the board's
- * arena, for a source that may split (given parameters). */
 /* A second accumulator for cur's net is small (CF_FITJOB_SHARD_MAX) and
  * the pass with it within the board's bytes. */
 static int shard_fits(const cf_fitjob_t *j, const nf_surf_t *cur)
@@ -745,6 +742,9 @@ static int shard_fits(const cf_fitjob_t *j, const nf_surf_t *cur)
     return sh >= 0 && sh <= CF_FITJOB_SHARD_MAX && need > 0 && need <= NF_ARENA_BYTES;
 }
 
+/* Room for a pass in halves on cur's net (opts.cores): a second
+ * accumulator of at most CF_FITJOB_SHARD_MAX bytes within the board's
+ * arena, for a source that may split (given parameters). */
 static int halves_room(const cf_fitjob_t *j, const run_t *r, const nf_surf_t *cur)
 {
     if (j->o.cores < 2 || j->o.threads > 1 || !r->src->split || r->src->cols != 5)
@@ -1073,9 +1073,8 @@ static void *measure_half(void *arg)
     return NULL;
 }
 
-/* measure of given parameters with nothing per span, in halves: the sums
- * of each merged (the histogram by its bins). */
-/* b's sums into out's (a pass measured in parts). */
+/* b's sums into out's (a pass measured in parts; the histogram by its
+ * bins). */
 static void resid_merge(resid_t *out, const resid_t *b)
 {
     out->ss += b->ss;
@@ -1201,6 +1200,8 @@ static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *c
     return c[0].fp.rc ? c[0].fp.rc : c[1].fp.rc;
 }
 
+/* measure of given parameters with nothing per span, in halves: the sums
+ * of each merged. */
 static int measure_halves(run_t *r, const nf_surf_t *s, const cf_fitsrc_t half[2], double cut,
                           resid_t *out, int want_hist)
 {
