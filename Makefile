@@ -196,8 +196,10 @@ fwcheck: $(FW_OBJ) $(BUILD)/cellsim
 	echo "fwcheck: cellsim holds no cellfit command, job or PLC server"
 
 # Each stage prints its wall time, so a slow CI run says where it went.
-# The builds use every core (TEST_JOBS); the tests themselves run one at a
-# time (each stage's run is one recipe), as their timing checks assume.
+# The builds use every core (TEST_JOBS); unit tests and the valgrind and
+# emulated runs go two at a time (scripts/unit-run.sh, mk/arch-test.sh),
+# test_plcsrv alone; the CLI scripts, whose rigs and servers keep time, one
+# at a time, with only the later stages' builds beside them at nice 19.
 STAGE = sh scripts/stage.sh
 TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 test: deps
@@ -205,9 +207,9 @@ test: deps
 	@$(STAGE) all $(MAKE) -j$(TEST_JOBS) all
 	@$(STAGE) fwcheck $(MAKE) fwcheck
 	@$(STAGE) unit-sim $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-sim unit-run
+	@$(STAGE) test-cli sh scripts/beside.sh build/prebuild.log "$(MAKE) test-prebuild" $(MAKE) test-cli
 	@$(STAGE) unit-asan $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
 	@$(STAGE) unit-clang $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-clang CC=clang unit-run
-	@$(STAGE) test-cli sh scripts/beside.sh build/prebuild.log "$(MAKE) test-prebuild" $(MAKE) test-cli
 	@$(STAGE) test-extra $(MAKE) test-extra
 	@$(STAGE) boards $(MAKE) -j$(TEST_JOBS) boards
 	@$(STAGE) boards-test $(MAKE) boards-test

@@ -21,7 +21,7 @@ t0=$(date +%s)
 # shellcheck disable=SC2086 # sid and io are commands and their options, or nothing
 $sid nice -n 19 $io sh -c "$bg" >"$log" 2>&1 &
 pid=$!
-stop() { [ -z "$sid" ] || kill -TERM -- "-$pid" 2>/dev/null || true; }
+stop() { [ -z "$sid" ] || kill -TERM "-$pid" 2>/dev/null || true; }
 trap 'stop; exit 1' INT TERM
 rc=0
 "$@" || rc=$?
