@@ -97,7 +97,7 @@ TEST_EXTRA :=
 CF_VERSION := 0.13.0
 CF_REV := $(shell git describe --always --dirty --abbrev=12 2>/dev/null || echo unknown)
 
-.PHONY: all firmware cellfit cellsim test check unit unit-run demo bench clean lint format deps \
+.PHONY: all firmware cellfit cellsim test check unit unit-run unit-bins test-prebuild demo bench clean lint format deps \
 	test-cli fwcheck test-extra
 all: $(if $(filter 1,$(BOARD_CROSS)),,cellfit $(if $(SIM_SRC),cellsim)) firmware
 
@@ -167,9 +167,18 @@ $(BUILD)/tests/%.o: tests/unit/%.c | $(BUILD)/gen/cf_rev.h
 $(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(A_HOST) $(A_LIB) $(A_HAL) $(A_FW)
 	$(CC) $(LDSAN) -o $@ $^ -lcmocka $(LIBS)
 
-# Unit tests of one build tree, each binary in turn; cmocka prints its summary.
+# Unit tests of one build tree, UNIT_JOBS at a time (scripts/unit-run.sh),
+# each in its own CF_TEST_TMP; their outputs (cmocka's summaries) follow in
+# order, with seconds. UNIT_SOLO run alone afterwards: test_plcsrv times its
+# server's idle rule. UNIT_FIRST (the slowest) start first.
+UNIT_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
+UNIT_SOLO := test_plcsrv
+UNIT_FIRST := test_foot test_project test_points test_quad test_fmt
+UNIT_ORDER = $(filter $(patsubst %,$(BUILD)/tests/%,$(UNIT_FIRST)),$(TEST_BIN)) \
+	$(filter-out $(patsubst %,$(BUILD)/tests/%,$(UNIT_FIRST)),$(TEST_BIN))
+unit-bins: $(TEST_BIN)
 unit-run: $(TEST_BIN)
-	@set -e; mkdir -p $(BUILD)/tmp; for t in $(TEST_BIN); do echo "== $$t"; CF_TEST_TMP=$(BUILD)/tmp $$t; done
+	@sh scripts/unit-run.sh $(UNIT_JOBS) $(BUILD)/tmp "$(UNIT_SOLO)" $(UNIT_ORDER)
 
 deps:
 	@sh scripts/deps.sh test
@@ -187,8 +196,10 @@ fwcheck: $(FW_OBJ) $(BUILD)/cellsim
 	echo "fwcheck: cellsim holds no cellfit command, job or PLC server"
 
 # Each stage prints its wall time, so a slow CI run says where it went.
-# The builds use every core (TEST_JOBS); the tests themselves run one at a
-# time (each stage's run is one recipe), as their timing checks assume.
+# The builds use every core (TEST_JOBS); unit tests and the valgrind and
+# emulated runs go two at a time (scripts/unit-run.sh, mk/arch-test.sh),
+# test_plcsrv alone; the CLI scripts, whose rigs and servers keep time, one
+# at a time, with only the later stages' builds beside them at nice 19.
 STAGE = sh scripts/stage.sh
 TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 test: deps
@@ -196,15 +207,28 @@ test: deps
 	@$(STAGE) all $(MAKE) -j$(TEST_JOBS) all
 	@$(STAGE) fwcheck $(MAKE) fwcheck
 	@$(STAGE) unit-sim $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-sim unit-run
+	@$(STAGE) test-cli sh scripts/beside.sh build/prebuild.log "$(MAKE) test-prebuild" $(MAKE) test-cli
 	@$(STAGE) unit-asan $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
 	@$(STAGE) unit-clang $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-clang CC=clang unit-run
-	@$(STAGE) test-cli $(MAKE) test-cli
 	@$(STAGE) test-extra $(MAKE) test-extra
 	@$(STAGE) boards $(MAKE) -j$(TEST_JOBS) boards
 	@$(STAGE) boards-test $(MAKE) boards-test
 	@$(STAGE) lint $(MAKE) lint
 	@cat build/stages.txt
 	@echo "make test: all passed"
+
+# The builds of the stages after test-cli (no test runs), made beside it at
+# the lowest priority (scripts/beside.sh): test-cli mostly waits on its
+# simulated rigs and leaves the cores idle. Each stage still runs its own
+# make, which then finds little or nothing to do, and fails on an error.
+test-prebuild:
+	-$(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-bins
+	-$(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-clang CC=clang unit-bins
+	-$(MAKE) -j$(TEST_JOBS) arch-a64-bins
+	-$(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 fuzz-bins
+	-$(MAKE) -j$(TEST_JOBS) fuzz-build
+	-$(MAKE) -j$(TEST_JOBS) boards
+	@echo "test-prebuild: done"
 
 # Every tests/cli/*.sh script (lib.sh and engines.sh aside: they are
 # sourced), each given the cellfit binary (and cellsim beside it); each

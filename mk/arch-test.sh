@@ -43,20 +43,41 @@ if [ "$NAME" = westmere ]; then
         no "CELLFIT_CPU=x86-64-v3 not refused: $(cat "$T/err")"
 fi
 
-# Unit tests.
+# Unit tests, ARCH_JOBS at a time (one emulator on each core; a lane takes
+# the next unclaimed binary, mkdir being atomic), each in its own
+# CF_TEST_TMP; their verdicts follow in the order given.
 npass=0 nskip=0 nfail=0
-mkdir -p "$T/tmp"
+mkdir -p "$T/tmp" "$T/claim"
+lane() {
+    i=0
+    for t in "$@"; do
+        i=$((i + 1))
+        mkdir "$T/claim/$i" 2>/dev/null || continue
+        b=$(basename "$t")
+        s=$(date +%s)
+        mkdir -p "$T/tmp/$b"
+        CF_TEST_TMP="$T/tmp/$b" $EMU "$t" >"$T/$b.log" 2>&1
+        echo "$? $(($(date +%s) - s))" >"$T/$b.rc"
+    done
+}
+w=0
+while [ $w -lt "${ARCH_JOBS:-$(nproc 2>/dev/null || echo 1)}" ]; do
+    lane "$@" &
+    PIDS="$PIDS $!"
+    w=$((w + 1))
+done
+for p in $PIDS; do wait "$p"; done
+PIDS=
 for t in "$@"; do
     b=$(basename "$t")
-    s=$(date +%s)
-    CF_TEST_TMP="$T/tmp" $EMU "$t" >"$T/$b.log" 2>&1
-    rc=$?
+    rc=1 secs=0
+    [ -s "$T/$b.rc" ] && read -r rc secs <"$T/$b.rc"
     p=$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' "$T/$b.log")
     k=$(sed -n 's/^\[  SKIPPED \] \([0-9]*\) test.*/\1/p' "$T/$b.log")
     f=$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' "$T/$b.log")
     npass=$((npass + ${p:-0})) nskip=$((nskip + ${k:-0})) nfail=$((nfail + ${f:-0}))
     if [ $rc -eq 0 ] && [ -n "$p" ]; then
-        ok "unit $b: ${p} passed${k:+, $k skipped} ($(($(date +%s) - s)) s)"
+        ok "unit $b: ${p} passed${k:+, $k skipped} ($secs s)"
     else
         no "unit $b: exit $rc"
         grep -E 'FAILED|ERROR|LINE' "$T/$b.log" | head -10 | sed 's/^/     /'

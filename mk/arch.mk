@@ -51,7 +51,7 @@ ARCH_EMU_TESTS ?= test_basis test_fit test_pcg test_refine test_curvefit test_co
 ARCH_A64_TESTS ?= $(ARCH_EMU_TESTS)
 ARCH_X86_TESTS ?= $(ARCH_EMU_TESTS)
 
-.PHONY: test-westmere test-aarch64
+.PHONY: test-westmere test-aarch64 arch-a64-bins
 
 test-westmere:
 	$(MAKE) BOARD=sim BUILD=build/t-sim $(patsubst %,build/t-sim/tests/%,$(ARCH_X86_TESTS))
@@ -59,12 +59,15 @@ test-westmere:
 	@ARCH_CC="$(CC)" sh mk/arch-test.sh westmere "$(QEMU_X86)" build/cellfit build/cellfit \
 	  $(patsubst %,build/t-sim/tests/%,$(ARCH_X86_TESTS))
 
-test-aarch64:
-	$(MAKE) TARGET=$(A64) cellfit cellsim
-	$(MAKE) TARGET=$(A64) BOARD=sim BUILD=build/$(A64)/t-sim \
-	  $(patsubst %,build/$(A64)/t-sim/tests/%,$(ARCH_A64_TESTS))
+test-aarch64: arch-a64-bins
 	$(MAKE) cellfit
 	@sh mk/arch-test.sh aarch64 "$(QEMU_A64)" build/$(A64)/cellfit build/cellfit \
+	  $(patsubst %,build/$(A64)/t-sim/tests/%,$(ARCH_A64_TESTS))
+
+# The cross builds alone (also made ahead by make test's test-prebuild).
+arch-a64-bins:
+	$(MAKE) TARGET=$(A64) cellfit cellsim
+	$(MAKE) TARGET=$(A64) BOARD=sim BUILD=build/$(A64)/t-sim \
 	  $(patsubst %,build/$(A64)/t-sim/tests/%,$(ARCH_A64_TESTS))
 
 TEST_EXTRA += test-westmere test-aarch64

@@ -32,7 +32,7 @@ FUZZ_COMMON := $(BUILD)/fuzz/fuzz_util.o $(BUILD)/fuzz/fuzz_hal.o $(BUILD)/tests
 	$(FUZZ_UNIT_OBJ) \
 	$(filter-out $(patsubst %.c,$(BUILD)/%.o,$(FUZZ_UNITS)),$(HOST_OBJ) $(filter-out $(BUILD)/host/cmd/main.o,$(CMD_OBJ)) $(HAL_OBJ) $(FW_OBJ))
 
-.PHONY: fuzz fuzz-bins fuzz-run test-fuzz fuzz-regress-run valgrind valgrind-run lint-fuzz
+.PHONY: fuzz fuzz-build fuzz-bins fuzz-run test-fuzz fuzz-regress-run valgrind valgrind-run lint-fuzz
 
 $(BUILD)/fuzz/%.o: tests/fuzz/%.c $(wildcard tests/fuzz/*.h tests/unit/*.h lib/*.h host/*/*.h hal/*.h firmware/*.h)
 	@mkdir -p $(@D)
@@ -55,10 +55,13 @@ fuzz-bins: $(FUZZ_BIN)
 
 # libFuzzer: new inputs go to build/fuzz/work/<name> (the committed corpus
 # is only read); final figures in build/fuzz/summary.txt.
-fuzz:
+fuzz: fuzz-build
+	$(MAKE) BOARD=sim BUILD=build/fuzz FUZZ_LIBFUZZER=1 fuzz-run
+
+# The libFuzzer builds alone (also made ahead by make test's test-prebuild).
+fuzz-build:
 	$(MAKE) -j$(FUZZ_JOBS) BOARD=sim BUILD=build/fuzz CC=clang SAN=1 OPT="-O1 -fsanitize=fuzzer-no-link" \
 	  FUZZ_LIBFUZZER=1 fuzz-bins
-	$(MAKE) BOARD=sim BUILD=build/fuzz FUZZ_LIBFUZZER=1 fuzz-run
 
 # FUZZ_JOBS targets at a time (mk/fuzz-run.sh), one core each.
 FUZZ_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
@@ -91,18 +94,15 @@ TEST_EXTRA += fuzz-short
 # fitter, basis, refinement, quads, journal, PLC map and state machine, scan
 # job): the build/t-sim binaries make test has already built, without
 # sanitizers (valgrind cannot run ASan binaries).
-VALGRIND_TESTS := test_basis test_fit test_refine test_quad test_jnl test_plc test_scan
+VALGRIND_TESTS := test_quad test_fit test_basis test_refine test_jnl test_plc test_scan
 valgrind:
 	$(MAKE) BOARD=sim BUILD=build/t-sim valgrind-run
 
+# Two at a time (scripts/unit-run.sh; test_quad alone takes over half the
+# serial time), each with its own CF_TEST_TMP; a memcheck error fails it.
+VALGRIND_WRAP := valgrind -q --error-exitcode=1 --leak-check=full --errors-for-leak-kinds=definite,indirect
 valgrind-run: $(patsubst %,$(BUILD)/tests/%,$(VALGRIND_TESTS))
-	@set -e; mkdir -p $(BUILD)/tmp; for t in $(VALGRIND_TESTS); do \
-	  s=$$(date +%s); \
-	  if ! CF_TEST_TMP=$(BUILD)/tmp valgrind -q --error-exitcode=1 --leak-check=full \
-	      --errors-for-leak-kinds=definite,indirect $(BUILD)/tests/$$t >$(BUILD)/tmp/$$t.vg 2>&1; then \
-	    tail -40 $(BUILD)/tmp/$$t.vg; echo "FAIL valgrind $$t"; exit 1; fi; \
-	  echo "ok   valgrind $$t: no memcheck error ($$(( $$(date +%s) - s )) s)"; \
-	done
+	@UNIT_WRAP="$(VALGRIND_WRAP)" sh scripts/unit-run.sh $(UNIT_JOBS) $(BUILD)/tmp/vg "" $^
 
 TEST_EXTRA += valgrind
 

@@ -9,12 +9,15 @@ set -eu
 jobs="-j $(nproc 2>/dev/null || echo 1)"
 files=$(ls firmware/*.[ch] lib/*.[ch] include/*.h examples/*.c host/*/*.[ch] hal/*.[ch] sim/*.[ch] tests/unit/*.[ch] boards/*/*.[ch] bench/*.[ch] 2>/dev/null || true)
 bad=0
-for f in $files; do
-    if ! clang-format --dry-run -Werror "$f" >/dev/null 2>&1; then
-        echo "lint: $f is not clang-formatted (make format)"
-        bad=1
-    fi
-done
+# clang-format one file a process, on every core (xargs -P); a file it
+# finds unformatted prints a line, and any line fails the lint.
+# shellcheck disable=SC2086 # files: one name a word
+unformatted=$(printf '%s\n' $files | xargs -P "$(nproc 2>/dev/null || echo 1)" -n 1 sh -c \
+    'clang-format --dry-run -Werror "$1" >/dev/null 2>&1 || echo "lint: $1 is not clang-formatted (make format)"' sh)
+if [ -n "$unformatted" ]; then
+    printf '%s\n' "$unformatted" | sort
+    bad=1
+fi
 # cppcheck: the firmware with each board's configuration, the rest as host code.
 cppcheck $jobs --quiet --error-exitcode=1 --enable=warning,performance,portability \
     --inline-suppr --suppress=missingIncludeSystem -Iboards/linux-cell -Ifirmware -Ilib \
