@@ -469,6 +469,22 @@ static void *feet_part(void *arg)
 /* Below this many points a batch's feet stay on one thread. */
 #define FEET_SPLIT 512
 
+/* One search grid for both halves of a batch of got points (the first is
+ * point n0; the first nin have starts): built in pj when some point of the
+ * batch has no start, then lent to pj2 (the grid's counters are each
+ * thread's). 0 or CF_ENOMEM. */
+static int grid_share(proj_t *pj, proj_t *pj2, long got, long n0, long nin)
+{
+    int rc;
+    if (!pj->ready && nin < n0 + got && (rc = proj_foot(pj, NULL, NULL)))
+        return rc;
+    if (pj->ready && !pj2->ready) {
+        pj2->g = pj->g;
+        pj2->ready = pj2->borrowed = 1;
+    }
+    return 0;
+}
+
 /* The feet of a batch of got points (the first is point n0 of the pass)
  * into res: on two threads when the job has two cores (opts.cores), the
  * second half with pj2; the same feet either way. direct: a kept foot as
@@ -481,15 +497,9 @@ static int feet_batch(const cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const doubl
     pthread_t th;
     int on = 0;
     if (j->o.cores > 1 && got >= FEET_SPLIT) {
-        /* One search grid for both: built here when some point of the
-         * batch has no start (the grid's counters are each thread's). */
-        int rc;
-        if (!pj->ready && nin < n0 + got && (rc = proj_foot(pj, NULL, NULL)))
+        int rc = grid_share(pj, pj2, got, n0, nin);
+        if (rc)
             return rc;
-        if (pj->ready && !pj2->ready) {
-            pj2->g = pj->g;
-            pj2->ready = pj2->borrowed = 1;
-        }
         fp[0].k1 = fp[1].k0 = got / 2;
         on = !cf_thread_start(&th, feet_part, &fp[1]);
     }
@@ -1172,12 +1182,8 @@ static void check_two_free(check_two_t *t)
 static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *ck, check_two_t *t,
                        resid_t *out, int cols, long got, long n0, long nin, int keep)
 {
-    if (!pj->ready && nin < n0 + got && proj_foot(pj, NULL, NULL))
+    if (grid_share(pj, pj2, got, n0, nin))
         return CF_ENOMEM;
-    if (pj->ready && !pj2->ready) { /* one search grid for both (feet_batch) */
-        pj2->g = pj->g;
-        pj2->ready = pj2->borrowed = 1;
-    }
     /* Kept feet in place when they follow on: room for the batch first. */
     const int feet = keep && j->nfeet == n0 && feet_room(j, n0 + got);
     const long h = got / 2;
