@@ -30,6 +30,11 @@ int cf_points_open(cf_points_t **r, const char *path, int want_cols, char *msg, 
  * file has shown no data line, i.e. it is empty). */
 int cf_points_cols(const cf_points_t *r);
 
+/* Points the file holds at most, known at open for a raw file (its size)
+ * and a text file small enough to be read whole then (its lines); -1
+ * otherwise. Callers size their buffers by it. */
+long cf_points_bound(const cf_points_t *r);
+
 /* Up to max_points points into buf (row-major, cols doubles each). Returns
  * the number read, 0 at the end of the file, or CF_EPARSE / CF_EIO with
  * "file:line: ..." in msg. After an error every later call repeats it. */

@@ -175,8 +175,8 @@ static int bench_fit(const bench_opts_t *o)
     fo.probe = 0; /* the raw solve's figures: no homogeneous check solve */
     fo.threads = (int)o->threads;
     gen_src_t g = {o, 0, 0, 0.0};
-    cf_fitsrc_t src = {5,    o->points, "generated points", gen_rewind, gen_read, gen_where, &g,
-                       NULL, NULL};
+    cf_fitsrc_t src = {
+        5, o->points, "generated points", gen_rewind, gen_read, gen_where, &g, NULL, NULL, 0};
     char msg[1024];
     cf_fitjob_t *j = NULL;
     cf_fitjob_result_t r;

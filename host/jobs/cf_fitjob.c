@@ -249,8 +249,8 @@ static void touch(void *p, size_t n)
 
 /* Batch buffers for n rows (at most BATCH), touched whole when allocated so
  * that memory never follows the points: a journal of a few hundred points
- * (the cell's scans) needs no 5 MB of them, a file of unknown length gets
- * BATCH. rows and src serve projection (proj: the fit pass's rows, the
+ * (the cell's scans) needs no 5 MB of them, nor a small file (its lines,
+ * the source's bound), and a file of unknown length gets BATCH. rows and src serve projection (proj: the fit pass's rows, the
  * check pass's feet); given parameters without statistics need one row of
  * rows and no src: 3 MB less. */
 static int buffers(cf_fitjob_t *j, long n, int proj)
@@ -1815,7 +1815,7 @@ static int prune(run_t *r, surfs_t *S, int k0, double alpha0, cf_stats_t **best_
          * projection decides that). */
         feet_src_t fs = {j, r->src, 0};
         cf_fitsrc_t fsrc = {5,          r->src->total, r->src->name, feet_rewind, feet_read,
-                            feet_where, &fs,           NULL,         NULL};
+                            feet_where, &fs,           NULL,         NULL,        r->src->bound};
         S->src0 = r->src->cols == 3 && !j->o.drop_far && feet_all(j, out->points) ? &fsrc : NULL;
         rc = one_round(r, k0 + (int)t, S, &res, &po, &cut_c, &rejected, &ck, &sr, out);
         S->proj0 = NULL;
@@ -1899,9 +1899,16 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
      * no journal verified and read back (issue 19), the same points in the
      * same order, so the same fit as the journal's replay. */
     held_t hc = {j, 0};
-    cf_fitsrc_t hs = {3,           j->nhold,  src ? src->name : "live points",
-                      held_rewind, held_read, held_where,
-                      &hc,         NULL,      NULL};
+    cf_fitsrc_t hs = {3,
+                      j->nhold,
+                      src ? src->name : "live points",
+                      held_rewind,
+                      held_read,
+                      held_where,
+                      &hc,
+                      NULL,
+                      NULL,
+                      0};
     if (cf_fitjob_held(j))
         src = &hs;
     run_t r = {j, src, ctl, pct0, pct1, 0.0, 1.0, src->total, msg, ml};
@@ -1923,7 +1930,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     S.cur = j->base;
     S.cur_is_base = 1;
     /* rows: also the feet of a check pass's batch, with stats too */
-    if (buffers(j, src->total, src->cols != 5 || o->stats)) {
+    if (buffers(j, src->total >= 0 ? src->total : src->bound, src->cols != 5 || o->stats)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }

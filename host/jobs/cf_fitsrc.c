@@ -154,7 +154,8 @@ static int pts_split(void *ctx, cf_fitsrc_t *half, char *msg, size_t ml)
                                 part_where,
                                 &p->part[i],
                                 NULL,
-                                NULL};
+                                NULL,
+                                0};
     return 0;
 }
 
@@ -180,7 +181,8 @@ void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, c
                        pts_where,
                        ctx,
                        pts_split,
-                       pts_join};
+                       pts_join,
+                       cf_points_bound(r)};
 }
 
 void cf_fitsrc_points_cache(cf_fitsrc_points_t *ctx, size_t max_bytes)
@@ -248,7 +250,7 @@ void cf_fitsrc_journal(cf_fitsrc_t *s, cf_fitsrc_jnl_t *ctx, jnl_reader_t *rd, c
 {
     ctx->rd = rd;
     ctx->path = path;
-    *s = (cf_fitsrc_t){3, points, path, jnl_rewind_, jnl_read_, jnl_where_, ctx, NULL, NULL};
+    *s = (cf_fitsrc_t){3, points, path, jnl_rewind_, jnl_read_, jnl_where_, ctx, NULL, NULL, 0};
 }
 
 int cf_fitsrc_nominal_id(const char *path, uint64_t *hash, char name[JNL_NAME_LEN])

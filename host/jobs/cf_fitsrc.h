@@ -33,6 +33,10 @@ typedef struct cf_fitsrc {
     /* After half[0] was read to its end with no error: half[1]'s lines (in
      * its errors and where) counted from the file's start from now on. */
     void (*join)(void *ctx);
+    /* Points at most when total is not known (a small points file's lines,
+     * cf_points_bound): the job's batch buffers take no more; <= 0: not
+     * known either. */
+    long bound;
 } cf_fitsrc_t;
 
 /* One half of a points file (cf_points_split). */

@@ -59,7 +59,7 @@ static void test_split(void **state)
             m.p[m.n][2] = -1.0;
             rowof[m.n++] = r;
         }
-    cf_fitsrc_t in = {3, m.n, "mem", m_rewind, m_read, m_where, &m, NULL, NULL};
+    cf_fitsrc_t in = {3, m.n, "mem", m_rewind, m_read, m_where, &m, NULL, NULL, 0};
     char msg[128];
     for (long k = 2; k <= 5; k++) {
         long seen[NPTS] = {0}, last[2] = {-1, -1};

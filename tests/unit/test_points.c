@@ -281,6 +281,7 @@ static void test_batches_across_buffer(void **state)
     cf_points_t *r;
     double v[5 * 7];
     assert_int_equal(cf_points_open(&r, path, 5, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_bound(r), -1); /* not read whole at open */
     for (int pass = 0; pass < 2; pass++) {
         long k = 0, got;
         while ((got = cf_points_read(r, v, 7, msg, sizeof msg)) > 0) {
@@ -453,6 +454,69 @@ static void le_bytes(unsigned char *b, double x)
     memcpy(&u, &x, sizeof u);
     for (int i = 0; i < 8; i++)
         b[i] = (unsigned char)(u >> (8 * i));
+}
+
+/* cf_points_bound against counts the test knows: a small text file read
+ * whole at open bounds its points by its lines (comments, blank lines, a
+ * header and a last line without a newline among them), a raw file by its
+ * size exactly, a text file past the buffer (test_batches_across_buffer)
+ * not at all.
+ * The small file's buffer (its size and a page) still streams a file that
+ * grew after open past that size, lines crossing its refills. */
+static void test_bound_small_files(void **state)
+{
+    (void)state;
+    char path[600];
+    tmp_path(path, sizeof path, "bound.txt");
+    write_text(path, "# heights\nx,y,z\n1,2,3\n\n4,5,6\n# mid\n7,8,9");
+    cf_points_t *r;
+    double v[3 * 16];
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
+    const long b = cf_points_bound(r);
+    assert_int_equal(cf_points_read(r, v, 16, msg, sizeof msg), 3);
+    assert_true(b >= 3);
+    assert_int_equal(b, 7); /* its lines */
+    assert_same(v[6], 7.0, 6);
+    cf_points_close(r);
+    /* raw: the size says the count */
+    tmp_path(path, sizeof path, "bound.xyz.bin");
+    unsigned char rb[8 * 3 * 5];
+    for (int i = 0; i < 15; i++)
+        le_bytes(rb + 8 * i, (double)i);
+    write_bytes(path, rb, sizeof rb);
+    assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_bound(r), 5);
+    assert_int_equal(cf_points_read(r, v, 16, msg, sizeof msg), 5);
+    cf_points_close(r);
+    /* A small file grown after open: every point, in order. */
+    tmp_path(path, sizeof path, "grow.txt");
+    write_text(path, "0 0 0\n");
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_bound(r), 2);
+    const long n = 30000; /* about 0.6 MB: 70 times the 6-byte file's buffer (8 KiB) */
+    FILE *f = fopen(path, "ab");
+    assert_non_null(f);
+    for (long i = 1; i < n; i++)
+        fprintf(f, "%ld %ld.5 %ld\n", i, i, -i);
+    assert_int_equal(fclose(f), 0);
+    long k = 0, got;
+    while ((got = cf_points_read(r, v, 16, msg, sizeof msg)) > 0)
+        for (long j = 0; j < got; j++, k++) {
+            assert_same(v[3 * j], (double)k, 3 * k);
+            assert_same(v[3 * j + 1], k ? (double)k + 0.5 : 0.0, 3 * k + 1);
+        }
+    assert_int_equal(got, 0);
+    assert_int_equal(k, n);
+    cf_points_close(r);
+    /* Opened again, the grown file is read whole at open: its lines. */
+    assert_int_equal(cf_points_open(&r, path, 3, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_bound(r), n + 1);
+    cf_points_close(r);
+    remove(path);
+    tmp_path(path, sizeof path, "bound.txt");
+    remove(path);
+    tmp_path(path, sizeof path, "bound.xyz.bin");
+    remove(path);
 }
 
 static void check_raw(const char *name, int cols, long n)
@@ -902,6 +966,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_batches_across_buffer),
         cmocka_unit_test(test_bit_identical_to_strtod),
         cmocka_unit_test(test_raw_float64),
+        cmocka_unit_test(test_bound_small_files),
         cmocka_unit_test(test_raw_nonfinite_direct),
         cmocka_unit_test(test_rewind),
         cmocka_unit_test(test_stdin_not_rewindable),
