@@ -34,6 +34,7 @@ sim_start() {
     name=$1; shift
     tries=0
     while :; do
+        : >"$T/$name.out" # there before the first grep (the job's redirection may come later)
         "$SIM" --gev "$SER" --gev-flank $FLANK --noise $NOISE "$@" >"$T/$name.out" 2>"$T/$name.err" &
         spid=$!
         i=0

@@ -30,6 +30,7 @@ NOM=$T/part/nominal.igs
 # sim NAME ARGS...: cellsim on TCP, sets $P (its port).
 sim() {
     name=$1; shift
+    : >"$T/$name.out" # there before the first grep (the job's redirection may come later)
     "$SIM" --tcp 0 --homed --noise $NOISE "$@" >"$T/$name.out" 2>"$T/$name.err" &
     PIDS="$PIDS $!"
     i=0
@@ -248,6 +249,7 @@ gev() {
     name=$1; shift
     tries=0
     while :; do
+        : >"$T/$name.out"
         "$SIM" --gev "$SER" --noise $NOISE --gev-width 256 --gev-height 16 --gev-profiles 160 "$@" \
             >"$T/$name.out" 2>"$T/$name.err" &
         spid=$!
