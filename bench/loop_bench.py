@@ -30,7 +30,8 @@ is not repeated.
 Data sets (x, y in [0, 100] mm, grids, every 5th row held out and not
 fitted): cliffs (hills and a curved cliff, tanh of width 3 mm), narrow (a panel with
 a 1 mm ridge and a 3 mm bump), holes (hills with three holes of no data),
-scan (the cliffs field at random x, y). T = 0.75 % of the height range.
+scan (the cliffs field at random x, y), coast (a sea floor and land with a
+wavy coastline between them, a 4-14 mm step over 0.7 mm). T = 0.75 % of the height range.
 Per data set and method: points fitted, T, control points, share within T,
 held-out p99 (|d| of the held-out rows), fit status, rounds and seconds
 (cellfit: the whole command's wall time; "loop s" the JSON's "seconds",
@@ -43,7 +44,7 @@ vertical T is about 2.7 normal T, so compare within pairs.
 
 Usage: /usr/bin/python3 bench/loop_bench.py --cellfit build/cellfit
            --knotsel build/knotsel_loop [--sizes 5000,20000,100000]
-           [--sets cliffs,narrow,holes,scan] [--surfit-s 300] [--json FILE]
+           [--sets cliffs,narrow,holes,scan,coast] [--surfit-s 300] [--json FILE]
            [--no-cellfit] [--no-surfit] [--no-knotsel] [--cellfit-refine HOW] [--reps N]
 --surfit-s: time budget of surfit's search per data set (LOOP_BENCH_SURFIT_S).
 """
@@ -75,6 +76,18 @@ def field(name, x, y):
         return 0.3 * hills + ridge + bump
     if name == "holes":
         return hills + 10.0 * np.exp(-((x - 50.0) ** 2 + (y - 60.0) ** 2) / (2 * 8.0**2))
+    if name == "coast":
+        # A wavy coastline (x = 55 + 12 sin(y / 14) + 5 cos(y / 5)): a sea
+        # floor falling to -18 mm, land with a 10 mm hill, and between them a
+        # step of 4-14 mm over 0.7 mm, about one grid spacing at 5,000
+        # points: a coast a terrain model does not resolve (issue 14's
+        # coastline grid, where surfit's fit was useless).
+        d = x - (55.0 + 12.0 * np.sin(y / 14.0) + 5.0 * np.cos(y / 5.0))
+        sea = -18.0 * (1.0 - np.exp(-np.maximum(-d, 0.0) / 20.0)) - 1.5 * np.sin(x / 9.0) * np.cos(
+            y / 11.0)
+        land = 4.0 + 10.0 * np.exp(-((x - 80.0) ** 2 + (y - 40.0) ** 2) / (2 * 10.0**2)) + \
+            3.0 * np.sin(x / 9.0) * np.sin(y / 13.0)
+        return sea + (land - sea) * 0.5 * (1.0 + np.tanh(d / 0.7))
     raise ValueError(name)
 
 
@@ -229,7 +242,7 @@ def main():
     ap.add_argument("--cellfit")
     ap.add_argument("--knotsel")
     ap.add_argument("--sizes", default="5000,20000,100000")
-    ap.add_argument("--sets", default="cliffs,narrow,holes,scan")
+    ap.add_argument("--sets", default="cliffs,narrow,holes,scan,coast")
     ap.add_argument("--surfit-s", type=float, default=float(os.environ.get("LOOP_BENCH_SURFIT_S", 300)))
     ap.add_argument("--no-cellfit", action="store_true")
     ap.add_argument("--no-surfit", action="store_true")

@@ -76,6 +76,9 @@ met_case cliffs 120 91 0.005
 # The 1 mm ridge within the default 12 rounds (a span's first knot and
 # its sides while far from the target: nf_loopctl_per_span).
 met_case narrow 141 141 0.0075
+# A coastline the grid does not resolve (a 4-14 mm step over 0.7 mm, rows
+# 1.1 mm apart): issue 14's coastline grid, where surfit's fit was useless.
+met_case coast 120 91 0.0075
 
 # 120 x 91 grid, the narrow ridge at T = 1 %: whatever stops the loop, no
 # direction gets more control points than the 91 data rows, and never more

@@ -209,7 +209,7 @@ static void test_job_prunes_back(void **state)
         for (int i = 0; i < r0.nrounds; i++)
             assert_int_equal(r0.rounds[i].prune, 0);
         /* With it (budget enough for every line: the stage ends when none is
-         * left to try, or two in a row are undone): given parameters, back
+         * left to try, or a trial is undone): given parameters, back
          * to S*'s 5 x 4, and the fit is S*; projected (the loop takes other
          * knots there), fewer lines, still all within tol. */
         if (run_prune(file, cols, tol, 40, &r))
