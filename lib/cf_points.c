@@ -1089,14 +1089,14 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
         rc = cp_fill(r);
     const unsigned char *b = (const unsigned char *)r->buf;
     int raw = r->is_stdin ? 0 : cp_raw_cols(path);
-    if (!rc && raw && size >= 0)
-        r->bound = (long)(size / (long long)(sizeof(double) * (size_t)raw));
-    else if (!rc && size >= 0 && (long long)r->len == size) { /* the whole file: its lines */
-        long nl = 1;
+    /* The whole file read: its lines, counted before parsing marks them
+     * (a bound for the text formats only: binary PLY's bytes are not lines). */
+    long lines = -1;
+    if (!rc && !raw && size >= 0 && (long long)r->len == size) {
+        lines = 1;
         for (const char *p = r->buf, *e = r->buf + r->len; (p = memchr(p, '\n', (size_t)(e - p)));
              p++)
-            nl++;
-        r->bound = nl;
+            lines++;
     }
     if (rc) {
         /* message already in r->errmsg */
@@ -1127,6 +1127,10 @@ int cf_points_open(cf_points_t **rp, const char *path, int want_cols, char *msg,
         cf_points_close(r);
         return rc;
     }
+    if (r->fmt == CP_RAW && size >= 0)
+        r->bound = (long)(size / (long long)(sizeof(double) * (size_t)r->cols));
+    else if (r->fmt == CP_ASCII || r->fmt == CP_PLY_ASCII)
+        r->bound = lines;
     *rp = r;
     return CF_OK;
 }

@@ -31,8 +31,9 @@ int cf_points_open(cf_points_t **r, const char *path, int want_cols, char *msg, 
 int cf_points_cols(const cf_points_t *r);
 
 /* Points the file holds at most, known at open for a raw file (its size)
- * and a text file small enough to be read whole then (its lines); -1
- * otherwise. Callers size their buffers by it. */
+ * and a text file (ASCII, PLY ascii) small enough to be read whole then
+ * (its lines); -1 otherwise (binary PLY, standard input, a larger text
+ * file). Callers size their buffers by it. */
 long cf_points_bound(const cf_points_t *r);
 
 /* Up to max_points points into buf (row-major, cols doubles each). Returns

@@ -250,9 +250,10 @@ static void touch(void *p, size_t n)
 /* Batch buffers for n rows (at most BATCH), touched whole when allocated so
  * that memory never follows the points: a journal of a few hundred points
  * (the cell's scans) needs no 5 MB of them, nor a small file (its lines,
- * the source's bound), and a file of unknown length gets BATCH. rows and src serve projection (proj: the fit pass's rows, the
- * check pass's feet); given parameters without statistics need one row of
- * rows and no src: 3 MB less. */
+ * the source's bound), and a file of unknown length gets BATCH. rows and
+ * src serve projection (proj: the fit pass's rows, the check pass's feet);
+ * given parameters without statistics need one row of rows and no src:
+ * 3 MB less. */
 static int buffers(cf_fitjob_t *j, long n, int proj)
 {
     n = n < 1 ? BATCH : n > BATCH ? BATCH : n;

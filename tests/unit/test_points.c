@@ -460,7 +460,8 @@ static void le_bytes(unsigned char *b, double x)
  * whole at open bounds its points by its lines (comments, blank lines, a
  * header and a last line without a newline among them), a raw file by its
  * size exactly, a text file past the buffer (test_batches_across_buffer)
- * not at all.
+ * and a binary PLY (test_ply_binary) not at all; PLY ascii by its lines
+ * (test_ply_ascii).
  * The small file's buffer (its size and a page) still streams a file that
  * grew after open past that size, lines crossing its refills. */
 static void test_bound_small_files(void **state)
@@ -784,6 +785,7 @@ static void test_ply_ascii(void **state)
                      "4 5 6 1 1 9 0\n"
                      "3 0 1 2\n");
     assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_bound(r), 18); /* its 17 lines (header and face too) and one */
     assert_int_equal(cf_points_cols(r), 3);
     assert_int_equal(cf_points_read(r, v, 5, msg, sizeof msg), 3);
     assert_int_equal(cf_points_line(r), 16);
@@ -866,6 +868,7 @@ static void test_ply_binary(void **state)
     tmp_path(path, sizeof path, "b.ply");
     write_bytes(path, b, n);
     assert_int_equal(cf_points_open(&r, path, 0, msg, sizeof msg), CF_OK);
+    assert_int_equal(cf_points_bound(r), -1); /* binary: its bytes are not lines */
     assert_int_equal(cf_points_cols(r), 5);
     for (int pass = 0; pass < 2; pass++) {
         assert_int_equal(cf_points_read(r, v, 3, msg, sizeof msg), 3);
