@@ -125,3 +125,12 @@ int nf_loopctl_verdict(nf_loopctl_t *c, double within_pct, double need_pct, doub
         return NF_LOOPCTL_MAX_ROUNDS;
     return NF_LOOPCTL_CONTINUE;
 }
+
+int nf_loopctl_supported(double ss0, long cp0, double ss1, long cp1, long n)
+{
+    if (cp1 <= cp0 || n <= cp1 || !(ss0 >= 0.0 && ss0 < INFINITY) ||
+        !(ss1 >= 0.0 && ss1 < INFINITY))
+        return 1;
+    const double var = ss1 / (double)(n - cp1);
+    return ss0 - ss1 >= NF_LOOPCTL_NOISE_K * var * (double)(cp1 - cp0);
+}

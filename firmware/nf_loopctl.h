@@ -108,6 +108,20 @@ long nf_loopctl_budget(nf_loopctl_t *c, double need_pct, long min_line);
 #define NF_LOOPCTL_SIDES_GAP 5.0
 int nf_loopctl_per_span(double within_pct, double need_pct);
 
+/* Whether the data support the control points a round added (issue 14:
+ * never more control points than the data support): 0 when the sum of
+ * squared distances fell from ss0 (cp0 control points) to ss1 (cp1) by
+ * less than NF_LOOPCTL_NOISE_K residual variances, ss1 / (n - cp1), per
+ * control point added, else 1. A control point fitted to noise removes
+ * about one variance from the sum, one that brings shape many (Akaike's
+ * criterion, K = 2). On the loop's noise-free fields no round comes near
+ * it; with noise of half the tolerance (99 % within it out of reach, 95 %
+ * at best) the loop otherwise adds lines to fit the noise until its round
+ * limit (docs/loop.md, "Noise: the rounds the data do not support").
+ * 1 too when cp1 <= cp0, n <= cp1 or a sum is not finite. */
+#define NF_LOOPCTL_NOISE_K 2.0
+int nf_loopctl_supported(double ss0, long cp0, double ss1, long cp1, long n);
+
 /* Record a round for nf_loopctl_budget: its share within and its control
  * points (once per round, before nf_loopctl_budget). */
 void nf_loopctl_record(nf_loopctl_t *c, double within_pct, long cp);

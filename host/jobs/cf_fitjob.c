@@ -1939,6 +1939,8 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
         r.ctl->progress(r.ctl->ctx, pct0);
     out->far_limit = o->far;
     double best_within = -1.0, best_rms = 0.0, best_share = 0.0;
+    double prev_ss = -1.0; /* the last round's sum of squared distances and net */
+    long prev_cp = 0;
     for (int k = 0;; k++) {
         double tr = cli_now(), c = 0.0;
         resid_t res;
@@ -1953,6 +1955,25 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
             goto fail;
         cf_round_t *rd = &out->rounds[out->nrounds++];
         round_record(rd, &S, &res, c, rejected, tr);
+        /* auto, short of the target: a round whose added control points
+         * took less from the distances than noise would (nf_loopctl_supported)
+         * fitted noise; it is not kept, and the loop stops (issue 14: never
+         * more control points than the data support). Robust fits weigh
+         * their sums otherwise: not for them. */
+        const long ncp = (long)S.fit.nu * S.fit.nv;
+        if (o->loop && o->refine == CF_REFINE_AUTO && !o->robust && prev_ss >= 0.0 &&
+            rd->within_pct < o->within &&
+            !nf_loopctl_supported(prev_ss, prev_cp, res.ss, ncp, res.n)) {
+            out->status = CF_FITJOB_NOT_MET_DATA_LIMIT;
+            snprintf(out->why, sizeof out->why,
+                     "not_met_data_limit: round %d's %ld more control points fit noise (squared "
+                     "distances %.4g -> %.4g mm^2, under %g variances of %.3g each; best %.3f %%)",
+                     k, ncp - prev_cp, prev_ss, res.ss, NF_LOOPCTL_NOISE_K,
+                     res.ss / (double)(res.n - ncp), best_within);
+            break;
+        }
+        prev_ss = res.ss;
+        prev_cp = ncp;
         /* Keep the best fit: most points within tolerance, then lowest rms. */
         if (rd->within_pct > best_within || (rd->within_pct == best_within && rd->rms < best_rms)) {
             if (keep_round(j, &S, rd, &po, &ck, &best_st, out)) {

@@ -14,6 +14,7 @@
 #include "nf_surf.h"
 #include "ref_dense.h"
 #include "ref_kloop.h"
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -590,6 +591,78 @@ static void test_caps(void **state)
 /* The stop rules, round by round: the issue's 95.56 -> 95.58 -> 95.63 %
  * stops for no progress (two rounds in a row under 0.1 point), a single
  * lost round does not; then the chooser's status and the round limit. */
+/* Sum of squared residuals of the least-squares piecewise-constant fit of
+ * y (n samples at t = (i + 0.5) / n) on m equal bins: each bin's mean,
+ * computed here by brute force (the model has m parameters). */
+static double bins_rss(const double *y, int n, int m)
+{
+    double ss = 0.0;
+    for (int b = 0; b < m; b++) {
+        double sum = 0.0;
+        int k = 0;
+        for (int i = 0; i < n; i++)
+            if ((i * m) / n == b)
+                sum += y[i], k++;
+        const double mean = k ? sum / k : 0.0;
+        for (int i = 0; i < n; i++)
+            if ((i * m) / n == b)
+                ss += (y[i] - mean) * (y[i] - mean);
+    }
+    return ss;
+}
+
+/* nf_loopctl_supported on least-squares fits computed here: on pure noise
+ * (a Gaussian sample, fixed seed) doubling the bins of a piecewise-constant
+ * fit takes about one variance per bin added, and the rule says no
+ * (Akaike's 2 per parameter); a step the coarse bins straddle, under the
+ * same noise, is shape the finer bins take out, and it says yes. Then the
+ * cases it leaves alone. */
+static void test_supported(void **state)
+{
+    (void)state;
+    enum { N = 4096 };
+    static double y[N], step[N];
+    unsigned long long r = 0x9E3779B97F4A7C15ULL;
+    for (int i = 0; i < N; i += 2) { /* Box-Muller, sigma 0.1 */
+        double u[2];
+        for (int k = 0; k < 2; k++) {
+            r ^= r << 13, r ^= r >> 7, r ^= r << 17;
+            u[k] = ((double)(r >> 11) + 0.5) / 9007199254740992.0;
+        }
+        const double m = 0.1 * sqrt(-2.0 * log(u[0]));
+        y[i] = m * cos(6.283185307179586 * u[1]);
+        y[i + 1] = m * sin(6.283185307179586 * u[1]);
+    }
+    for (int i = 0; i < N; i++) /* a step at t = 0.3: inside a bin of 8, on an edge of 64 */
+        step[i] = y[i] + ((double)i + 0.5 >= 0.3 * N ? 1.0 : 0.0);
+    int noise_no = 0, step_yes = 0;
+    for (int m = 8; m <= 256; m *= 2) {
+        const double a = bins_rss(y, N, m), b = bins_rss(y, N, 2 * m);
+        /* about one variance (0.01) per bin added: the noise's share */
+        assert_true(a - b > 0.3 * 0.01 * m && a - b < 2.0 * 0.01 * m);
+        noise_no += !nf_loopctl_supported(a, m, b, 2 * m, N);
+    }
+    assert_int_equal(noise_no, 6); /* never supported on noise */
+    for (int m = 8; m <= 32; m *= 2) {
+        const double a = bins_rss(step, N, m), b = bins_rss(step, N, 2 * m);
+        step_yes += nf_loopctl_supported(a, m, b, 2 * m, N);
+    }
+    assert_true(step_yes >= 1); /* the split that isolates the step is supported */
+    /* 8 -> 16 bins: the step (0.3 of 4096 = 1228.8) moves from inside a bin
+     * of 512 to inside one of 256, half the straddling error gone. */
+    assert_true(nf_loopctl_supported(bins_rss(step, N, 8), 8, bins_rss(step, N, 16), 16, N));
+    /* Left alone: no control point added, no room, sums not finite. */
+    assert_true(nf_loopctl_supported(1.0, 10, 1.0, 10, 100));
+    assert_true(nf_loopctl_supported(1.0, 10, 1.0, 9, 100));
+    assert_true(nf_loopctl_supported(1.0, 10, 0.99, 100, 100));
+    assert_true(nf_loopctl_supported(NAN, 10, 0.5, 20, 100));
+    assert_true(nf_loopctl_supported(1.0, 10, INFINITY, 20, 100));
+    /* The edge by hand: 10 added, variance 0.5 / 80: a fall of 0.125 is
+     * exactly 2 variances each (supported), just under it not. */
+    assert_true(nf_loopctl_supported(0.625, 10, 0.5, 20, 100));
+    assert_false(nf_loopctl_supported(0.6249, 10, 0.5, 20, 100));
+}
+
 static void test_verdict(void **state)
 {
     (void)state;
@@ -850,21 +923,14 @@ static void test_loop_bump(void **state)
 int main(void)
 {
     const struct CMUnitTest t[] = {
-        cmocka_unit_test(test_counts),
-        cmocka_unit_test(test_concentrated),
-        cmocka_unit_test(test_sides),
-        cmocka_unit_test(test_side_balance),
-        cmocka_unit_test(test_side_depth),
-        cmocka_unit_test(test_merge),
-        cmocka_unit_test(test_merge_all),
-        cmocka_unit_test(test_rows),
-        cmocka_unit_test(test_gain_order),
-        cmocka_unit_test(test_caps),
-        cmocka_unit_test(test_verdict),
-        cmocka_unit_test(test_budget),
-        cmocka_unit_test(test_budget_near_goal),
-        cmocka_unit_test(test_alpha),
-        cmocka_unit_test(test_loop_bump),
+        cmocka_unit_test(test_counts),     cmocka_unit_test(test_concentrated),
+        cmocka_unit_test(test_sides),      cmocka_unit_test(test_side_balance),
+        cmocka_unit_test(test_side_depth), cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_merge_all),  cmocka_unit_test(test_rows),
+        cmocka_unit_test(test_gain_order), cmocka_unit_test(test_caps),
+        cmocka_unit_test(test_verdict),    cmocka_unit_test(test_supported),
+        cmocka_unit_test(test_budget),     cmocka_unit_test(test_budget_near_goal),
+        cmocka_unit_test(test_alpha),      cmocka_unit_test(test_loop_bump),
     };
     return cmocka_run_group_tests(t, NULL, NULL);
 }
