@@ -1181,9 +1181,8 @@ int cf_points_thread(cf_points_t *r)
         return CF_OK; /* memory speed already, nothing to read, or a half (its own thread) */
     /* A file of few points: blocks of a quarter of them (the ring on the
      * heap's pages, not a huge page to clear). */
-    long block = CP_MT_BLOCK;
-    if (r->bound > 0 && r->bound / CP_MT_NBLK + 1 < block)
-        block = r->bound / CP_MT_NBLK + 1 < 256 ? 256 : r->bound / CP_MT_NBLK + 1;
+    const long quarter = r->bound > 0 ? r->bound / CP_MT_NBLK + 1 : CP_MT_BLOCK;
+    const long block = quarter >= CP_MT_BLOCK ? CP_MT_BLOCK : quarter < 256 ? 256 : quarter;
     return cf_pmt_start(&r->mt, r->cols, block, CP_MT_NBLK, cp_fill_block, r);
 }
 

@@ -1931,7 +1931,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     S.cur = j->base;
     S.cur_is_base = 1;
     /* rows: also the feet of a check pass's batch, with stats too */
-    if (buffers(j, src->total >= 0 ? src->total : src->bound, src->cols != 5 || o->stats)) {
+    if (buffers(j, cf_fitsrc_most(src), src->cols != 5 || o->stats)) {
         rc = cf_fail(msg, ml, CF_ENOMEM, "out of memory");
         goto fail;
     }

@@ -39,6 +39,12 @@ typedef struct cf_fitsrc {
     long bound;
 } cf_fitsrc_t;
 
+/* Points s holds at most: total when known, else bound (<= 0: not known). */
+static inline long cf_fitsrc_most(const cf_fitsrc_t *s)
+{
+    return s->total >= 0 ? s->total : s->bound;
+}
+
 /* One half of a points file (cf_points_split). */
 typedef struct cf_fitsrc_part {
     cf_points_t *r;

@@ -65,7 +65,7 @@ void cf_holdout_src(cf_fitsrc_t *s, cf_holdout_t *ctx, const cf_fitsrc_t *in, lo
     ctx->held = held != 0;
     s->cols = in->cols;
     s->total = -1;
-    s->bound = in->total >= 0 ? in->total : in->bound; /* a filter keeps no more */
+    s->bound = cf_fitsrc_most(in); /* a filter keeps no more */
     s->name = in->name;
     s->rewind = ho_rewind;
     s->read = ho_read;
