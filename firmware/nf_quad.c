@@ -1233,13 +1233,15 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
         if (!(nu > q->dom[0] && nu < q->dom[1] && nv > q->dom[2] && nv < q->dom[3]))
             return 0;
         if (fabs(du) <= tu && fabs(dv) <= tv) {
-            /* Newton's last step: its end is the foot to second order in a
-             * step below 1e-9, so the point and tangents there are taken
-             * from the Taylor expansion instead of a further evaluation. */
+            /* Newton's last step: its end is the foot to second order in
+             * the step, so the point there is taken from the Taylor
+             * expansion to second order (its error of the step's third
+             * order) instead of a further evaluation. */
             out->u = nu;
             out->v = nv;
             for (int m = 0; m < 3; m++)
-                out->foot[m] = d[0][m] + d[1][m] * du + d[2][m] * dv;
+                out->foot[m] = d[0][m] + d[1][m] * du + d[2][m] * dv +
+                               0.5 * (d[3][m] * du * du + d[5][m] * dv * dv) + d[4][m] * du * dv;
             const double e[3] = {Q[0] - out->foot[0], Q[1] - out->foot[1], Q[2] - out->foot[2]};
             double n[3];
             cross3(d[1], d[2], n);

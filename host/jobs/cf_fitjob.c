@@ -35,11 +35,13 @@
  * 5 doubles a point fill one 2 MiB huge page (cf_bigmem) and no more. */
 #define BATCH 52400
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
-/* Newton from a kept foot stops at a step of 1e-6 of the domain and takes
- * it: quadratic convergence puts that end on the foot to 1e-9 (test_foot:
- * the foot Newton to 1e-9 finds, and brute force's distance on the next
- * fit), with 2.0-2.1 evaluations of the derivatives a point instead of 2.7. */
-#define WARM_TOL 1e-6
+/* Newton from a kept foot stops at a step of 1e-4 of the domain and takes
+ * it, the foot from the second-order Taylor expansion there (newton_fast):
+ * quadratic convergence puts that end on the foot to 1e-9 (test_foot: the
+ * foot Newton to 1e-9 finds, and brute force's distance on the next fit to
+ * 1e-9; 5.5e-10 at most there), with 1.5 evaluations of the derivatives a
+ * point on the holes field instead of 2.1 at a step of 1e-6 (2.7 at 1e-9). */
+#define WARM_TOL 1e-4
 #define FOOT 3  /* doubles per kept foot: u v d (|distance|, negative: on a bound) */
 #define SEEDS 8 /* seed samples per knot span and direction (cf_seedgrid) */
 
@@ -377,6 +379,7 @@ typedef struct pass {
     const nf_surf_t *proj;
     const weigh_t *wt;
     long nin;       /* the first nin of the job's feet are on proj (Boehm): Newton from them */
+    int keep;       /* each foot into the job's feet (round 0: the check's starts) */
     cf_edges_t ed;  /* the rows' footprint, the pins (issue 14; mem NULL: free edges) */
     cf_edges_t ed2; /* with the shard: its half's footprint (edges_hook), merged into ed */
     long points, clamped, nfar, dropped;
@@ -554,13 +557,20 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
             if (ps->proj) {
                 const double *Q = in + 3 * k;
                 nf_proj_t pr;
+                int ok = 1;
                 if (pre) {
                     const double *f = j->rows + 5 * k;
                     pr.u = f[0], pr.v = f[1], pr.dist = f[2], pr.clamped = (int)f[3];
-                } else if (!foot_from(j, ps, ps->points + k, &pr) && proj_foot(&ps->pj, Q, &pr)) {
-                    *bad = k;
-                    return CF_ENOMEM;
+                    ok = f[4] != 0.0;
+                } else if (!foot_from(j, ps, ps->points + k, &pr)) {
+                    if (proj_foot(&ps->pj, Q, &pr)) {
+                        *bad = k;
+                        return CF_ENOMEM;
+                    }
+                    ok = ps->pj.rc == NF_OK;
                 }
+                if (ps->keep)
+                    foot_keep(j, ps->points + k, &pr, ok);
                 double d = fabs(pr.dist);
                 ps->clamped += pr.clamped != 0;
                 ps->ss0 += d * d;
@@ -927,6 +937,11 @@ static int fit_halves(run_t *r, const nf_surf_t *cur, const cf_fitsrc_t half[2],
     return rc;
 }
 
+/* A fit pass's feet (projecting onto proj): none kept, the job's feet
+ * taken as they are (proj is the surface they were found on, refined), or
+ * each point's foot kept for the check's Newton (round 0). */
+enum { FEET_NONE, FEET_USE, FEET_KEEP };
+
 /* One fit pass from the source into out (cur's shape). */
 static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const weigh_t *wt,
                     int feet, nf_surf_t *out, pass_t *ps)
@@ -948,8 +963,11 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
             ps->fp.hook_ctx = ps;
         }
     }
-    if (feet && ps->proj)
+    if (feet == FEET_USE && ps->proj)
         ps->nin = j->nfeet;
+    ps->keep = feet == FEET_KEEP && ps->proj && !rc;
+    if (ps->keep)
+        j->nfeet = 0;
     if (two && !rc) {
         j->used2 = 1;
         rc = fit_halves(r, cur, half, ps);
@@ -989,6 +1007,10 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
                      s->name, ps->points, j->o.far);
     if (!rc)
         rc = pass_solve(j, ps, out, s->name, r->msg, r->ml);
+    if (ps->keep && (rc || j->nfeet != ps->points))
+        j->nfeet = 0; /* not every point's: no starts */
+    else if (ps->keep && (ps->pj.ready || ps->pj2.ready))
+        j->flat = ps->pj.ready ? ps->pj.g.use_quad : ps->pj2.g.use_quad;
     pass_free(ps);
     return rc;
 }
@@ -1458,8 +1480,12 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             const cf_fitsrc_t *own = r->src;
             if (pass == 0 && S->src0)
                 r->src = S->src0;
-            rc = fit_pass(r, &S->cur, r->src->cols == 5 ? NULL : pj, NULL, pass == 0 && k > 0,
-                          &S->fit, po);
+            /* Round 0's last pass keeps the feet: its check starts from
+             * them (test_foot's first_check). */
+            const int feet = pass == 0 && k > 0                        ? FEET_USE
+                             : k == 0 && pass == o->reparam && o->loop ? FEET_KEEP
+                                                                       : FEET_NONE;
+            rc = fit_pass(r, &S->cur, r->src->cols == 5 ? NULL : pj, NULL, feet, &S->fit, po);
             r->src = own;
         }
         if (rc)
@@ -1498,7 +1524,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             break; /* the fit is exact: nothing to reweight */
         weigh_t wt = {*c, &S->prev};
         set_pass(r, lo, hi, ip++, npass);
-        if ((rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, &wt, 0, &S->fit, po)))
+        if ((rc = fit_pass(r, &S->cur, uv ? NULL : &S->prev, &wt, FEET_NONE, &S->fit, po)))
             return rc;
         *rejected = po->fp.rejected;
         out->t_acc += po->fp.t_acc;
@@ -1927,7 +1953,9 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     }
     int rc = 0;
     /* Round 0 fits in the base's space from its net, which no round
-     * changes: it is read in place, not copied (issue 20). */
+     * changes: it is read in place, not copied (issue 20). No feet from
+     * an earlier run of the job start its Newton. */
+    j->nfeet = 0;
     S.cur = j->base;
     S.cur_is_base = 1;
     /* rows: also the feet of a check pass's batch, with stats too */

@@ -8,6 +8,7 @@
  * interior foot is nearer. */
 
 #include "cf_err.h"
+#include "cf_fitjob.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "cf_test.h"
@@ -17,10 +18,12 @@
 #include "nf_refine.h"
 #include "nf_surf.h"
 #include "ref_dense.h"
+#include "ref_job.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define TOL 1e-9
 #define NPTS 10000
@@ -482,8 +485,8 @@ static long next_fit(const char *part, const nf_surf_t *r, int bnu, int bnv, con
     for (int k = 0; k < n; k++) {
         double ub = 0, vb = 0, dint, u = feet[2 * k], v = feet[2 * k + 1];
         nf_proj_t f;
-        /* to 1e-6, as the fit job's check pass (cf_fitjob.c, WARM_TOL) */
-        const int ok = nf_quad_newton(&nq, pts[k], 1e-6, &u, &v, &f);
+        /* to 1e-4, as the fit job's check pass (cf_fitjob.c, WARM_TOL) */
+        const int ok = nf_quad_newton(&nq, pts[k], 1e-4, &u, &v, &f);
         const double db = brute(&b, pts[k], &ub, &vb, &dint), scale = fmax(1.0, db);
         /* brute force's foot on the boundary: nearer than any interior one */
         const int on_edge = dint > db + 1e-9 * scale;
@@ -573,14 +576,14 @@ static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
             fail_msg("%s: point %d: nf_quad_newton (%.17g, %.17g) %.17g, nf_project (%.17g, "
                      "%.17g) %.17g",
                      part, k, f2.u, f2.v, f2.dist, f1.u, f1.v, f1.dist);
-        /* The fit job's warm Newton stops at a step of 1e-6 and takes it
+        /* The fit job's warm Newton stops at a step of 1e-4 and takes it
          * (cf_fitjob.c, WARM_TOL): the same foot to 1e-9 of the domain. */
         double u3 = f0.u, v3 = f0.v;
         nf_proj_t f3;
-        if (fast && (!nf_quad_newton(&nq, Q, 1e-6, &u3, &v3, &f3) || fabs(f3.u - f2.u) > TOL ||
+        if (fast && (!nf_quad_newton(&nq, Q, 1e-4, &u3, &v3, &f3) || fabs(f3.u - f2.u) > TOL ||
                      fabs(f3.v - f2.v) > TOL ||
                      fabs(fabs(f3.dist) - fabs(f2.dist)) > TOL * fmax(1.0, fabs(f2.dist))))
-            fail_msg("%s: point %d: Newton to 1e-6 (%.17g, %.17g) %.17g, to 1e-9 (%.17g, "
+            fail_msg("%s: point %d: Newton to 1e-4 (%.17g, %.17g) %.17g, to 1e-9 (%.17g, "
                      "%.17g) %.17g",
                      part, k, f3.u, f3.v, f3.dist, f2.u, f2.v, f2.dist);
         for (int c = 0; c < 3; c++)
@@ -653,13 +656,93 @@ static void test_refined_start(void **state)
     free(mem);
 }
 
+/* The fit job's first check (cf_fitjob.c, round 0): Newton from each
+ * point's foot on the base, kept by the fit pass, instead of a search. The
+ * wavy field (8 mm from crest to trough) sampled 60 x 60 and moved up to
+ * 0.5 mm off it, a 4 x 4 plane base, one round of the loop: the check's rms,
+ * largest distance and share within tol must be brute force's distances
+ * to that round's fit (the base feet are up to 4 mm from the fit's), on
+ * one core and on two. */
+static void test_first_check(void **state)
+{
+    (void)state;
+    nf_surf_t w, base;
+    double *wm = make_wavy(&w), *bm = surf_new(&base, 4, 4);
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            double *P = base.cp + 3 * (i + 4 * j);
+            P[0] = 40.0 * i / 3.0, P[1] = 40.0 * j / 3.0, P[2] = 0.0;
+        }
+    const char *d = getenv("CF_TEST_TMP");
+    char path[600];
+    snprintf(path, sizeof path, "%s/cf_foot_%ld_first.xyz", d && *d ? d : "/tmp", (long)getpid());
+    enum { N = 60 };
+    static double pts[N * N][3];
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    srand(1406);
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++) {
+            double *Q = pts[i + N * j];
+            nf_surf_eval(&w, (i + 0.5) / N, (j + 0.5) / N, Q);
+            Q[2] += ref_rand(-0.5, 0.5);
+            fprintf(f, "%.17g %.17g %.17g\n", Q[0], Q[1], Q[2]);
+        }
+    assert_int_equal(fclose(f), 0);
+    for (int cores = 1; cores <= 2; cores++) {
+        cf_fitjob_opts_t o;
+        cf_fitjob_defaults(&o);
+        o.tol = 0.8;
+        o.within = 99.0;
+        o.loop = 1;
+        o.refine = CF_REFINE_AUTO;
+        o.max_rounds = 1;
+        o.cores = o.threads = cores;
+        cf_fitjob_t *j = NULL;
+        char m[1024];
+        assert_int_equal(cf_fitjob_open(&j, &base, &o, m, sizeof m), CF_OK);
+        cf_fitjob_result_t r;
+        if (ref_job_file(j, path, 3, &r, m, sizeof m))
+            fail_msg("%s", m);
+        cf_fitjob_close(j);
+        assert_int_equal(r.nrounds, 1);
+        assert_int_equal(r.points, N * N);
+        brute_t b;
+        brute_init(&b, &r.surf, 401, 401);
+        double mx = 0.0, ss = 0.0;
+        long within = 0, near_tol = 0;
+        for (int k = 0; k < N * N; k++) {
+            double ub, vb, dint;
+            const double db = brute(&b, pts[k], &ub, &vb, &dint);
+            mx = fmax(mx, db);
+            ss += db * db;
+            within += db <= o.tol;
+            near_tol += fabs(db - o.tol) < 1e-9;
+        }
+        print_message("first check on %d core%s: %d points, rms %.6f (brute force %.6f), max "
+                      "%.6f (%.6f), within %.3f %% (%.3f %%)\n",
+                      cores, cores > 1 ? "s" : "", N * N, r.rms, sqrt(ss / (N * N)), r.max_abs, mx,
+                      r.within_pct, 100.0 * (double)within / (N * N));
+        assert_near(r.max_abs, mx, 1e-9 * fmax(1.0, mx));
+        assert_near(r.rms, sqrt(ss / (N * N)), 1e-9);
+        assert_near(r.within_pct, 100.0 * (double)within / (N * N),
+                    100.0 * (double)near_tol / (N * N) + 1e-9);
+        assert_true(mx > 1.0); /* the fit is far from the base: the starts are far */
+        free(b.bc);
+        free(b.P);
+        cf_fitjob_result_free(&r);
+    }
+    remove(path);
+    free(bm);
+    free(wm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_twisted_strip),
-        cmocka_unit_test(test_folded_edge),
-        cmocka_unit_test(test_edge_restart),
-        cmocka_unit_test(test_refined_start),
+        cmocka_unit_test(test_twisted_strip), cmocka_unit_test(test_folded_edge),
+        cmocka_unit_test(test_edge_restart),  cmocka_unit_test(test_refined_start),
+        cmocka_unit_test(test_first_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
