@@ -775,16 +775,17 @@ static int halves_room(const cf_fitjob_t *j, const run_t *r, const nf_surf_t *cu
 
 /* Projected points (x y z) accumulate with the shard whatever the cores
  * (j->shard), so that one core's fit is two cores' bit for bit; once the
- * count is known (after round 0, for a file as for a journal), and only
- * where the points outweigh the shard: zeroing and merging it costs about
- * its stripe width a control point, a point about 16 of its products a
- * core (the narrow ridge's 3,420 control points at 15,933 points ran 7 %
- * slower with it). */
+ * count is known (after round 0, or from the start for a file read whole
+ * at open: its bound), and only where the points outweigh the shard:
+ * zeroing and merging it costs about its stripe width a control point, a
+ * point about 16 of its products a core (the narrow ridge's 3,420 control
+ * points at 15,933 points ran 7 % slower with it). */
 static int shard_room(const cf_fitjob_t *j, const run_t *r, const nf_surf_t *cur)
 {
     const double width = (double)cur->q * cur->nu + cur->p + 1;
-    return j->o.threads == 1 && r->src->cols == 3 && r->total > 0 &&
-           16.0 * (double)r->total >= (double)cur->nu * cur->nv * width && shard_fits(j, cur);
+    const long n = r->total > 0 ? r->total : cf_fitsrc_most(r->src);
+    return j->o.threads == 1 && r->src->cols == 3 && n > 0 &&
+           16.0 * (double)n >= (double)cur->nu * cur->nv * width && shard_fits(j, cur);
 }
 
 /* The source in two halves for two threads (opts.cores): 1 and half[],
@@ -1449,7 +1450,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
     /* Round k fits in the space of cur with P0 = cur's net: the base
      * first, then the previous fit refined (Section 2.2). */
     j->two = !(k == 0 && j->live) && halves_room(j, r, &S->cur);
-    j->shard = k > 0 && !j->two && shard_room(j, r, &S->cur);
+    j->shard = !(k == 0 && j->live) && !j->two && shard_room(j, r, &S->cur);
     j->need = cf_fitpass_bytes(&S->cur, o->solver, j->two || j->shard ? 2 : o->threads);
     if (!(k == 0 && j->live)) {
         cf_bigmem_free(j->mem);
