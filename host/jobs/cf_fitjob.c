@@ -431,12 +431,19 @@ static double dist_at(const nf_surf_t *s, const double *q)
                 (q[4] - P[2]) * (q[4] - P[2]));
 }
 
+/* What a kept foot starts: Newton to the foot on the surface projected
+ * onto; the foot itself (a fit pass's, foot_from's: the same surface);
+ * Newton, then over a fold the other layers' valleys that may hold a
+ * nearer foot (cf_seedgrid_nearer: a change of the fit can swap which
+ * layer is nearer). */
+enum { START_NEWTON, START_AS_IS, START_FOLD };
+
 /* The feet of a batch's points k0 .. k1 - 1 (point n0 + k of the pass),
- * on either thread: Newton from the last check's foot where there is one
- * (direct: that foot itself, foot_from's), else the search; per point u,
- * v, the signed distance, clamped, and 1 when converged, into res (5
- * doubles a point). Each thread its own proj_t (the search's grid built
- * where it is first needed). */
+ * on either thread: from the last check's foot where there is one (how:
+ * START_*), else the search; per point u, v, the signed distance,
+ * clamped, and 1 when converged, into res (5 doubles a point). Each
+ * thread its own proj_t (the search's grid built where it is first
+ * needed). */
 typedef struct feet_part {
     proj_t *pj;
     const double *buf, *feet;
@@ -444,7 +451,7 @@ typedef struct feet_part {
     long k0, k1, n0, nin;
     double *res;
     int rc;
-    int direct;
+    int how;
 } feet_part_t;
 
 static void *feet_part(void *arg)
@@ -456,15 +463,19 @@ static void *feet_part(void *arg)
         const double *f = n < fp->nin && fp->feet ? fp->feet + FOOT * n : NULL;
         nf_proj_t pr;
         double *o = fp->res + 5 * k;
-        if (fp->direct && f && f[0] == f[0]) {
+        if (fp->how == START_AS_IS && f && f[0] == f[0]) {
             o[0] = f[0], o[1] = f[1], o[2] = fabs(f[2]), o[3] = signbit(f[2]) != 0, o[4] = 1.0;
             continue;
         }
-        if (!(f && f[0] == f[0] && !fp->direct && proj_newton(fp->pj, Q, f[0], f[1], &pr)) &&
-            proj_foot(fp->pj, Q, &pr)) {
+        const int warm =
+            f && f[0] == f[0] && fp->how != START_AS_IS && proj_newton(fp->pj, Q, f[0], f[1], &pr);
+        if ((!warm || fp->how == START_FOLD) && proj_foot(fp->pj, warm ? NULL : Q, &pr)) {
             fp->rc = CF_ENOMEM;
             return NULL;
         }
+        if (warm && fp->how == START_FOLD)
+            fp->pj->rc = cf_seedgrid_nearer(&fp->pj->g, fp->pj->nready > 0 ? &fp->pj->nq : NULL, Q,
+                                            PROJ_TOL, &pr);
         o[0] = pr.u, o[1] = pr.v, o[2] = pr.dist, o[3] = pr.clamped, o[4] = fp->pj->rc == NF_OK;
     }
     return NULL;
@@ -475,12 +486,12 @@ static void *feet_part(void *arg)
 
 /* One search grid for both halves of a batch of got points (the first is
  * point n0; the first nin have starts): built in pj when some point of the
- * batch has no start, then lent to pj2 (the grid's counters are each
- * thread's). 0 or CF_ENOMEM. */
-static int grid_share(proj_t *pj, proj_t *pj2, long got, long n0, long nin)
+ * batch has no start or every start needs it (how: START_FOLD), then lent
+ * to pj2 (the grid's counters are each thread's). 0 or CF_ENOMEM. */
+static int grid_share(proj_t *pj, proj_t *pj2, long got, long n0, long nin, int how)
 {
     int rc;
-    if (!pj->ready && nin < n0 + got && (rc = proj_foot(pj, NULL, NULL)))
+    if (!pj->ready && (nin < n0 + got || how == START_FOLD) && (rc = proj_foot(pj, NULL, NULL)))
         return rc;
     if (pj->ready && !pj2->ready) {
         pj2->g = pj->g;
@@ -491,17 +502,17 @@ static int grid_share(proj_t *pj, proj_t *pj2, long got, long n0, long nin)
 
 /* The feet of a batch of got points (the first is point n0 of the pass)
  * into res: on two threads when the job has two cores (opts.cores), the
- * second half with pj2; the same feet either way. direct: a kept foot as
- * it is (a fit pass's, foot_from). */
+ * second half with pj2; the same feet either way. how: what a kept foot
+ * starts (START_*). */
 static int feet_batch(const cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const double *buf, int cols,
-                      long got, long n0, long nin, int direct, double *res)
+                      long got, long n0, long nin, int how, double *res)
 {
-    feet_part_t fp[2] = {{pj, buf, j->feet, cols, 0, got, n0, nin, res, 0, direct},
-                         {pj2, buf, j->feet, cols, got, got, n0, nin, res, 0, direct}};
+    feet_part_t fp[2] = {{pj, buf, j->feet, cols, 0, got, n0, nin, res, 0, how},
+                         {pj2, buf, j->feet, cols, got, got, n0, nin, res, 0, how}};
     pthread_t th;
     int on = 0;
     if (j->o.cores > 1 && got >= FEET_SPLIT) {
-        int rc = grid_share(pj, pj2, got, n0, nin);
+        int rc = grid_share(pj, pj2, got, n0, nin, how);
         if (rc)
             return rc;
         fp[0].k1 = fp[1].k0 = got / 2;
@@ -546,7 +557,8 @@ static int pass_rows(cf_fitjob_t *j, pass_t *ps, const double *in, long n, long 
      * its row is written (m <= k); the same feet as one thread's. */
     const int pre = ps->proj && !ps->wt && j->o.cores > 1 && n >= FEET_SPLIT &&
                     ps->nin < ps->points + n && j->rcap >= n;
-    if (pre && feet_batch(j, &ps->pj, &ps->pj2, in, 3, n, ps->points, ps->nin, 1, j->rows)) {
+    if (pre &&
+        feet_batch(j, &ps->pj, &ps->pj2, in, 3, n, ps->points, ps->nin, START_AS_IS, j->rows)) {
         *bad = 0;
         return CF_ENOMEM;
     }
@@ -1204,21 +1216,21 @@ static void check_two_free(check_two_t *t)
 /* One batch of got points (the first is point n0 of the pass) in two
  * parts: a into out, ck's chooser and footprint; b into t. */
 static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *ck, check_two_t *t,
-                       resid_t *out, int cols, long got, long n0, long nin, int keep)
+                       resid_t *out, int cols, long got, long n0, long nin, int how, int keep)
 {
-    if (grid_share(pj, pj2, got, n0, nin))
+    if (grid_share(pj, pj2, got, n0, nin, how))
         return CF_ENOMEM;
     /* Kept feet in place when they follow on: room for the batch first. */
     const int feet = keep && j->nfeet == n0 && feet_room(j, n0 + got);
     const long h = got / 2;
-    check_part_t c[2] = {{{pj, j->buf, j->feet, cols, 0, h, n0, nin, j->rows, 0, 0},
+    check_part_t c[2] = {{{pj, j->buf, j->feet, cols, 0, h, n0, nin, j->rows, 0, how},
                           j,
                           feet,
                           j->o.tol,
                           out,
                           ck->ks,
                           ck->fp},
-                         {{pj2, j->buf, j->feet, cols, h, got, n0, nin, j->rows, 0, 0},
+                         {{pj2, j->buf, j->feet, cols, h, got, n0, nin, j->rows, 0, how},
                           j,
                           feet,
                           j->o.tol,
@@ -1275,12 +1287,14 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     int uv = src->cols == 5;
     /* The check's feet: the next round's fit pass starts from them. The
      * feet before (the last check's, on the previous fit) start this
-     * pass's Newton; where it fails, or over a fold, the search. (A start
-     * from the last foot trusts the fit to move less than the distance's
-     * valleys are apart: test_foot's next_fit; on the loop data sets every
-     * warm foot was the search's.) */
+     * pass's Newton; where it fails, the search. (A start from the last
+     * foot trusts the fit to move less than the distance's valleys are
+     * apart: test_foot's next_fit; on the loop data sets every warm foot
+     * was the search's.) Over a fold the other layers' valleys within
+     * reach of Newton's foot are tried too (START_FOLD). */
     const int keep = ck && !uv && j->o.loop;
-    const long nin = uv || !j->flat ? 0 : j->nfeet;
+    const long nin = uv ? 0 : j->nfeet;
+    const int how = j->flat ? START_NEWTON : START_FOLD;
     if (keep)
         j->nfeet = 0;
     /* Given parameters and only the sums: each half on its own core. */
@@ -1305,7 +1319,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
             break;
         }
         if (parts && got >= FEET_SPLIT) {
-            if (check_batch(j, &pj, &pj2, ck, &two, out, src->cols, got, seen, nin, keep)) {
+            if (check_batch(j, &pj, &pj2, ck, &two, out, src->cols, got, seen, nin, how, keep)) {
                 rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
                 break;
             }
@@ -1316,7 +1330,7 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
         /* The batch's feet first (j->rows: 5 doubles a point), then the
          * sums in the points' order. */
         const int proj = !uv || st;
-        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, seen, nin, 0, j->rows)) {
+        if (proj && feet_batch(j, &pj, &pj2, j->buf, src->cols, got, seen, nin, how, j->rows)) {
             rc = cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
             break;
         }

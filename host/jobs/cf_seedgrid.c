@@ -232,41 +232,39 @@ static long descend(const cf_seedgrid_t *g, long k, const double Q[3], double *d
     }
 }
 
-/* Up to NF_PROJ_STARTS starts, nearest first: the nearest sample, then the
- * other samples that are local minima of the distance over the sample grid
- * within the band sqrt(nearest) + reach (nf_seed_starts's rule: a valley
- * whose samples never come that near cannot hold the nearest foot). Over a
- * fold the nearest sample can lie on the wrong layer; the other layer's
- * valley is then among these. Returns how many (>= 1). */
-static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
+/* Q's cell. */
+static void cell_of(const cf_seedgrid_t *g, const double Q[3], int c0[3])
 {
-    int c0[3];
     for (int c = 0; c < 3; c++)
         c0[c] = clampi((long)floor((Q[c] - g->lo[c]) / g->cell), g->dim[c] - 1);
-    double best;
-    ks[0] = nearest(g, Q, c0, &best);
-    if (!(best < INFINITY))
-        return 1;
+}
+
+/* The starts of the valleys that may hold a foot no further than core
+ * from Q (core: the distance to some point of the surface), after the
+ * found ones in ks and bd (squared distances) and not the valley whose
+ * local minimum is sample skip (-1: none): up to NF_PROJ_STARTS in all,
+ * nearest first. Returns how many. */
+static int band_starts(const cf_seedgrid_t *g, const double Q[3], const int c0[3], double core,
+                       long skip, long *ks, double *bd, int found)
+{
     const long n2 = (long)g->seed.ns * g->seed.ns;
     const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
-    const double band = sqrt(best) + g->seed.reach, band2 = band * band;
+    const double band = core + g->seed.reach, band2 = band * band;
     /* A cell r cells from Q's cell is at least (r - 1) cells from Q. */
     const double rr = floor(band / g->cell) + 1;
     const int R = rr > SG_MAX_DIM ? SG_MAX_DIM : (int)rr;
-    double bd[NF_PROJ_STARTS];
     long key[NF_PROJ_STARTS]; /* (cell, sample): ties ordered as a scan by cells */
-    int found = 1;
-    bd[0] = best;
-    key[0] = -1;
-    /* Local bands: the valley of a foot no further than the nearest sample
-     * has a corner of the foot's grid cell within sqrt(best) + that cell's
-     * reach, and the valley's start is where steepest descent over the
+    for (int t = 0; t < found; t++)
+        key[t] = -1;
+    const int first = found; /* ks[0 .. first - 1] stay in front */
+    /* Local bands: the valley of a foot no further than core has a corner
+     * of the foot's grid cell within core + that cell's reach, and the valley's start is where steepest descent over the
      * grid from that corner ends. So only samples within their own reach
      * of the band's core are descended from, and a cell whose box is
      * further than its largest reach is skipped: a long chord elsewhere
      * (a stretched free edge) no longer makes every search read every
      * sample. */
-    const double core = sqrt(best), slack = 1e-9 * g->cell;
+    const double slack = 1e-9 * g->cell;
     for (int iz = c0[2] - R < 0 ? 0 : c0[2] - R; iz < g->dim[2] && iz <= c0[2] + R; iz++) {
         const double gz = cell_gap(g, 2, iz, Q[2], slack);
         for (int iy = c0[1] - R < 0 ? 0 : c0[1] - R; iy < g->dim[1] && iy <= c0[1] + R; iy++) {
@@ -288,17 +286,19 @@ static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
                     if (!(d < lk * lk))
                         continue;
                     const long m = descend(g, k, Q, &d);
-                    if (m == ks[0] || !(d < band2))
+                    if (m == skip || !(d < band2))
                         continue;
                     const long kk = cell_index(g, X[m], Y[m], Z[m]) * n2 + m;
                     int dup = 0;
-                    for (int t = 1; t < found; t++)
+                    for (int t = 0; t < found; t++)
                         dup |= ks[t] == m;
-                    if (dup || (found == NF_PROJ_STARTS &&
-                                (d > bd[found - 1] || (d == bd[found - 1] && kk > key[found - 1]))))
+                    if (dup ||
+                        (found == NF_PROJ_STARTS && (found == first || d > bd[found - 1] ||
+                                                     (d == bd[found - 1] && kk > key[found - 1]))))
                         continue;
                     int t = found < NF_PROJ_STARTS ? found++ : NF_PROJ_STARTS - 1;
-                    for (; t > 1 && (bd[t - 1] > d || (bd[t - 1] == d && key[t - 1] > kk)); t--) {
+                    for (; t > first && (bd[t - 1] > d || (bd[t - 1] == d && key[t - 1] > kk));
+                         t--) {
                         bd[t] = bd[t - 1];
                         ks[t] = ks[t - 1];
                         key[t] = key[t - 1];
@@ -311,6 +311,25 @@ static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
         }
     }
     return found;
+}
+
+/* Up to NF_PROJ_STARTS starts, nearest first: the nearest sample, then the
+ * other samples that are local minima of the distance over the sample grid
+ * within the band sqrt(nearest) + reach (nf_seed_starts's rule: a valley
+ * whose samples never come that near cannot hold the nearest foot). Over a
+ * fold the nearest sample can lie on the wrong layer; the other layer's
+ * valley is then among these. Returns how many (>= 1). */
+static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
+{
+    int c0[3];
+    cell_of(g, Q, c0);
+    double best;
+    ks[0] = nearest(g, Q, c0, &best);
+    if (!(best < INFINITY))
+        return 1;
+    double bd[NF_PROJ_STARTS];
+    bd[0] = best;
+    return band_starts(g, Q, c0, sqrt(best), ks[0], ks, bd, 1);
 }
 
 static void sample_uv(const cf_seedgrid_t *g, long k, double *u0, double *v0)
@@ -346,6 +365,43 @@ int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj
     for (int t = 0; t < n; t++)
         sample_uv(g, ks[t], &u0[t], &v0[t]);
     return nf_project_starts(&g->seed, Q, u0, v0, n, tol, out);
+}
+
+int cf_seedgrid_nearer(cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3], double tol,
+                       nf_proj_t *io)
+{
+    if (g->use_quad || !(fabs(io->dist) < INFINITY))
+        return NF_OK;
+    /* Every valley within the band, io's own too: two feet closer than a
+     * sample spacing (a steep step) share a valley of the samples. */
+    int c0[3];
+    cell_of(g, Q, c0);
+    long ks[NF_PROJ_STARTS];
+    double bd[NF_PROJ_STARTS], u0[NF_PROJ_STARTS], v0[NF_PROJ_STARTS];
+    const int n = band_starts(g, Q, c0, fabs(io->dist), -1, ks, bd, 0);
+    for (int t = 0; t < n; t++)
+        sample_uv(g, ks[t], &u0[t], &v0[t]);
+    nf_proj_t alt;
+    int rc = NF_OK;
+    if (n > 0 && (!nq || nq->creased)) /* a crease: its mirror starts too */
+        rc = nf_project_starts(&g->seed, Q, u0, v0, n, tol, &alt);
+    else
+        for (int t = 0; t < n; t++) {
+            /* Newton's interior foot from the start, else nf_project's (a
+             * bound: its boundary check) */
+            double u = u0[t], v = v0[t];
+            nf_proj_t p;
+            int r = NF_OK;
+            if (!nf_quad_newton(nq, Q, tol, &u, &v, &p))
+                r = nf_project(g->seed.s, Q, u0[t], v0[t], tol, &p);
+            if (r != NF_OK && r != NF_ENOCONV)
+                return r;
+            if (t == 0 || fabs(p.dist) < fabs(alt.dist))
+                alt = p;
+        }
+    if (n > 0 && (rc == NF_OK || rc == NF_ENOCONV) && fabs(alt.dist) < fabs(io->dist))
+        *io = alt;
+    return rc == NF_ENOCONV ? NF_OK : rc;
 }
 
 void cf_seedgrid_free(cf_seedgrid_t *g)
