@@ -35,17 +35,8 @@
  * 5 doubles a point fill one 2 MiB huge page (cf_bigmem) and no more. */
 #define BATCH 52400
 #define PROJ_TOL 1e-9 /* parameter accuracy, relative to the domain */
-/* Newton from a kept foot stops at a step of 1e-4 of the domain and takes
- * it, the foot from the second-order Taylor expansion there (newton_fast):
- * 1.5 evaluations of the derivatives a point on the holes field instead of
- * 2.1 at a step of 1e-6 (2.7 at 1e-9). The foot is then brute force's to
- * 1e-9 of the distance on test_foot's surfaces (5.5e-10 at most); on the
- * benchmark's fields the distances are the search's to 2e-6 mm, 3e-9 mm at
- * a step of 1e-6 (a foot s off along the surface lengthens a distance d by
- * about s^2 / 2d: most for points nearest the surface). */
-#define WARM_TOL 1e-4
-#define FOOT 3  /* doubles per kept foot: u v d (|distance|, negative: on a bound) */
-#define SEEDS 8 /* seed samples per knot span and direction (cf_seedgrid) */
+#define FOOT 3        /* doubles per kept foot: u v d (|distance|, negative: on a bound) */
+#define SEEDS 8       /* seed samples per knot span and direction (cf_seedgrid) */
 
 struct cf_fitjob {
     cf_fitjob_opts_t o;
@@ -76,14 +67,18 @@ struct cf_fitjob {
      * most CF_FITJOB_HOLD_ROWS; NaN u: search again): the next round's fit
      * pass projects onto that fit refined by Boehm insertion, the same
      * surface, so each foot is its foot there (Newton from it ends where
-     * it starts: test_foot's refined_part). nfeet 0: none. */
+     * it starts: test_foot's refined_part). Before round 0's check: round
+     * 0's feet on the surface it projected onto. nfeet 0: none. */
     double *feet;
     long nfeet, fcap;
     /* 1: the last search's surface did not fold over (the quadrilaterals
      * served): the check pass may take Newton from the last feet. Over a
      * fold the surface's change between fits can swap which layer is
-     * nearer, and the search (every valley within reach) decides. */
+     * nearer: every valley within reach of Newton's foot is tried too
+     * (START_FOLD). feet_base: the feet are round 0's, on the base, which
+     * its fit may have moved far: its check sees the fit's grid first. */
     int flat;
+    int feet_base;
 };
 
 void cf_fitjob_defaults(cf_fitjob_opts_t *o)
@@ -321,7 +316,7 @@ static int proj_newton(proj_t *p, const double Q[3], double u, double v, nf_proj
             (void)nf_quad_power(&p->nq, (double *)(void *)((char *)p->nqmem + b), pb);
     }
     double un = u, vn = v;
-    if ((p->nready < 0 || !nf_quad_newton(&p->nq, Q, WARM_TOL, &un, &vn, out)) &&
+    if ((p->nready < 0 || !nf_quad_newton(&p->nq, Q, CF_FITJOB_WARM_TOL, &un, &vn, out)) &&
         (nf_project(p->s, Q, u, v, PROJ_TOL, out) != NF_OK || !out->clamped))
         return 0;
     p->rc = NF_OK;
@@ -1026,6 +1021,8 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
         j->nfeet = 0; /* not every point's: no starts */
     else if (ps->keep && (ps->pj.ready || ps->pj2.ready))
         j->flat = ps->pj.ready ? ps->pj.g.use_quad : ps->pj2.g.use_quad;
+    if (ps->keep)
+        j->feet_base = j->nfeet > 0;
     pass_free(ps);
     return rc;
 }
@@ -1296,9 +1293,9 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
      * reach of Newton's foot are tried too (START_FOLD). */
     const int keep = ck && !uv && j->o.loop;
     const long nin = uv ? 0 : j->nfeet;
-    const int how = j->flat ? START_NEWTON : START_FOLD;
+    const int how = j->flat && !j->feet_base ? START_NEWTON : START_FOLD;
     if (keep)
-        j->nfeet = 0;
+        j->nfeet = j->feet_base = 0;
     /* Given parameters and only the sums: each half on its own core. */
     cf_fitsrc_t half[2];
     if (uv && !st && !(ck && (ck->sr || ck->ks || ck->kr || ck->fp)) && halves(r, half)) {
@@ -1909,6 +1906,7 @@ static int holdout_check(run_t *r, const cf_fitsrc_t *in, cf_fitjob_result_t *ou
     cf_fitsrc_t hs;
     cf_holdout_src(&hs, &hc, in, r->j->o.holdout, 1);
     r->src = &hs;
+    r->j->nfeet = 0; /* the kept feet are the fitted rows': no starts for these */
     resid_t res;
     int rc = measure(r, &out->surf, NULL, 0.0, &res, NULL, 1); /* p99 from the histogram */
     r->src = in;
@@ -1972,7 +1970,7 @@ int cf_fitjob_run(cf_fitjob_t *j, const cf_fitsrc_t *src, const cf_job_ctl_t *ct
     /* Round 0 fits in the base's space from its net, which no round
      * changes: it is read in place, not copied (issue 20). No feet from
      * an earlier run of the job start its Newton. */
-    j->nfeet = 0;
+    j->nfeet = j->feet_base = 0;
     S.cur = j->base;
     S.cur_is_base = 1;
     /* rows: also the feet of a check pass's batch, with stats too */

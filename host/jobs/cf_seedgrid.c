@@ -258,12 +258,12 @@ static int band_starts(const cf_seedgrid_t *g, const double Q[3], const int c0[3
         key[t] = -1;
     const int first = found; /* ks[0 .. first - 1] stay in front */
     /* Local bands: the valley of a foot no further than core has a corner
-     * of the foot's grid cell within core + that cell's reach, and the valley's start is where steepest descent over the
-     * grid from that corner ends. So only samples within their own reach
-     * of the band's core are descended from, and a cell whose box is
-     * further than its largest reach is skipped: a long chord elsewhere
-     * (a stretched free edge) no longer makes every search read every
-     * sample. */
+     * of the foot's grid cell within core + that cell's reach, and the
+     * valley's start is where steepest descent over the grid from that
+     * corner ends. So only samples within their own reach of the band's
+     * core are descended from, and a cell whose box is further than its
+     * largest reach is skipped: a long chord elsewhere (a stretched free
+     * edge) no longer makes every search read every sample. */
     const double slack = 1e-9 * g->cell;
     for (int iz = c0[2] - R < 0 ? 0 : c0[2] - R; iz < g->dim[2] && iz <= c0[2] + R; iz++) {
         const double gz = cell_gap(g, 2, iz, Q[2], slack);
@@ -367,11 +367,13 @@ int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj
     return nf_project_starts(&g->seed, Q, u0, v0, n, tol, out);
 }
 
-int cf_seedgrid_nearer(cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3], double tol,
+int cf_seedgrid_nearer(const cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3], double tol,
                        nf_proj_t *io)
 {
     if (g->use_quad || !(fabs(io->dist) < INFINITY))
         return NF_OK;
+    if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
+        return NF_ENONFINITE;
     /* Every valley within the band, io's own too: two feet closer than a
      * sample spacing (a steep step) share a valley of the samples. */
     int c0[3];
@@ -379,16 +381,19 @@ int cf_seedgrid_nearer(cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3],
     long ks[NF_PROJ_STARTS];
     double bd[NF_PROJ_STARTS], u0[NF_PROJ_STARTS], v0[NF_PROJ_STARTS];
     const int n = band_starts(g, Q, c0, fabs(io->dist), -1, ks, bd, 0);
+    if (n == 0)
+        return NF_OK;
     for (int t = 0; t < n; t++)
         sample_uv(g, ks[t], &u0[t], &v0[t]);
     nf_proj_t alt;
-    int rc = NF_OK;
-    if (n > 0 && (!nq || nq->creased)) /* a crease: its mirror starts too */
+    int rc = NF_ENOCONV;      /* alt's: a foot Newton did not converge to is no start */
+    if (!nq || nq->creased) { /* a crease: its mirror starts too */
         rc = nf_project_starts(&g->seed, Q, u0, v0, n, tol, &alt);
-    else
+        if (rc != NF_OK && rc != NF_ENOCONV)
+            return rc;
+    } else
         for (int t = 0; t < n; t++) {
-            /* Newton's interior foot from the start, else nf_project's (a
-             * bound: its boundary check) */
+            /* Newton's interior foot, else nf_project's (its bound check) */
             double u = u0[t], v = v0[t];
             nf_proj_t p;
             int r = NF_OK;
@@ -396,12 +401,15 @@ int cf_seedgrid_nearer(cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3],
                 r = nf_project(g->seed.s, Q, u0[t], v0[t], tol, &p);
             if (r != NF_OK && r != NF_ENOCONV)
                 return r;
-            if (t == 0 || fabs(p.dist) < fabs(alt.dist))
+            if (t == 0 || fabs(p.dist) < fabs(alt.dist)) {
                 alt = p;
+                rc = r;
+            }
         }
-    if (n > 0 && (rc == NF_OK || rc == NF_ENOCONV) && fabs(alt.dist) < fabs(io->dist))
-        *io = alt;
-    return rc == NF_ENOCONV ? NF_OK : rc;
+    if (!(fabs(alt.dist) < fabs(io->dist)))
+        return NF_OK;
+    *io = alt;
+    return rc;
 }
 
 void cf_seedgrid_free(cf_seedgrid_t *g)

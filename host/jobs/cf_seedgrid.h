@@ -56,14 +56,12 @@ void cf_seedgrid_start(const cf_seedgrid_t *g, const double Q[3], double *u0, do
  * a hemmed plate on the wrong layer: tests/unit/test_foot.c). nf_project's
  * codes. */
 int cf_seedgrid_project(cf_seedgrid_t *g, const double Q[3], double tol, nf_proj_t *out);
-/* A foot *io of Q (a local minimum of the distance, e.g. Newton's from the
- * foot on the last fit) made the nearest: over a fold, the feet from the
- * starts of every valley that may hold a foot no further than io's (within
- * |io->dist| + reach, as cf_seedgrid_project's band: Newton set up in nq
- * to an interior foot, else nf_project; nq NULL or creased:
- * nf_project_starts), the nearer foot kept; on the quadrilaterals (one
- * layer) io as it is. NF_OK or nf_project's codes (io then unchanged). */
-int cf_seedgrid_nearer(cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3], double tol,
+/* Foot *io of Q (Newton's, a local minimum) made the nearest: over a fold
+ * the feet from every valley's start within |io->dist| + reach (the
+ * search's band: no nearer foot lies outside it) replace it if nearer;
+ * Newton in nq (NULL or creased: nf_project_starts). NF_OK, NF_ENOCONV
+ * when the foot kept did not converge, or nf_project's errors (io kept). */
+int cf_seedgrid_nearer(const cf_seedgrid_t *g, const nf_quad_t *nq, const double Q[3], double tol,
                        nf_proj_t *io);
 void cf_seedgrid_free(cf_seedgrid_t *g);
 

@@ -453,9 +453,11 @@ static void test_edge_restart(void **state)
 /* The tolerance loop's check pass (cf_fitjob's measure): the foot on the
  * refined net starts Newton on the next fit (here r moved by up to 0.05 mm
  * per coordinate); nf_quad_newton's foot, where it converges, must be the
- * next fit's true foot (brute force), and it must give up on every foot
- * that brute force puts on the boundary; there nf_project from the same
- * start (its true-foot check at the bound) must find brute force's foot.
+ * next fit's true foot (brute force; over a fold after
+ * cf_seedgrid_nearer), and it must give up on every foot that brute force
+ * puts on the boundary (unless nearer found it); there nf_project from the
+ * same start (its true-foot check at the bound) must find brute force's
+ * foot.
  * The warm start assumes the fit moves less than the valleys are apart:
  * moves of 0.5 mm pass here, random moves of 2 mm on the wavy field (4 mm
  * waves) put a few feet in other valleys. Returns how many nf_quad_newton
@@ -485,8 +487,8 @@ static long next_fit(const char *part, const nf_surf_t *r, int bnu, int bnv, con
     for (int k = 0; k < n; k++) {
         double ub = 0, vb = 0, dint, u = feet[2 * k], v = feet[2 * k + 1];
         nf_proj_t f;
-        /* to 1e-4, as the fit job's check pass (cf_fitjob.c, WARM_TOL) */
-        const int ok = nf_quad_newton(&nq, pts[k], 1e-4, &u, &v, &f);
+        /* as the fit job's check pass */
+        const int ok = nf_quad_newton(&nq, pts[k], CF_FITJOB_WARM_TOL, &u, &v, &f);
         /* over a fold the job then tries the other layers' valleys
          * (START_FOLD): the nearer foot */
         if (ok && !sg.use_quad) {
@@ -504,11 +506,14 @@ static long next_fit(const char *part, const nf_surf_t *r, int bnu, int bnv, con
                      part, k, fabs(f.dist), db);
         if (!ok) {
             /* cf_fitjob keeps nf_project's foot from the warm start when
-             * it is on a bound, else searches */
+             * it is on a bound (over a fold: then the nearer one), else
+             * searches */
             nf_proj_t g;
             assert_int_equal(nf_project(&r2, pts[k], feet[2 * k], feet[2 * k + 1], TOL, &g), NF_OK);
             if (!g.clamped)
                 assert_int_equal(cf_seedgrid_project(&sg, pts[k], TOL, &g), NF_OK);
+            else if (!sg.use_quad)
+                assert_int_equal(cf_seedgrid_nearer(&sg, &nq, pts[k], TOL, &g), NF_OK);
             nback += !g.clamped;
             if (fabs(fabs(g.dist) - db) > 1e-9 * scale)
                 fail_msg("%s next fit: point %d nf_project from the warm start %.17g (clamped %d), "
@@ -584,14 +589,14 @@ static void refined_part(const char *part, const nf_surf_t *s, int bnu, int bnv,
             fail_msg("%s: point %d: nf_quad_newton (%.17g, %.17g) %.17g, nf_project (%.17g, "
                      "%.17g) %.17g",
                      part, k, f2.u, f2.v, f2.dist, f1.u, f1.v, f1.dist);
-        /* The fit job's warm Newton stops at a step of 1e-4 and takes it
-         * (cf_fitjob.c, WARM_TOL): the same foot to 1e-9 of the domain. */
+        /* The fit job's warm Newton stops at CF_FITJOB_WARM_TOL and takes
+         * the step: the same foot to 1e-9 of the domain. */
         double u3 = f0.u, v3 = f0.v;
         nf_proj_t f3;
-        if (fast && (!nf_quad_newton(&nq, Q, 1e-4, &u3, &v3, &f3) || fabs(f3.u - f2.u) > TOL ||
-                     fabs(f3.v - f2.v) > TOL ||
+        if (fast && (!nf_quad_newton(&nq, Q, CF_FITJOB_WARM_TOL, &u3, &v3, &f3) ||
+                     fabs(f3.u - f2.u) > TOL || fabs(f3.v - f2.v) > TOL ||
                      fabs(fabs(f3.dist) - fabs(f2.dist)) > TOL * fmax(1.0, fabs(f2.dist))))
-            fail_msg("%s: point %d: Newton to 1e-4 (%.17g, %.17g) %.17g, to 1e-9 (%.17g, "
+            fail_msg("%s: point %d: the warm Newton (%.17g, %.17g) %.17g, to 1e-9 (%.17g, "
                      "%.17g) %.17g",
                      part, k, f3.u, f3.v, f3.dist, f2.u, f2.v, f2.dist);
         for (int c = 0; c < 3; c++)
@@ -664,22 +669,16 @@ static void test_refined_start(void **state)
 }
 
 /* The fit job's first check (cf_fitjob.c, round 0): Newton from each
- * point's foot on the base, kept by the fit pass, instead of a search. The
- * wavy field (8 mm from crest to trough) sampled 60 x 60 and moved up to
- * 0.5 mm off it, a 4 x 4 plane base, one round of the loop: the check's rms,
- * largest distance and share within tol must be brute force's distances
- * to that round's fit (the base feet are up to 4 mm from the fit's), on
- * one core and on two. */
-static void test_first_check(void **state)
+ * point's foot on the base, kept by the fit pass, then over a fold the
+ * other valleys within reach (START_FOLD), instead of a search. Points of
+ * truth sampled 60 x 60 and moved up to 0.5 mm in z, one round of the
+ * loop from base: the check's rms, largest distance and share within tol
+ * must be brute force's distances to that round's fit, on one core and on
+ * two. Returns how far (mm along the fit) the furthest start, the foot on
+ * base, lay from brute force's foot. */
+static double first_check(const char *part, const nf_surf_t *base, const nf_surf_t *truth,
+                          double tol)
 {
-    (void)state;
-    nf_surf_t w, base;
-    double *wm = make_wavy(&w), *bm = surf_new(&base, 4, 4);
-    for (int j = 0; j < 4; j++)
-        for (int i = 0; i < 4; i++) {
-            double *P = base.cp + 3 * (i + 4 * j);
-            P[0] = 40.0 * i / 3.0, P[1] = 40.0 * j / 3.0, P[2] = 0.0;
-        }
     const char *d = getenv("CF_TEST_TMP");
     char path[600];
     snprintf(path, sizeof path, "%s/cf_foot_%ld_first.xyz", d && *d ? d : "/tmp", (long)getpid());
@@ -691,15 +690,18 @@ static void test_first_check(void **state)
     for (int j = 0; j < N; j++)
         for (int i = 0; i < N; i++) {
             double *Q = pts[i + N * j];
-            nf_surf_eval(&w, (i + 0.5) / N, (j + 0.5) / N, Q);
+            nf_surf_eval(truth, (i + 0.5) / N, (j + 0.5) / N, Q);
             Q[2] += ref_rand(-0.5, 0.5);
             fprintf(f, "%.17g %.17g %.17g\n", Q[0], Q[1], Q[2]);
         }
     assert_int_equal(fclose(f), 0);
+    cf_seedgrid_t sg; /* the starts: the base's feet */
+    assert_int_equal(cf_seedgrid_init(&sg, base, 8), CF_OK);
+    double far = 0.0;
     for (int cores = 1; cores <= 2; cores++) {
         cf_fitjob_opts_t o;
         cf_fitjob_defaults(&o);
-        o.tol = 0.8;
+        o.tol = tol;
         o.within = 99.0;
         o.loop = 1;
         o.refine = CF_REFINE_AUTO;
@@ -707,7 +709,7 @@ static void test_first_check(void **state)
         o.cores = o.threads = cores;
         cf_fitjob_t *j = NULL;
         char m[1024];
-        assert_int_equal(cf_fitjob_open(&j, &base, &o, m, sizeof m), CF_OK);
+        assert_int_equal(cf_fitjob_open(&j, base, &o, m, sizeof m), CF_OK);
         cf_fitjob_result_t r;
         if (ref_job_file(j, path, 3, &r, m, sizeof m))
             fail_msg("%s", m);
@@ -719,29 +721,60 @@ static void test_first_check(void **state)
         double mx = 0.0, ss = 0.0;
         long within = 0, near_tol = 0;
         for (int k = 0; k < N * N; k++) {
-            double ub, vb, dint;
+            double ub, vb, dint, P[3], B[3];
             const double db = brute(&b, pts[k], &ub, &vb, &dint);
             mx = fmax(mx, db);
             ss += db * db;
             within += db <= o.tol;
             near_tol += fabs(db - o.tol) < 1e-9;
+            nf_proj_t g;
+            assert_int_equal(cf_seedgrid_project(&sg, pts[k], TOL, &g), NF_OK);
+            nf_surf_eval(&r.surf, ub, vb, P);
+            nf_surf_eval(&r.surf, g.u, g.v, B);
+            far = fmax(far, dist3(P, B));
         }
-        print_message("first check on %d core%s: %d points, rms %.6f (brute force %.6f), max "
-                      "%.6f (%.6f), within %.3f %% (%.3f %%)\n",
-                      cores, cores > 1 ? "s" : "", N * N, r.rms, sqrt(ss / (N * N)), r.max_abs, mx,
-                      r.within_pct, 100.0 * (double)within / (N * N));
+        print_message("%s, first check on %d core%s: %d points, rms %.6f (brute force %.6f), max "
+                      "%.6f (%.6f), within %.3f %% (%.3f %%), starts up to %.3f mm from the "
+                      "feet\n",
+                      part, cores, cores > 1 ? "s" : "", N * N, r.rms, sqrt(ss / (N * N)),
+                      r.max_abs, mx, r.within_pct, 100.0 * (double)within / (N * N), far);
         assert_near(r.max_abs, mx, 1e-9 * fmax(1.0, mx));
         assert_near(r.rms, sqrt(ss / (N * N)), 1e-9);
         assert_near(r.within_pct, 100.0 * (double)within / (N * N),
                     100.0 * (double)near_tol / (N * N) + 1e-9);
-        assert_true(mx > 1.0); /* the fit is far from the base: the starts are far */
         free(b.bc);
         free(b.P);
         cf_fitjob_result_free(&r);
     }
+    cf_seedgrid_free(&sg);
     remove(path);
+    return far;
+}
+
+/* A plane base under the wavy field (8 mm from crest to trough): the fit
+ * moves far from the base, so the starts are far from the feet; and the
+ * hem as its own base (two layers 4 mm apart: START_FOLD's valleys). */
+static void test_first_check(void **state)
+{
+    (void)state;
+    nf_surf_t w, plane;
+    double *wm = make_wavy(&w), *bm = surf_new(&plane, 4, 4);
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            double *P = plane.cp + 3 * (i + 4 * j);
+            P[0] = 40.0 * i / 3.0, P[1] = 40.0 * j / 3.0, P[2] = 0.0;
+        }
+    assert_true(first_check("wavy field, plane base", &plane, &w, 0.8) > 1.0);
     free(bm);
     free(wm);
+    nf_surf_t hem;
+    double *hm = make_folded(&hem);
+    cf_seedgrid_t sg;
+    assert_int_equal(cf_seedgrid_init(&sg, &hem, 8), CF_OK);
+    assert_false(sg.use_quad); /* folded: the check's START_FOLD */
+    cf_seedgrid_free(&sg);
+    first_check("hem", &hem, &hem, 0.2);
+    free(hm);
 }
 
 int main(void)
