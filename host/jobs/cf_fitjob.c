@@ -1019,9 +1019,7 @@ static int fit_pass(run_t *r, const nf_surf_t *cur, const nf_surf_t *proj, const
         rc = pass_solve(j, ps, out, s->name, r->msg, r->ml);
     if (ps->keep && (rc || j->nfeet != ps->points))
         j->nfeet = 0; /* not every point's: no starts */
-    else if (ps->keep && (ps->pj.ready || ps->pj2.ready))
-        j->flat = ps->pj.ready ? ps->pj.g.use_quad : ps->pj2.g.use_quad;
-    if (ps->keep)
+    if (ps->keep)     /* the check then sees its fit's grid (START_FOLD) */
         j->feet_base = j->nfeet > 0;
     pass_free(ps);
     return rc;

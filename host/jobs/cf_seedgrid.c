@@ -241,11 +241,10 @@ static void cell_of(const cf_seedgrid_t *g, const double Q[3], int c0[3])
 
 /* The starts of the valleys that may hold a foot no further than core
  * from Q (core: the distance to some point of the surface), after the
- * found ones in ks and bd (squared distances) and not the valley whose
- * local minimum is sample skip (-1: none): up to NF_PROJ_STARTS in all,
- * nearest first. Returns how many. */
+ * found ones in ks and bd (squared distances; first < NF_PROJ_STARTS):
+ * up to NF_PROJ_STARTS in all, nearest first. Returns how many. */
 static int band_starts(const cf_seedgrid_t *g, const double Q[3], const int c0[3], double core,
-                       long skip, long *ks, double *bd, int found)
+                       long *ks, double *bd, int found)
 {
     const long n2 = (long)g->seed.ns * g->seed.ns;
     const double *X = g->pts, *Y = X + n2, *Z = Y + n2;
@@ -286,15 +285,14 @@ static int band_starts(const cf_seedgrid_t *g, const double Q[3], const int c0[3
                     if (!(d < lk * lk))
                         continue;
                     const long m = descend(g, k, Q, &d);
-                    if (m == skip || !(d < band2))
+                    if (!(d < band2))
                         continue;
                     const long kk = cell_index(g, X[m], Y[m], Z[m]) * n2 + m;
                     int dup = 0;
                     for (int t = 0; t < found; t++)
                         dup |= ks[t] == m;
-                    if (dup ||
-                        (found == NF_PROJ_STARTS && (found == first || d > bd[found - 1] ||
-                                                     (d == bd[found - 1] && kk > key[found - 1]))))
+                    if (dup || (found == NF_PROJ_STARTS &&
+                                (d > bd[found - 1] || (d == bd[found - 1] && kk > key[found - 1]))))
                         continue;
                     int t = found < NF_PROJ_STARTS ? found++ : NF_PROJ_STARTS - 1;
                     for (; t > first && (bd[t - 1] > d || (bd[t - 1] == d && key[t - 1] > kk));
@@ -329,7 +327,7 @@ static int grid_starts(const cf_seedgrid_t *g, const double Q[3], long *ks)
         return 1;
     double bd[NF_PROJ_STARTS];
     bd[0] = best;
-    return band_starts(g, Q, c0, sqrt(best), ks[0], ks, bd, 1);
+    return band_starts(g, Q, c0, sqrt(best), ks, bd, 1);
 }
 
 static void sample_uv(const cf_seedgrid_t *g, long k, double *u0, double *v0)
@@ -380,7 +378,7 @@ int cf_seedgrid_nearer(const cf_seedgrid_t *g, const nf_quad_t *nq, const double
     cell_of(g, Q, c0);
     long ks[NF_PROJ_STARTS];
     double bd[NF_PROJ_STARTS], u0[NF_PROJ_STARTS], v0[NF_PROJ_STARTS];
-    const int n = band_starts(g, Q, c0, fabs(io->dist), -1, ks, bd, 0);
+    const int n = band_starts(g, Q, c0, fabs(io->dist), ks, bd, 0);
     if (n == 0)
         return NF_OK;
     for (int t = 0; t < n; t++)
