@@ -767,6 +767,7 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
         return rc;
     max_area_plane(q); /* verify left the vertices in q->xyz */
     quad_data(q);
+    (void)nf_affine_init(&q->aff, s);
     return build_grid(q, im, im + 2 * maxq + 3);
 }
 
@@ -1271,10 +1272,13 @@ int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out)
         return NF_ENONFINITE;
     if (!(tol > 0.0 && tol < 1.0))
         return NF_EARG;
-    double u0, v0;
-    nf_quad_start(q, Q, &u0, &v0);
     int rc = NF_OK;
-    if (q->creased || !newton_fast(q, Q, tol, &u0, &v0, out)) {
+    double u0, v0;
+    if (q->aff.ok)
+        (void)nf_affine_project(&q->aff, Q, out); /* Q is finite: NF_OK */
+    else
+        nf_quad_start(q, Q, &u0, &v0);
+    if (!q->aff.ok && (q->creased || !newton_fast(q, Q, tol, &u0, &v0, out))) {
         q->n_slow++;
         rc = nf_project(q->s, Q, u0, v0, tol, out);
         if (rc != NF_OK && rc != NF_ENOCONV)

@@ -11,6 +11,7 @@
 #ifndef NF_QUAD_H
 #define NF_QUAD_H
 
+#include "nf_affine.h"
 #include "nf_basis.h"
 #include "nf_project.h"
 #include <stddef.h>
@@ -78,6 +79,7 @@ typedef struct nf_quad {
     int *cstart, *citem; /* cell c holds citem[cstart[c] .. cstart[c + 1]) */
     long n_clamped, n_far, n_slow; /* counts: feet on the boundary, points beyond
                                     * limit, points nf_project had to finish */
+    nf_affine_t aff;               /* aff.ok: s is a flat affine map, projected in closed form */
 } nf_quad_t;
 
 /* Decompose s (passed nf_surf_check) into at most maxq quadrilaterals in
@@ -96,7 +98,8 @@ long nf_quad_count(const nf_quad_t *q); /* quadrilaterals */
 void nf_quad_start(const nf_quad_t *q, const double Q[3], double *u0, double *v0);
 
 /* Projection of Q: nf_quad_start, then Newton to tol of the domain (inline
- * for interior feet, nf_project otherwise). Counts clamped, far and slow
+ * for interior feet, nf_project otherwise); on an affine surface (a plane
+ * base, nf_affine.h) the closed form instead. Counts clamped, far and slow
  * points in q. Returns nf_project's codes, or NF_QUAD_DROPPED. */
 int nf_quad_project(nf_quad_t *q, const double Q[3], double tol, nf_proj_t *out);
 

@@ -40,9 +40,23 @@ static int pel_bits(const uint32_t *b)
     return 0;
 }
 
-static int pel_bit(const uint32_t *b, int i)
+/* Bits i .. i + 63 of B (zero outside it), a word at a time: the table
+ * is built at the first number read, inside every fit's clock (bit by bit
+ * it cost 1.2 M instructions, a few percent of a fit of 4,000 points). */
+static uint64_t pel_bits64(const uint32_t *b, int i)
 {
-    return i >= 0 && i < 32 * PEL_W && ((b[i / 32] >> (i % 32)) & 1);
+    uint64_t r = 0;
+    const int w0 = i >= 0 ? i / 32 : -((31 - i) / 32);
+    for (int w = w0; w <= w0 + 2; w++) {
+        if (w < 0 || w >= PEL_W)
+            continue;
+        const int off = 32 * w - i; /* where the word's bit 0 lands */
+        if (off >= 0 && off < 64)
+            r |= (uint64_t)b[w] << off;
+        else if (off < 0 && off > -32)
+            r |= (uint64_t)b[w] >> -off;
+    }
+    return r;
 }
 
 /* T = floor(B * 2^-s), s = bits(B) - 128: the top 128 bits, truncated (for
@@ -50,11 +64,8 @@ static int pel_bit(const uint32_t *b, int i)
 static void pel_top(const uint32_t *b, pel_pow_t *t, int extra)
 {
     int s = pel_bits(b) - 128;
-    t->hi = t->lo = 0;
-    for (int i = 0; i < 64; i++) {
-        t->lo |= (uint64_t)pel_bit(b, s + i) << i;
-        t->hi |= (uint64_t)pel_bit(b, s + 64 + i) << i;
-    }
+    t->lo = pel_bits64(b, s);
+    t->hi = pel_bits64(b, s + 64);
     t->s = s - extra;
 }
 

@@ -3,10 +3,13 @@
  * (Piegl & Tiller 2001, Section 3) against independent results: feet by
  * brute force (400 x 400 samples, Newton from the nearest), chord error by
  * sampling, shared vertices, exact circle and sphere patches (weights),
- * storage untouched by the point count, thinning against a full search. */
+ * storage untouched by the point count, thinning against a full search;
+ * the closed form on affine surfaces (nf_affine) and the hodograph proof
+ * of no fold (nf_fold) against the brute force and the blanket. */
 
 #include "cf_test.h"
 #include "nf_err.h"
+#include "nf_fold.h"
 #include "nf_quad.h"
 #include "nf_surf.h"
 #include "ref_dense.h"
@@ -634,6 +637,155 @@ static void test_power_form(void **state)
     free(pf);
 }
 
+/* An affine bicubic: control points at O + g_i A + h_j B (g, h the Greville
+ * abscissae of non-uniform knots), A and B at 60 degrees, tilted in space. */
+static void affine_surf(nf_surf_t *s)
+{
+    ref_surf_random(s, 3, 3, 7, 6, 0.0, 2.0, -1.0, 1.0, 1.0, 1.0);
+    const double O[3] = {5.0, -3.0, 2.0}, A[3] = {40.0, 5.0, 10.0}, B[3] = {20.0, 30.0, -15.0};
+    for (int j = 0; j < s->nv; j++)
+        for (int i = 0; i < s->nu; i++) {
+            const double g = nf_greville(i, 3, s->U), h = nf_greville(j, 3, s->V);
+            for (int c = 0; c < 3; c++)
+                s->cp[3 * (i + (long)j * s->nu) + c] = O[c] + g * A[c] + h * B[c];
+        }
+}
+
+/* The closed form (nf_quad_project on an affine surface) against the brute
+ * force: feet inside, beyond an edge (clamped) and beyond a corner; a net
+ * off the map by 1e-6 of its size, or unequal weights, are not affine. */
+static void test_affine(void **state)
+{
+    (void)state;
+    ref_seed(31);
+    nf_surf_t s;
+    affine_surf(&s);
+    fixture_t f;
+    quad_make(&f, &s, NF_QUAD_REL_TOL, MAXQ);
+    assert_int_equal(f.q.aff.ok, 1);
+    free(f.mem);
+    check_against_brute(&s, 5.0, 300);
+    /* beyond the corners, on both sides of the plane */
+    dense_t d;
+    dense_make(&d, &s);
+    quad_make(&f, &s, NF_QUAD_REL_TOL, MAXQ);
+    for (int k = 0; k < 16; k++) {
+        const double u = d.dom[k & 1], v = d.dom[2 + ((k >> 1) & 1)];
+        double S[27], Q[3];
+        nf_surf_derivs(&s, u, v, 1, S);
+        const double *Su = S + 9, *Sv = S + 3;
+        double n[3] = {Su[1] * Sv[2] - Su[2] * Sv[1], Su[2] * Sv[0] - Su[0] * Sv[2],
+                       Su[0] * Sv[1] - Su[1] * Sv[0]};
+        const double nl = sqrt(dot3(n, n));
+        const double su = (k & 1) ? 0.3 : -0.3, sv = ((k >> 1) & 1) ? 0.2 : -0.2;
+        const double h = (k & 4) ? 7.0 : -7.0, a = (k & 8) ? 1.0 : 0.1;
+        for (int c = 0; c < 3; c++)
+            Q[c] = S[c] + a * (su * Su[c] + sv * Sv[c]) + h * n[c] / nl;
+        nf_proj_t pa, pb;
+        assert_int_equal(nf_quad_project(&f.q, Q, TOL, &pa), NF_OK);
+        brute(&s, &d, Q, &pb);
+        assert_near(pa.u, pb.u, TOL * (d.dom[1] - d.dom[0]));
+        assert_near(pa.v, pb.v, TOL * (d.dom[3] - d.dom[2]));
+        assert_near(pa.dist, pb.dist, 1e-9 * (1.0 + fabs(pb.dist)));
+        assert_int_equal(pa.clamped, pb.clamped);
+        assert_int_equal(pa.clamped, 1);
+    }
+    free(f.mem);
+    free(d.P);
+    /* not affine */
+    nf_affine_t af;
+    s.cp[3 * (2 + 2 * s.nu) + 2] += 1e-6 * 60.0;
+    assert_int_equal(nf_affine_init(&af, &s), 0);
+    s.cp[3 * (2 + 2 * s.nu) + 2] -= 1e-6 * 60.0;
+    assert_int_equal(nf_affine_init(&af, &s), 1);
+    s.w[5] = 1.5;
+    assert_int_equal(nf_affine_init(&af, &s), 0);
+    ref_surf_free(&s);
+}
+
+/* nf_fold_free is a proof: every net it passes, the blanket finds unfolded
+ * and the normals sampled on a 60 x 60 grid all face one side; over a fold
+ * (the 270-degree cylinder, a hem) it never passes. Nets from gently to
+ * strongly distorted in plane: it passes some and declines others. */
+static void test_fold_free(void **state)
+{
+    (void)state;
+    ref_seed(32);
+    int passed = 0, declined = 0;
+    for (int t = 0; t < 60; t++) {
+        nf_surf_t s;
+        ref_surf_random(&s, 3, 3, 6 + t % 5, 5 + t % 4, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+        /* at the Greville points of a 100 mm square, jittered in plane by
+         * 0 .. 5.5 % of it, heights +-15 mm */
+        const double jit = 0.5 * (t % 12);
+        for (int j = 0; j < s.nv; j++)
+            for (int i = 0; i < s.nu; i++) {
+                double *C = s.cp + 3 * (i + (long)j * s.nu);
+                C[0] = 100.0 * nf_greville(i, 3, s.U) + ref_rand(-jit, jit);
+                C[1] = 100.0 * nf_greville(j, 3, s.V) + ref_rand(-jit, jit);
+                C[2] *= 3.0;
+            }
+        if (!nf_fold_free(&s)) {
+            declined++;
+            ref_surf_free(&s);
+            continue;
+        }
+        passed++;
+        fixture_t f;
+        quad_make(&f, &s, NF_QUAD_REL_TOL, MAXQ);
+        assert_int_equal(f.q.folded, 0);
+        free(f.mem);
+        double u0, u1, v0, v1, sign = 0.0;
+        nf_surf_domain(&s, &u0, &u1, &v0, &v1);
+        for (int j = 0; j < 60; j++)
+            for (int i = 0; i < 60; i++) {
+                double D[27];
+                nf_surf_derivs(&s, u0 + (u1 - u0) * i / 59.0, v0 + (v1 - v0) * j / 59.0, 1, D);
+                const double *Su = D + 9, *Sv = D + 3;
+                /* the z of Su x Sv: the nets lie along x, y */
+                const double nz = Su[0] * Sv[1] - Su[1] * Sv[0];
+                if (sign == 0.0)
+                    sign = nz > 0.0 ? 1.0 : -1.0;
+                if (!(nz * sign > 0.0))
+                    fail_msg("net %d: normal turns over at (%d, %d) of 60 x 60", t, i, j);
+            }
+        ref_surf_free(&s);
+    }
+    printf("nf_fold_free: %d of 60 nets proven, %d declined\n", passed, declined);
+    assert_true(passed >= 10 && declined >= 10);
+    /* folds: the 270-degree cylinder, and a plate hemmed back over itself */
+    double m3[NF_SURF_DOUBLES(7, 2, 2, 1)];
+    nf_surf_t c3;
+    nf_surf_wire(&c3, 2, 1, 7, 2, m3);
+    const double U[] = {0, 0, 0, 1, 1, 2, 2, 3, 3, 3}, V[] = {0, 0, 1, 1};
+    memcpy(c3.U, U, sizeof U);
+    memcpy(c3.V, V, sizeof V);
+    const double P[7][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 7; i++) {
+            double *C = c3.cp + 3 * (i + 7 * j);
+            C[0] = 40 * P[i][0];
+            C[1] = 40 * P[i][1];
+            C[2] = 100.0 * j;
+        }
+    assert_int_equal(nf_fold_free(&c3), 0); /* polynomial here: the hodograph bound decides */
+    nf_surf_t hem;
+    ref_surf_random(&hem, 3, 3, 8, 5, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
+    for (int j = 0; j < hem.nv; j++)
+        for (int i = 0; i < hem.nu; i++) {
+            double *C = hem.cp + 3 * (i + (long)j * hem.nu);
+            C[0] = i < 5 ? 10.0 * i : 10.0 * (8 - i); /* back over itself */
+            C[1] = 10.0 * j;
+            C[2] = i < 5 ? 0.0 : 3.0;
+        }
+    fixture_t f;
+    quad_make(&f, &hem, NF_QUAD_REL_TOL, MAXQ);
+    assert_int_equal(f.q.folded, 1);
+    free(f.mem);
+    assert_int_equal(nf_fold_free(&hem), 0);
+    ref_surf_free(&hem);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -642,6 +794,7 @@ int main(void)
         cmocka_unit_test(test_crack_free),       cmocka_unit_test(test_memory_flat),
         cmocka_unit_test(test_thin_nearest),     cmocka_unit_test(test_fold),
         cmocka_unit_test(test_flags_and_budget), cmocka_unit_test(test_power_form),
+        cmocka_unit_test(test_affine),           cmocka_unit_test(test_fold_free),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
