@@ -25,6 +25,7 @@ typedef double nf_v4u __attribute__((vector_size(32), aligned(8), may_alias));
 #define V4C(ptr) (*(const nf_v4u *)(ptr))
 /* GCC at -O2 does not unroll the short constant loops of the kernels. */
 #define NF_UNROLL _Pragma("GCC unroll 4")
+#define NF_UNROLL8 _Pragma("GCC unroll 8") /* a buffer's rows (NF_ACCUM_BUF) */
 #else
 #define NF_ACCUM_VECTOR 0
 #endif
@@ -88,13 +89,14 @@ static void rhs_add(nf_accum_t *ac, int l, int k, const double *R, const double 
 #if NF_ACCUM_VECTOR && defined(__AVX__)
 /* Row t1 from the vector holding column t1 on: the upper triangle plus at
  * most three entries below it, which the flush ignores. nb is a constant
- * (NF_ACCUM_BUF) for the full-buffer call, so the k loop unrolls there. */
+ * in every call (block_rows' switch), so the k loop unrolls. */
 NF_INLINE void block_rows_nb(nf_accum_t *ac, int nl, int nlp, const int nb)
 {
     for (int t1 = 0; t1 < nl; t1++) {
         double *row = ac->blk + t1 * nlp;
         for (int T = t1 & ~3; T < nlp; T += 4) {
             nf_v4 acc = V4C(row + T);
+            NF_UNROLL8
             for (int k = 0; k < nb; k++)
                 acc += ac->Rb[k][t1] * V4C(ac->Rb[k] + T);
             V4(row + T) = acc;
@@ -102,13 +104,44 @@ NF_INLINE void block_rows_nb(nf_accum_t *ac, int nl, int nlp, const int nb)
     }
 }
 
+/* brhs += sum_k qb[k][c] Rb[k], a padded row of brhs per coordinate. */
+NF_INLINE void block_rhs_nb(nf_accum_t *ac, int nlp, const int nb)
+{
+    for (int c = 0; c < 3; c++)
+        for (int T = 0; T < nlp; T += 4) {
+            double *r = ac->brhs + c * NF_LOCAL_PAD + T;
+            nf_v4 acc = V4C(r);
+            NF_UNROLL8
+            for (int k = 0; k < nb; k++)
+                acc += ac->qb[k][c] * V4C(ac->Rb[k] + T);
+            V4(r) = acc;
+        }
+}
+
+/* Every buffer length a constant: a raster row visits a span for a few
+ * points, so the last, partial buffer of a run is the common case
+ * (callgrind: its loop counter cost as much as its products). */
+#define NF_BLOCK_NB(n)                                                                             \
+    case n:                                                                                        \
+        block_rows_nb(ac, nl, nlp, n);                                                             \
+        block_rhs_nb(ac, nlp, n);                                                                  \
+        break
 NF_INLINE void block_rows(nf_accum_t *ac, int nl, int nlp)
 {
-    if (ac->nb == NF_ACCUM_BUF)
-        block_rows_nb(ac, nl, nlp, NF_ACCUM_BUF);
-    else
-        block_rows_nb(ac, nl, nlp, ac->nb);
+    switch (ac->nb) {
+        NF_BLOCK_NB(1);
+        NF_BLOCK_NB(2);
+        NF_BLOCK_NB(3);
+        NF_BLOCK_NB(4);
+        NF_BLOCK_NB(5);
+        NF_BLOCK_NB(6);
+        NF_BLOCK_NB(7);
+        NF_BLOCK_NB(8);
+    default: block_rows_nb(ac, nl, nlp, ac->nb); block_rhs_nb(ac, nlp, ac->nb);
+    }
 }
+#undef NF_BLOCK_NB
+#define NF_BLOCK_RHS_DONE 1
 #else
 NF_INLINE void block_rows(nf_accum_t *ac, int nl, int nlp)
 {
@@ -122,6 +155,7 @@ NF_INLINE void block_rows(nf_accum_t *ac, int nl, int nlp)
         }
     }
 }
+#define NF_BLOCK_RHS_DONE 0
 #endif
 
 NF_INLINE void block_rank(nf_accum_t *ac, int nl, int nlp)
@@ -129,17 +163,16 @@ NF_INLINE void block_rank(nf_accum_t *ac, int nl, int nlp)
     if (!ac->open) {
         for (int t = 0; t < nl * nlp; t++)
             ac->blk[t] = 0.0;
-        for (int t = 0; t < 3 * nl; t++)
+        for (int t = 0; t < 3 * NF_LOCAL_PAD; t++)
             ac->brhs[t] = 0.0;
         ac->open = 1;
     }
     block_rows(ac, nl, nlp);
-    for (int k = 0; k < ac->nb; k++)
-        for (int t1 = 0; t1 < nl; t1++) {
-            ac->brhs[3 * t1] += ac->Rb[k][t1] * ac->qb[k][0];
-            ac->brhs[3 * t1 + 1] += ac->Rb[k][t1] * ac->qb[k][1];
-            ac->brhs[3 * t1 + 2] += ac->Rb[k][t1] * ac->qb[k][2];
-        }
+    if (!NF_BLOCK_RHS_DONE)
+        for (int k = 0; k < ac->nb; k++)
+            for (int c = 0; c < 3; c++)
+                for (int t1 = 0; t1 < nl; t1++)
+                    ac->brhs[c * NF_LOCAL_PAD + t1] += ac->Rb[k][t1] * ac->qb[k][c];
     ac->nb = 0;
 }
 
@@ -242,9 +275,9 @@ NF_INLINE void block_flush33(nf_accum_t *ac, long base)
             V4(sl) += (V4C(br + 4 * d));
         }
         double *r = ac->rhs + 3 * (base + a + b * nu);
-        r[0] += ac->brhs[3 * t1];
-        r[1] += ac->brhs[3 * t1 + 1];
-        r[2] += ac->brhs[3 * t1 + 2];
+        r[0] += ac->brhs[t1];
+        r[1] += ac->brhs[NF_LOCAL_PAD + t1];
+        r[2] += ac->brhs[2 * NF_LOCAL_PAD + t1];
     }
 }
 
@@ -393,9 +426,9 @@ void nf_accum_flush(nf_accum_t *ac)
                         sl[c] += br[c + d * o];
                 }
                 double *r = ac->rhs + 3 * (base + a + (long)b * s->nu);
-                r[0] += ac->brhs[3 * t1];
-                r[1] += ac->brhs[3 * t1 + 1];
-                r[2] += ac->brhs[3 * t1 + 2];
+                r[0] += ac->brhs[t1];
+                r[1] += ac->brhs[NF_LOCAL_PAD + t1];
+                r[2] += ac->brhs[2 * NF_LOCAL_PAD + t1];
             }
     }
     ac->npend = 0;
