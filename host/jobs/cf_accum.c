@@ -2,7 +2,7 @@
 /* cf_accum.c: a chunk of points split between the job and its shard, the
  * shard's half on a second thread (firmware/ has no threads). */
 #include "cf_accum.h"
-#include <pthread.h>
+#include "cf_pair.h"
 
 typedef struct half {
     nf_fit_t *f;
@@ -42,12 +42,12 @@ int cf_accum_rows_hook(nf_fit_t *f, nf_fit_t *sh, int serial, const double *rows
     const long n1 = n / 2;
     half_t a = {f, rows, n1, -1, 0, 0, hook, ctx},
            b = {sh, rows + 5 * n1, n - n1, -1, 0, 1, hook, ctx};
-    pthread_t th;
+    cf_pair_t th;
     /* Without a thread the halves run in turn: the grouping stays. */
-    const int on = !serial && !pthread_create(&th, 0, run_half, &b);
+    const int on = !serial && !cf_pair_start(&th, run_half, &b);
     run_half(&a);
     if (on)
-        pthread_join(th, 0);
+        cf_pair_join(&th);
     else if (!a.rc)
         run_half(&b);
     if (a.rc) {

@@ -9,10 +9,10 @@
 #include "cf_err.h"
 #include "cf_fitpass.h"
 #include "cf_holdout.h"
+#include "cf_pair.h"
 #include "cf_seedgrid.h"
 #include "cf_surf.h"
 #include "cf_surfrow.h"
-#include "cf_thread.h"
 #include "nf_err.h"
 #include "nf_fold.h"
 #include "nf_footprint.h"
@@ -507,18 +507,18 @@ static int feet_batch(const cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const doubl
 {
     feet_part_t fp[2] = {{pj, buf, j->feet, cols, 0, got, n0, nin, res, 0, how},
                          {pj2, buf, j->feet, cols, got, got, n0, nin, res, 0, how}};
-    pthread_t th;
+    cf_pair_t th;
     int on = 0;
     if (j->o.cores > 1 && got >= FEET_SPLIT) {
         int rc = grid_share(pj, pj2, got, n0, nin, how);
         if (rc)
             return rc;
         fp[0].k1 = fp[1].k0 = got / 2;
-        on = !cf_thread_start(&th, feet_part, &fp[1]);
+        on = !cf_pair_start(&th, feet_part, &fp[1]);
     }
     feet_part(&fp[0]);
     if (on)
-        pthread_join(th, NULL);
+        cf_pair_join(&th);
     else
         feet_part(&fp[1]);
     return fp[0].rc ? fp[0].rc : fp[1].rc;
@@ -895,11 +895,11 @@ static void two_halves(const run_t *r, const cf_fitsrc_t half[2], half_t h[2], v
         h[k].halt = &halt;
     }
     h[0].r = r;
-    pthread_t th;
-    int on = !cf_thread_start(&th, fn, &h[1]); /* signals stay the caller's */
+    cf_pair_t th;
+    int on = !cf_pair_start(&th, fn, &h[1]); /* signals stay the caller's */
     fn(&h[0]);
     if (on)
-        pthread_join(th, NULL);
+        cf_pair_join(&th);
     else
         fn(&h[1]);
     if (!h[0].rc && r->src->join)
@@ -1235,11 +1235,11 @@ static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *c
                           &t->res,
                           &t->ks,
                           &t->foot}};
-    pthread_t th;
-    const int on = j->o.cores > 1 && !cf_thread_start(&th, check_half, &c[1]);
+    cf_pair_t th;
+    const int on = j->o.cores > 1 && !cf_pair_start(&th, check_half, &c[1]);
     check_half(&c[0]);
     if (on)
-        pthread_join(th, NULL);
+        cf_pair_join(&th);
     else
         check_half(&c[1]);
     if (feet && !c[0].fp.rc && !c[1].fp.rc)
