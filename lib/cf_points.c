@@ -97,6 +97,9 @@ struct cf_points {
     int map[CF_POINTS_MAX_COLS];
     /* The parse thread, when on: it alone touches everything above. */
     cf_pmt_t *mt;
+    /* 1 after a read since the open or the last rewind: without one, a
+     * rewind keeps the thread's work (its ring starts at the first point). */
+    int used;
 };
 
 static int cp_err(cf_points_t *r, int code, long line, const char *fmt, ...)
@@ -1190,6 +1193,7 @@ long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, siz
 {
     if (!r || (!buf && max_points > 0) || max_points < 0)
         return cf_fail(msg, msglen, CF_EARG, "cf_points_read: bad arguments");
+    r->used = 1;
     if (r->mt)
         return cf_pmt_read(r->mt, buf, max_points, msg, msglen);
     if (r->err)
@@ -1338,6 +1342,7 @@ static int cp_rewind(cf_points_t *r)
     r->line = r->data_line;
     r->last = 0;
     r->pending = 0;
+    r->used = 0;
     r->err = 0;
     r->errline = 0;
     r->errmsg[0] = '\0';
@@ -1352,6 +1357,11 @@ int cf_points_rewind(cf_points_t *r)
         return CF_EARG;
     if (r->is_stdin)
         return CF_EUNSUPPORTED;
+    /* Nothing read yet: the thread parsed ahead from the first point (a
+     * caller that starts it at the open, before its own set-up, keeps that
+     * work). */
+    if (r->mt && !r->used && r->end < 0)
+        return CF_OK;
     /* The thread stops before the file moves, and starts again after, on
      * the same ring. Without a thread it reads alike on this one. */
     if (r->mt)

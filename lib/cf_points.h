@@ -45,7 +45,8 @@ long cf_points_read(cf_points_t *r, double *buf, long max_points, char *msg, siz
 long cf_points_line(const cf_points_t *r);
 
 /* Start again from the first point. CF_EUNSUPPORTED for stdin, CF_EIO if
- * the file cannot seek. */
+ * the file cannot seek. With the parse thread on and no point read since
+ * the open or the last rewind, nothing moves: the thread's work is kept. */
 int cf_points_rewind(cf_points_t *r);
 
 /* Parse on a second thread from now on (host only; cf_points_mt.h): the

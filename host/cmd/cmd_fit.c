@@ -295,14 +295,25 @@ int cmd_fit(int argc, char **argv)
         return cf_opt_exit(rc);
     char msg[1024];
     double t0 = cli_now();
-    nf_surf_t base;
-    if (cf_surfio_read(a.base, (int)a.entity, &base, msg, sizeof msg))
+    /* The points first: their parse thread starts now and reads ahead
+     * while the base is read and the job set up (the first pass's rewind
+     * keeps that work). */
+    cf_points_t *pr = NULL;
+    if (cf_points_open(&pr, a.points, a.uv ? 5 : 3, msg, sizeof msg))
         return cli_error("fit", CLI_USAGE, "%s", msg);
+    if (a.o.loop && !a.uv)
+        (void)cf_points_thread(pr); /* without it, the points are read on this thread */
+    nf_surf_t base;
+    if (cf_surfio_read(a.base, (int)a.entity, &base, msg, sizeof msg)) {
+        cf_points_close(pr);
+        return cli_error("fit", CLI_USAGE, "%s", msg);
+    }
     /* A trimmed nominal's trim goes to the output as it is: the fit keeps
      * the knot range, so the parameter-space curves stay valid. */
     cf_trim_t trim;
     if (cf_surfio_read_trim(a.base, a.entity, &trim, msg, sizeof msg)) {
         cf_surf_free(&base);
+        cf_points_close(pr);
         return cli_error("fit", CLI_USAGE, "%s", msg);
     }
     cf_fitjob_t *j = NULL;
@@ -310,13 +321,8 @@ int cmd_fit(int argc, char **argv)
     cf_surf_free(&base);
     if (rc) {
         cf_trim_free(&trim);
+        cf_points_close(pr);
         return cli_error("fit", rc == CF_ENOMEM ? CLI_FAIL : CLI_USAGE, "%s: %s", a.base, msg);
-    }
-    cf_points_t *pr = NULL;
-    if (cf_points_open(&pr, a.points, a.uv ? 5 : 3, msg, sizeof msg)) {
-        cf_fitjob_close(j);
-        cf_trim_free(&trim);
-        return cli_error("fit", CLI_USAGE, "%s", msg);
     }
     cf_fitsrc_t src;
     cf_fitsrc_points_t pc;
