@@ -78,6 +78,10 @@ int nf_isa_select(nf_isa_t isa)
       (nf_accum_t * ac, const double *rows, long n, const double lim[4], const double dom[4]),     \
       (ac, rows, n, lim, dom))                                                                     \
     V(nf_accum_flush, (nf_accum_t * ac), (ac))                                                     \
+    R(int, nf_chol_solve,                                                                          \
+      (const nf_stripe_t *A, const double *b, double *x, nf_arena_t *ar, nf_solve_stats_t *st,     \
+       long *bad),                                                                                 \
+      (A, b, x, ar, st, bad))                                                                      \
     R(int, nf_fit_add, (nf_fit_t * f, double u, double v, const double xyz[3], double wgt),        \
       (f, u, v, xyz, wgt))                                                                         \
     R(int, nf_fit_add_rows, (nf_fit_t * f, const double *rows, long n, long *bad),                 \

@@ -31,6 +31,8 @@
 #define nf_accum_lone33 NF_ISA_SFX(nf_accum_lone33)
 #define nf_accum_rows33 NF_ISA_SFX(nf_accum_rows33)
 #define nf_accum_flush NF_ISA_SFX(nf_accum_flush)
+/* nf_chol.c */
+#define nf_chol_solve NF_ISA_SFX(nf_chol_solve)
 /* nf_fit.c */
 #define nf_fit_add NF_ISA_SFX(nf_fit_add)
 #define nf_fit_add_rows NF_ISA_SFX(nf_fit_add_rows)
