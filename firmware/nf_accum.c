@@ -118,6 +118,7 @@ NF_INLINE void block_rhs_nb(nf_accum_t *ac, int nlp, const int nb)
         }
 }
 
+_Static_assert(NF_ACCUM_BUF == 8, "block_rows' switch has a case per buffer length");
 /* Every buffer length a constant: a raster row visits a span for a few
  * points, so the last, partial buffer of a run is the common case
  * (callgrind: its loop counter cost as much as its products). */

@@ -60,8 +60,8 @@ typedef struct nf_accum {
     _Alignas(32) double Rb[NF_ACCUM_BUF][NF_LOCAL_PAD]; /* buffered rows of R, zero tails */
     double qb[NF_ACCUM_BUF][3];
     _Alignas(32) double blk[NF_MAX_LOCAL * NF_LOCAL_PAD]; /* row t1 at t1*nlp, upper used */
-    _Alignas(
-        32) double brhs[3 * NF_LOCAL_PAD]; /* coordinate c of row t1 at c * NF_LOCAL_PAD + t1 */
+    /* coordinate c of row t1 at c * NF_LOCAL_PAD + t1 */
+    _Alignas(32) double brhs[3 * NF_LOCAL_PAD];
 } nf_accum_t;
 
 void nf_accum_init(nf_accum_t *ac, const nf_surf_t *s, nf_stripe_t *A, double *rhs);

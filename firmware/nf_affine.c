@@ -99,7 +99,13 @@ int nf_affine_project(const nf_affine_t *a, const double Q[3], nf_proj_t *out)
     double S[3], d[3];
     out->iters = 0;
     out->clamped = 0;
-    if (u >= a->dom[0] && u <= a->dom[1] && v >= a->dom[2] && v <= a->dom[3]) {
+    /* A foot on an edge to rounding is inside (nf_project calls a foot
+     * clamped only when the distance falls outward beyond noise). */
+    const double eu = NF_AFFINE_EDGE * (a->dom[1] - a->dom[0]);
+    const double ev = NF_AFFINE_EDGE * (a->dom[3] - a->dom[2]);
+    if (u >= a->dom[0] - eu && u <= a->dom[1] + eu && v >= a->dom[2] - ev && v <= a->dom[3] + ev) {
+        u = clampd(u, a->dom[0], a->dom[1]);
+        v = clampd(v, a->dom[2], a->dom[3]);
         (void)at(a, Q, u, v, S, d);
     } else {
         /* The plane's nearest point lies outside: the distance, a convex
@@ -116,7 +122,7 @@ int nf_affine_project(const nf_affine_t *a, const double Q[3], nf_proj_t *out)
                 ue = clampd((ra - ve * a->gab) / a->gaa, a->dom[0], a->dom[1]);
             }
             const double dd = at(a, Q, ue, ve, Se, de);
-            if (dd < best) {
+            if (e == 0 || dd < best) { /* the first always: an overflowed dd is inf */
                 best = dd;
                 u = ue;
                 v = ve;
@@ -129,7 +135,13 @@ int nf_affine_project(const nf_affine_t *a, const double Q[3], nf_proj_t *out)
     out->v = v;
     for (int c = 0; c < 3; c++)
         out->foot[c] = S[c];
-    const double len = sqrt(dot3(d, d));
+    /* |d| scaled by its largest component: no overflow for a far point */
+    const double m = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+    double len = 0.0;
+    if (m > 0.0) {
+        const double w[3] = {d[0] / m, d[1] / m, d[2] / m};
+        len = m * sqrt(dot3(w, w));
+    }
     out->dist = dot3(d, a->n) < 0.0 ? -len : len;
     return NF_OK;
 }

@@ -18,6 +18,10 @@
  * surface's, far below nf_project's 1e-9 of the domain). */
 #define NF_AFFINE_REL_TOL 1e-12
 
+/* A plane foot within this share of the domain's width outside an edge is
+ * on it, not clamped (rounding of the 2 x 2 solve). */
+#define NF_AFFINE_EDGE 1e-12
+
 typedef struct nf_affine {
     int ok;                  /* 1: s is affine and the fields below hold */
     double O[3], A[3], B[3]; /* S(u, v) = O + u A + v B on the domain */

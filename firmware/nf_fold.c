@@ -16,13 +16,20 @@ static void cross3(const double *a, const double *b, double *c)
     c[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* Bounds of a hodograph control point d (already scaled) on the axes:
- * lo of its e-coordinate, the largest |.| of its f-coordinate. */
-static void bound(const double *d, const double *e, const double *f, double *lo, double *fmx)
+/* Interval of a coordinate: lo, hi. */
+typedef struct iv {
+    double lo, hi;
+} iv_t;
+
+static void iv_take(iv_t *a, double x)
 {
-    const double x = dot3(d, e), y = fabs(dot3(d, f));
-    *lo = x < *lo ? x : *lo;
-    *fmx = y > *fmx ? y : *fmx;
+    a->lo = x < a->lo ? x : a->lo;
+    a->hi = x > a->hi ? x : a->hi;
+}
+
+static double iv_abs(const iv_t *a)
+{
+    return fmax(fabs(a->lo), fabs(a->hi));
 }
 
 int nf_fold_free(const nf_surf_t *s)
@@ -36,7 +43,7 @@ int nf_fold_free(const nf_surf_t *s)
             if (s->w[k] != s->w[0])
                 return 0; /* rational: the hodographs are not these */
     const double *P = s->cp;
-    /* The plane: the net's summed edges in u and in v span it. */
+    /* The direction: the net's summed edges in u and in v. */
     double A[3] = {0, 0, 0}, B[3] = {0, 0, 0}, N[3], e1[3], e2[3];
     for (long j = 0; j < nv; j++)
         for (int c = 0; c < 3; c++)
@@ -59,7 +66,15 @@ int nf_fold_free(const nf_surf_t *s)
     for (int c = 0; c < 3; c++)
         e1[c] /= el;
     cross3(N, e1, e2);
+    /* The scales, one pair for the whole domain (the proof integrates
+     * across spans): F's Jacobian about the identity for a net near its
+     * mean edges, the mean extent per unit of each parameter. */
     const double *U = s->U, *V = s->V;
+    const double su = dot3(A, e1) / ((double)nv * (U[nu] - U[p]));
+    const double sv = dot3(B, e2) / ((double)nu * (V[nv] - V[q]));
+    if (!(su > 0.0 && sv > 0.0 && su < INFINITY && sv < INFINITY))
+        return 0;
+    const double ks = 1.0 / su, kt = 1.0 / sv;
     for (long k = q; k < nv; k++) {
         if (!(V[k + 1] > V[k]))
             continue; /* an empty span */
@@ -67,31 +82,37 @@ int nf_fold_free(const nf_surf_t *s)
             if (!(U[l + 1] > U[l]))
                 continue;
             /* Su on span (l, k): control points (i, j), i = l-p .. l-1,
-             * j = k-q .. k; Sv: i = l-p .. l, j = k-q .. k-1. */
-            double alo = INFINITY, bmx = 0.0, dlo = INFINITY, cmx = 0.0;
+             * j = k-q .. k; Sv: i = l-p .. l, j = k-q .. k-1; their
+             * coordinates along e1 and e2, scaled. */
+            iv_t a = {INFINITY, -INFINITY}, b = a, c = a, d = a;
             for (long j = k - q; j <= k; j++)
                 for (long i = l - p; i <= l; i++) {
                     const double *Pij = P + 3 * (i + j * nu);
-                    double d[3];
+                    double h3[3];
                     if (i < l) {
                         const double h = U[i + p + 1] - U[i + 1];
                         if (!(h > 0.0))
                             return 0;
-                        for (int c = 0; c < 3; c++)
-                            d[c] = p * (Pij[3 + c] - Pij[c]) / h;
-                        bound(d, e1, e2, &alo, &bmx);
+                        for (int m = 0; m < 3; m++)
+                            h3[m] = p * (Pij[3 + m] - Pij[m]) / h * ks;
+                        iv_take(&a, dot3(h3, e1));
+                        iv_take(&b, dot3(h3, e2));
                     }
                     if (j < k) {
                         const double h = V[j + q + 1] - V[j + 1];
                         if (!(h > 0.0))
                             return 0;
-                        for (int c = 0; c < 3; c++)
-                            d[c] = q * (Pij[3 * nu + c] - Pij[c]) / h;
-                        bound(d, e2, e1, &dlo, &cmx);
+                        for (int m = 0; m < 3; m++)
+                            h3[m] = q * (Pij[3 * nu + m] - Pij[m]) / h * kt;
+                        iv_take(&c, dot3(h3, e1));
+                        iv_take(&d, dot3(h3, e2));
                     }
                 }
-            /* det >= alo dlo - bmx cmx for every (u, v) of the span */
-            if (!(alo > 0.0 && dlo > 0.0 && alo * dlo > bmx * cmx))
+            /* J = [a c; b d]: x^T J x = a x1^2 + (b + c) x1 x2 + d x2^2 > 0
+             * for x != 0 when a, d > 0 and (b + c)^2 < 4 a d, on the whole
+             * span when it holds for the bounds. */
+            const double bc = iv_abs(&b) + iv_abs(&c);
+            if (!(a.lo > 0.0 && d.lo > 0.0 && bc * bc < 4.0 * a.lo * d.lo))
                 return 0;
         }
     }

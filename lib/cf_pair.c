@@ -56,6 +56,18 @@ static void set_state(int s, pthread_cond_t *cv)
     pthread_mutex_unlock(&mu);
 }
 
+/* A child of fork has no helper (only the forking thread goes on there):
+ * it starts its own at its first use. */
+static void child_reset(void)
+{
+    pthread_mutex_init(&owner, NULL);
+    pthread_mutex_init(&mu, NULL);
+    pthread_cond_init(&go, NULL);
+    pthread_cond_init(&fin, NULL);
+    atomic_store(&state, 0);
+    tried = 0;
+}
+
 static void *helper_main(void *unused)
 {
     (void)unused;
@@ -74,7 +86,8 @@ int cf_pair_start(cf_pair_t *h, void *(*fn)(void *), void *arg)
         if (!tried) { /* the first user starts it; owner keeps that to one */
             tried = 1;
             pthread_t th;
-            if (cf_thread_start(&th, helper_main, NULL) == 0) {
+            if (pthread_atfork(NULL, NULL, child_reset) == 0 &&
+                cf_thread_start(&th, helper_main, NULL) == 0) {
                 pthread_detach(th);
                 atomic_store(&state, 1);
             }

@@ -6,7 +6,7 @@
  * exit, the release of that stack on both cores. The helper takes every
  * signal blocked (cf_thread.h). A caller that finds the helper in use
  * (another job's half, or a half that splits again) gets a thread of its
- * own, as before. */
+ * own, as before. A child of fork starts a helper of its own. */
 #ifndef CF_PAIR_H
 #define CF_PAIR_H
 
@@ -22,7 +22,8 @@ typedef struct cf_pair {
  * error number (fn not run: the caller runs it itself). */
 int cf_pair_start(cf_pair_t *h, void *(*fn)(void *), void *arg);
 
-/* Wait for fn to return (after a successful cf_pair_start only). */
+/* Wait for fn to return: once after each successful cf_pair_start, on
+ * the thread that started it (the helper stays taken until then). */
 void cf_pair_join(cf_pair_t *h);
 
 #endif

@@ -72,12 +72,14 @@ struct cf_fitjob {
      * 0's feet on the surface it projected onto. nfeet 0: none. */
     double *feet;
     long nfeet, fcap;
-    /* 1: the last search's surface did not fold over (the quadrilaterals
-     * served): the check pass may take Newton from the last feet. Over a
-     * fold the surface's change between fits can swap which layer is
-     * nearer: every valley within reach of Newton's foot is tried too
-     * (START_FOLD). feet_base: the feet are round 0's, on the base, which
-     * its fit may have moved far: its check sees the fit's grid first. */
+    /* 1: the last fit checked has one layer: its search's quadrilaterals
+     * served (no quadrilateral faced away from their plane's normal), or
+     * it was proven a height field (nf_fold_free): the check pass may take
+     * Newton from the last feet. Over a fold the surface's change between
+     * fits can swap which layer is nearer: every valley within reach of
+     * Newton's foot is tried too (START_FOLD). feet_base: the feet are
+     * round 0's, on the base, which its fit may have moved far: its check
+     * asks the fit first (the proof, else its grid). */
     int flat;
     int feet_base;
 };
@@ -1292,9 +1294,13 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
      * reach of Newton's foot are tried too (START_FOLD). */
     const int keep = ck && !uv && j->o.loop;
     const long nin = uv ? 0 : j->nfeet;
-    /* A fit proven not to fold (nf_fold_free: hodograph bounds, O(N))
-     * needs no grid to say so: the blanket on round 0's fit cost about a
-     * tenth of the loop on holes at 3,833 points. */
+    /* A fit proven a height field (nf_fold_free: every line along one
+     * direction meets it once, so it has no second layer; hodograph
+     * bounds, O(N)) needs no grid to say so: the blanket on round 0's fit
+     * cost about a tenth of the loop on holes at 3,833 points. The proof
+     * and the blanket's test are different sufficient signs (the blanket
+     * judges its quadrilaterals against its maximum-area plane); either
+     * one lets the check start from the kept feet. */
     const int unfolded = nin > 0 && !(j->flat && !j->feet_base) && nf_fold_free(s);
     const int how = (j->flat && !j->feet_base) || unfolded ? START_NEWTON : START_FOLD;
     if (unfolded)

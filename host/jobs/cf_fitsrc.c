@@ -171,8 +171,10 @@ void cf_fitsrc_points(cf_fitsrc_t *s, cf_fitsrc_points_t *ctx, cf_points_t *r, c
     ctx->r = r;
     ctx->path = path;
     ctx->cols = cf_points_cols(r); /* the rows' width (0: an empty file, no cache) */
-    /* The parse thread starts at the first rewind: a job that reads the
-     * file in halves never starts it (the job rewinds before every pass). */
+    /* The parse thread starts at the first rewind unless the caller
+     * started it already (cellfit fit: at the open, the first rewind then
+     * keeps its work); a job that reads the file in halves never starts it
+     * (the job rewinds before every pass). */
     *s = (cf_fitsrc_t){cf_points_cols(r) == 5 ? 5 : 3,
                        -1,
                        path,

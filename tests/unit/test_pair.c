@@ -3,12 +3,16 @@
  * each job runs once, on a thread other than the caller's, with its
  * results visible after the join; the same helper serves job after job,
  * also after gaps long enough for it (and the joiner) to sleep; a second
- * caller while the helper is in use gets a thread of its own; the helper
- * takes no SIGINT or SIGTERM. */
+ * caller while the helper is in use gets a thread of its own, also a job
+ * on the helper that splits again; a child of fork gets a helper of its
+ * own; the helper takes no SIGINT or SIGTERM. */
 #include "cf_pair.h"
 #include "cf_test.h"
 #include <signal.h>
+#include <stdio.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 typedef struct job {
     pthread_t self;
@@ -104,12 +108,70 @@ static void t_busy(void **state)
     assert_true(pthread_equal(c.self, a.self));
 }
 
+/* A job on the helper that splits again: its half gets a thread of its
+ * own; and a child of fork runs jobs on a helper of its own. */
+typedef struct nested {
+    job_t inner;
+    int pooled;
+    int rc;
+} nested_t;
+
+static void *nested_main(void *p)
+{
+    nested_t *n = p;
+    cf_pair_t h;
+    n->rc = cf_pair_start(&h, job_main, &n->inner);
+    if (n->rc == 0) {
+        n->pooled = h.pooled;
+        cf_pair_join(&h);
+    }
+    return NULL;
+}
+
+static void t_nested_and_fork(void **state)
+{
+    (void)state;
+    nested_t n = {.inner = {.in = 4}, .pooled = -1};
+    cf_pair_t h;
+    assert_int_equal(cf_pair_start(&h, nested_main, &n), 0);
+    cf_pair_join(&h);
+    assert_int_equal(h.pooled, 1);
+    assert_int_equal(n.rc, 0);
+    assert_int_equal(n.pooled, 0);
+    assert_int_equal(n.inner.runs, 1);
+    assert_true(n.inner.out == 13);
+    fflush(NULL);
+    const pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) { /* the child: exit 0 when a job runs and joins */
+        job_t j = {.in = 2};
+        cf_pair_t c;
+        int ok = cf_pair_start(&c, job_main, &j) == 0;
+        if (ok)
+            cf_pair_join(&c);
+        _exit(ok && c.pooled == 1 && j.runs == 1 && j.out == 7 ? 0 : 1);
+    }
+    /* a child whose helper never came would wait for it for good: 10 s */
+    int st = 0;
+    pid_t w = 0;
+    for (int k = 0; k < 1000 && (w = waitpid(pid, &st, WNOHANG)) == 0; k++)
+        nap(10);
+    if (w == 0) {
+        kill(pid, SIGKILL);
+        waitpid(pid, &st, 0);
+        fail_msg("the child's job did not end in 10 s");
+    }
+    assert_int_equal(w, pid);
+    assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(t_many),
         cmocka_unit_test(t_sleepers),
         cmocka_unit_test(t_busy),
+        cmocka_unit_test(t_nested_and_fork),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
