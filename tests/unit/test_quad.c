@@ -200,6 +200,27 @@ static void test_thin(void **state)
     ref_surf_free(&s);
 }
 
+/* The 270-degree cylinder of radius 40 and length 100 (three quarter arcs,
+ * degree 2 x 1, double knots at 1/3 and 2/3) in mem; weights 1, 1/sqrt 2
+ * (exact) with rational set, else all 1 (a polynomial that folds too). */
+static void cylinder270(nf_surf_t *c3, double *mem, int rational)
+{
+    nf_surf_wire(c3, 2, 1, 7, 2, mem);
+    const double U[] = {0, 0, 0, 1, 1, 2, 2, 3, 3, 3}, V[] = {0, 0, 1, 1};
+    memcpy(c3->U, U, sizeof U);
+    memcpy(c3->V, V, sizeof V);
+    const double P[7][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}};
+    const double c = sqrt(0.5), w[7] = {1, c, 1, c, 1, c, 1};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 7; i++) {
+            double *C = c3->cp + 3 * (i + 7 * j);
+            C[0] = 40 * P[i][0];
+            C[1] = 40 * P[i][1];
+            C[2] = 100.0 * j;
+            c3->w[i + 7 * j] = rational ? w[i] : 1.0;
+        }
+}
+
 /* Exact quarter cylinder (radius R, degree 2 x 1, weights 1, 1/sqrt 2, 1)
  * and sphere patch (a 90-degree meridian arc revolved by 90 degrees). */
 static void cylinder(nf_surf_t *s, double R, double L, double *mem)
@@ -481,20 +502,7 @@ static void test_fold(void **state)
     /* 270 degrees: three quarter arcs, double knots at 1/3 and 2/3. */
     double m3[NF_SURF_DOUBLES(7, 2, 2, 1)];
     nf_surf_t c3;
-    nf_surf_wire(&c3, 2, 1, 7, 2, m3);
-    const double U[] = {0, 0, 0, 1, 1, 2, 2, 3, 3, 3}, V[] = {0, 0, 1, 1};
-    memcpy(c3.U, U, sizeof U);
-    memcpy(c3.V, V, sizeof V);
-    const double P[7][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}};
-    const double c = sqrt(0.5), w[7] = {1, c, 1, c, 1, c, 1};
-    for (int j = 0; j < 2; j++)
-        for (int i = 0; i < 7; i++) {
-            double *C = c3.cp + 3 * (i + 7 * j);
-            C[0] = 40 * P[i][0];
-            C[1] = 40 * P[i][1];
-            C[2] = 100.0 * j;
-            c3.w[i + 7 * j] = w[i];
-        }
+    cylinder270(&c3, m3, 1);
     assert_int_equal(nf_surf_check(&c3), NF_OK);
     quad_make(&f, &c3, NF_QUAD_REL_TOL, MAXQ);
     assert_int_equal(f.q.folded, 1);
@@ -890,18 +898,7 @@ static void test_fold_free(void **state)
     /* folds: the 270-degree cylinder, and a plate hemmed back over itself */
     double m3[NF_SURF_DOUBLES(7, 2, 2, 1)];
     nf_surf_t c3;
-    nf_surf_wire(&c3, 2, 1, 7, 2, m3);
-    const double U[] = {0, 0, 0, 1, 1, 2, 2, 3, 3, 3}, V[] = {0, 0, 1, 1};
-    memcpy(c3.U, U, sizeof U);
-    memcpy(c3.V, V, sizeof V);
-    const double P[7][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}};
-    for (int j = 0; j < 2; j++)
-        for (int i = 0; i < 7; i++) {
-            double *C = c3.cp + 3 * (i + 7 * j);
-            C[0] = 40 * P[i][0];
-            C[1] = 40 * P[i][1];
-            C[2] = 100.0 * j;
-        }
+    cylinder270(&c3, m3, 0);
     assert_int_equal(nf_fold_free(&c3), 0); /* polynomial here: the hodograph bound decides */
     nf_surf_t hem;
     ref_surf_random(&hem, 3, 3, 8, 5, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0);
