@@ -456,33 +456,53 @@ static void test_domain_and_nonfinite(void **state)
     ref_surf_free(&s);
 }
 
-/* Budget: the sim board allows NF_MAX_CP control points and NF_ARENA_BYTES. */
+/* 1 when an n x n bicubic net's Cholesky band exceeds the board's arena and
+ * its PCG storage does not. */
+static int chol_only(int n)
+{
+    return nf_fit_bytes(n, n, 3, 3, NF_SOLVER_CHOL) > NF_ARENA_BYTES &&
+           nf_fit_bytes(n, n, 3, 3, NF_SOLVER_PCG) <= NF_ARENA_BYTES;
+}
+
+/* Budget: the board allows NF_MAX_CP control points and NF_ARENA_BYTES; the
+ * nets are sized from them (sim: 201 x 201 over the count, 190 x 190 over
+ * Cholesky's arena; linux-cell: 1049 x 1049 and the largest net below it
+ * that shows it). */
 static void test_budget_refusal(void **state)
 {
     (void)state;
     nf_surf_t s;
     /* Over the control-point maximum: refused before any storage is taken. */
-    ref_surf_random(&s, 3, 3, 201, 201, 0, 1, 0, 1, 1, 1);
+    int over = 1;
+    while ((long)over * over <= NF_MAX_CP)
+        over++;
+    ref_surf_random(&s, 3, 3, over, over, 0, 1, 0, 1, 1, 1);
     nf_fit_t f;
     nf_arena_t ar;
     static unsigned char small[4096];
     nf_arena_init(&ar, small, sizeof small);
     nf_fit_params_t prm = {0.1, 0.001, NF_SOLVER_PCG};
     assert_int_equal(nf_fit_init(&f, &s, &prm, &ar), NF_EBUDGET);
-    assert_int_equal(f.need_bytes, NF_BYTES_PCG(201L * 201, 3, 3));
-    assert_true(201L * 201 > NF_MAX_CP);
+    assert_int_equal(f.need_bytes, NF_BYTES_PCG((long)over * over, 3, 3));
+    assert_true((long)over * over > NF_MAX_CP);
     assert_int_equal(ar.used, 0);
     ref_surf_free(&s);
     /* Within the count, but Cholesky's band exceeds the arena: refused, with
-     * the bytes it needed; PCG on the same net fits. */
-    ref_surf_random(&s, 3, 3, 190, 190, 0, 1, 0, 1, 1, 1);
+     * the bytes it needed; PCG on the same net fits. The largest such
+     * square net at most 190 on a side. */
+    int n = 190;
+    if (!(n < over && chol_only(n)))
+        for (n = over - 1; n > 4 && !chol_only(n); n--)
+            ;
+    assert_true(n > 4);
+    ref_surf_random(&s, 3, 3, n, n, 0, 1, 0, 1, 1, 1);
     prm.solver = NF_SOLVER_CHOL;
     assert_int_equal(nf_fit_init(&f, &s, &prm, &ar), NF_EBUDGET);
-    assert_int_equal(f.need_bytes, NF_BYTES_CHOL(190, 190, 3, 3));
+    assert_int_equal(f.need_bytes, NF_BYTES_CHOL(n, n, 3, 3));
     assert_true(f.need_bytes > NF_ARENA_BYTES);
     prm.solver = NF_SOLVER_PCG;
     assert_int_equal(nf_fit_init(&f, &s, &prm, &ar), NF_EARENA); /* fits the board, not 4 KiB */
-    assert_true(nf_fit_bytes(190, 190, 3, 3, NF_SOLVER_PCG) <= NF_ARENA_BYTES);
+    assert_true(nf_fit_bytes(n, n, 3, 3, NF_SOLVER_PCG) <= NF_ARENA_BYTES);
     ref_surf_free(&s);
 }
 

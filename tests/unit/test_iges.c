@@ -676,8 +676,10 @@ static void test_invalid_surfaces(void **state)
     c = col_of(iges_a, 33, "5.0E-01");
     expect_a(patched(iges_a, 33, c, "0.0E-01"), 11, NF_EWEIGHT, "line 33 (P record 13");
     expect_a(patched(iges_a, 33, c, "-.5E-01"), 11, NF_EWEIGHT, "W(1,1)");
-    /* Degree 6 in u for DE 11 (board sim: at most 5). */
-    expect_a(patched(iges_a, 30, 9, "6"), 11, NF_EDEGREE, "line 30 (P record 10");
+    /* One degree over the board's in u for DE 11 (sim: 6; linux-cell: 8). */
+    char over[2] = {(char)('0' + NF_MAX_DEGREE + 1), '\0'};
+    _Static_assert(NF_MAX_DEGREE + 1 <= 9, "the patched field holds one digit");
+    expect_a(patched(iges_a, 30, 9, over), 11, NF_EDEGREE, "line 30 (P record 10");
 }
 
 /* A file with one 128 whose parameter text is params (free format). */
@@ -899,21 +901,27 @@ static void test_numbers_as_strtod(void **state)
 static void test_counts(void **state)
 {
     (void)state;
-    char *ok = params_128(6, 5);
+    /* The board's highest degree reads, one more is refused. */
+    char *ok = params_128(NF_MAX_DEGREE + 1, NF_MAX_DEGREE);
     expect_one(ok, CF_OK, NULL);
     free(ok);
-    char *deg6 = params_128(6, 6);
-    expect_one(deg6, NF_EDEGREE, "line 5 (P record 1");
-    free(deg6);
+    char *deg = params_128(NF_MAX_DEGREE + 1, NF_MAX_DEGREE + 1);
+    expect_one(deg, NF_EDEGREE, "line 5 (P record 1");
+    free(deg);
     /* Counts far beyond the data: refused before any allocation. */
     expect_one("128,999999999,999999999,3,3,0,0,1,0,0,0.,0.,0.,0.,1.,1.,1.,1.;", CF_EPARSE,
                "need 4000000002000000018");
     expect_one("128,2147483647,3,3,3,0,0,1,0,0,0.;", CF_EPARSE, "line 5 (P record 1");
     expect_one("128,-1,3,3,3,0,0,1,0,0,0.;", CF_EPARSE, "negative");
     expect_one("128,3,3,3;", CF_EPARSE, "at least 10");
-    /* 201 x 201 points, all present: over the sim board's NF_MAX_CP. */
-    char *big = params_128(200, 1);
-    expect_one(big, NF_EBUDGET, "201 x 201");
+    /* The least square net over the board's NF_MAX_CP, all points present
+     * (sim: 201 x 201; linux-cell: 1049 x 1049). */
+    int side = 1;
+    while ((long)side * side <= NF_MAX_CP)
+        side++;
+    char *big = params_128(side - 1, 1), what[64];
+    snprintf(what, sizeof what, "%d x %d", side, side);
+    expect_one(big, NF_EBUDGET, what);
     free(big);
     /* One value short. */
     char *shrt = params_128(3, 3);
