@@ -7,6 +7,7 @@
 #include "cf_opt.h"
 #include "cf_surf.h"
 #include "cf_surfio.h"
+#include "cf_surfrow.h"
 #include "cmd.h"
 #include "nf_budget.h"
 #include <math.h>
@@ -30,9 +31,13 @@ static void bbox(const nf_surf_t *s, double lo[3], double hi[3], double *wlo, do
 
 /* Box of the surface itself: the control-net box plus a dense sample of the
  * surface (at least 8 samples per knot span and direction, the end points
- * and every knot line included). */
+ * and every knot line included), inside the edges row by row of one v
+ * (cf_surfrow: a net of 10^5 control points took 0.65 s with nf_surf_eval
+ * per sample). */
 static void surf_box(const nf_surf_t *s, double lo[3], double hi[3])
 {
+    cf_surfrow_t ev;
+    const int rows = cf_surfrow_init(&ev, s) == 0;
     int nsu = 8 * (s->nu - s->p), nsv = 8 * (s->nv - s->q);
     nsu = nsu > 2000 ? 2000 : nsu;
     nsv = nsv > 2000 ? 2000 : nsv;
@@ -45,12 +50,21 @@ static void surf_box(const nf_surf_t *s, double lo[3], double hi[3])
     for (int j = 0; j <= nsv; j++)
         for (int i = 0; i <= nsu; i++) {
             double P[3];
-            nf_surf_eval(s, u0 + (u1 - u0) * i / nsu, v0 + (v1 - v0) * j / nsv, P);
+            const double u = u0 + (u1 - u0) * i / nsu, v = v0 + (v1 - v0) * j / nsv;
+            /* The edges by the basis itself: at the domain's ends it is
+             * exact (a corner is its control point; the power form gave x
+             * 3.7e-15 for 0 on a test surface). */
+            if (rows && i > 0 && i < nsu && j > 0 && j < nsv)
+                cf_surfrow_eval(&ev, u, v, P);
+            else
+                nf_surf_eval(s, u, v, P);
             for (int c = 0; c < 3; c++) {
-                lo[c] = fmin(lo[c], P[c]);
-                hi[c] = fmax(hi[c], P[c]);
+                lo[c] = P[c] < lo[c] ? P[c] : lo[c];
+                hi[c] = P[c] > hi[c] ? P[c] : hi[c];
             }
         }
+    if (rows)
+        cf_surfrow_free(&ev);
 }
 
 static void print_knots(const char *name, const double *U, int len)

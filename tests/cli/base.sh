@@ -37,6 +37,27 @@ expect 0 "bilinear refined to 50 x 40" "$CF" base --curves "$T/curves.igs" --nu 
 d=$(maxdiff "$T/e-fine" "$T/e-bil")
 le "$d" 1e-9 && ok "refined bilinear base is the same surface ($d mm)" || no "refined base differs by $d mm"
 "$CF" info "$T/b-bilinear.igs" | grep -q "(polynomial)" && ok "polynomial curves give a polynomial base" || no "bilinear base not polynomial"
+# `cellfit info`'s sampled box (inside the edges row by row, cf_surfrow)
+# against `cellfit eval` (the basis at each point) at the same samples:
+# 8 a knot span and direction, the edges included.
+"$CF" info --json "$T/nominal.igs" >"$T/info"
+awk -v nu="$(json "$T/info" nu)" -v nv="$(json "$T/info" nv)" -v p="$(json "$T/info" p)" \
+    -v q="$(json "$T/info" q)" -v u0="$(json "$T/info" u0)" -v u1="$(json "$T/info" u1)" \
+    -v v0="$(json "$T/info" v0)" -v v1="$(json "$T/info" v1)" 'BEGIN {
+    su = 8 * (nu - p); sv = 8 * (nv - q); if (su > 2000) su = 2000; if (sv > 2000) sv = 2000
+    for (j = 0; j <= sv; j++) for (i = 0; i <= su; i++)
+        printf "%.17g %.17g\n", u0 + (u1 - u0) * i / su, v0 + (v1 - v0) * j / sv }' >"$T/box.uv"
+"$CF" eval "$T/nominal.igs" "$T/box.uv" >"$T/box.xyz"
+bad=$(awk -v x0="$(json "$T/info" xmin)" -v x1="$(json "$T/info" xmax)" -v y0="$(json "$T/info" ymin)" \
+    -v y1="$(json "$T/info" ymax)" -v z0="$(json "$T/info" zmin)" -v z1="$(json "$T/info" zmax)" '
+    NR == 1 { a = $1; b = $1; c = $2; d = $2; e = $3; f = $3 }
+    { if ($1 < a) a = $1; if ($1 > b) b = $1; if ($2 < c) c = $2; if ($2 > d) d = $2
+      if ($3 < e) e = $3; if ($3 > f) f = $3 }
+    function off(s, t, w) { s -= t; if (s < 0) s = -s; return s > 1e-12 * w }
+    END { w = (b - a) + (d - c) + (f - e)
+          if (off(a, x0, w) || off(b, x1, w) || off(c, y0, w) || off(d, y1, w) || off(e, z0, w) || off(f, z1, w))
+              printf "info %s %s %s %s %s %s, eval %s %s %s %s %s %s", x0, x1, y0, y1, z0, z1, a, b, c, d, e, f }' "$T/box.xyz")
+[ -z "$bad" ] && [ -s "$T/box.xyz" ] && ok "info's sampled box is eval's at the same $(wc -l <"$T/box.xyz") samples" || no "info's box: $bad"
 expect 2 "--degree is refused for a Coons patch" "$CF" base --curves "$T/curves.igs" --degree 2 --out "$T/x.igs"
 
 # Curves given in another order (--de) and direction make the same patch.
