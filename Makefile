@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 # cellfit top-level Makefile.
 #   make              build/cellfit and build/firmware/*.o (BOARD=linux-cell)
-#   make test         every test: unit (sim board), ASan+UBSan, clang, CLI,
-#                     lint; installs missing Debian packages first
+#   make test         every test: unit (sim board; clang on linux-cell),
+#                     ASan+UBSan, CLI, lint; installs missing Debian packages
+#                     first
 #   make demo         the main job, end to end, with its report
 #   make bench        benchmarks (printed figures, no assertions)
 #   make BOARD=b      build for boards/b
@@ -202,7 +203,9 @@ fwcheck: $(FW_OBJ) $(BUILD)/cellsim
 # at a time, with only the later stages' builds beside them at nice 19.
 # The unit tests run on the sim board (gcc, ASan) and, with clang, on
 # linux-cell, the board the host tools are built for: tests that size their
-# cases from the board's limits are checked against both.
+# cases from the board's limits are checked against both. (A build tree
+# holds one board: the objects do not depend on BOARD, so the linux-cell
+# tree has a name of its own, t-clang-lc, not the sim tree's t-clang.)
 STAGE = sh scripts/stage.sh
 TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 test: deps
@@ -212,7 +215,7 @@ test: deps
 	@$(STAGE) unit-sim $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-sim unit-run
 	@$(STAGE) test-cli sh scripts/beside.sh build/prebuild.log "$(MAKE) test-prebuild" $(MAKE) test-cli
 	@$(STAGE) unit-asan $(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-run
-	@$(STAGE) unit-clang $(MAKE) -j$(TEST_JOBS) BOARD=linux-cell BUILD=build/t-clang CC=clang unit-run
+	@$(STAGE) unit-clang $(MAKE) -j$(TEST_JOBS) BOARD=linux-cell BUILD=build/t-clang-lc CC=clang unit-run
 	@$(STAGE) test-extra $(MAKE) test-extra
 	@$(STAGE) boards $(MAKE) -j$(TEST_JOBS) boards
 	@$(STAGE) boards-test $(MAKE) boards-test
@@ -226,7 +229,7 @@ test: deps
 # make, which then finds little or nothing to do, and fails on an error.
 test-prebuild:
 	-$(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 unit-bins
-	-$(MAKE) -j$(TEST_JOBS) BOARD=linux-cell BUILD=build/t-clang CC=clang unit-bins
+	-$(MAKE) -j$(TEST_JOBS) BOARD=linux-cell BUILD=build/t-clang-lc CC=clang unit-bins
 	-$(MAKE) -j$(TEST_JOBS) arch-a64-bins
 	-$(MAKE) -j$(TEST_JOBS) BOARD=sim BUILD=build/t-asan SAN=1 OPT=-O1 fuzz-bins
 	-$(MAKE) -j$(TEST_JOBS) fuzz-build

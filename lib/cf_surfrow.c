@@ -60,7 +60,9 @@ int cf_surfrow_init(cf_surfrow_t *e, const nf_surf_t *s)
         if (s->V[k] < s->V[k + 1])
             span_power(s->V, s->q, k, e->Mv + q2 * (size_t)(k - s->q));
     e->row = -1;
-    e->v = s->V[s->q] - 1.0; /* no row yet */
+    /* No row yet: NaN equals no v. (V[q] - 1 did not: at |V[q]| >= 2^53 it
+     * is V[q], and a first row there read columns never computed.) */
+    e->v = NAN;
     e->umin = s->U[s->p], e->umax = s->U[s->nu];
     e->vmin = s->V[s->q], e->vmax = s->V[s->nv];
     e->lo = 1.0, e->hi = 0.0; /* no span yet: [lo, hi) empty */

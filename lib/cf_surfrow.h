@@ -27,7 +27,7 @@ typedef struct cf_surfrow {
     double *M;   /* (p+1)^2 per u span l (at l - p): N_(l-p+a)(u) = sum_j M[j][a] t^j */
     double *Mv;  /* (q+1)^2 per v span k (at k - q), the same for N(v) */
     long row;    /* rows seen (stamps) */
-    double v;    /* the current row's v (clamped) */
+    double v;    /* the current row's v (clamped); NaN before the first */
     int k;       /* its v span */
     double Nv[NF_MAX_ORDER];
     int l;                         /* the u span of the last point, -1 none */

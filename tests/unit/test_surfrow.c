@@ -180,9 +180,42 @@ static void test_row_walk_edges(void **state)
     }
 }
 
+/* Knots far from 0 in v (1e18 + 256 j: V[q] - 1 is V[q] there): the first
+ * row, at the domain's start, is computed, not taken for a row already
+ * seen (it was, and read columns never computed: garbage, valgrind's
+ * uninitialised values). */
+static void test_far_knots(void **state)
+{
+    (void)state;
+    nf_surf_t s;
+    make(&s, 3, 3, 7, 6, 0, 0);
+    double *w = s.w;
+    s.w = NULL; /* polynomial */
+    for (int i = 0; i < s.nv + s.q + 1; i++) {
+        const int j = i < s.q ? 0 : i > s.nv ? s.nv - s.q : i - s.q;
+        s.V[i] = 1e18 + 256.0 * j;
+    }
+    assert_true(s.V[s.q] - 1.0 == s.V[s.q]);
+    cf_surfrow_t e;
+    assert_int_equal(cf_surfrow_init(&e, &s), CF_OK);
+    const double v[] = {s.V[s.q], s.V[s.q], s.V[s.q + 1], s.V[s.nv]};
+    for (size_t r = 0; r < sizeof v / sizeof v[0]; r++)
+        for (int k = 0; k <= 8; k++) {
+            double P[3], Q[3];
+            cf_surfrow_eval(&e, k / 8.0, v[r], P);
+            nf_surf_eval(&s, k / 8.0, v[r], Q);
+            for (int c = 0; c < 3; c++)
+                assert_near(P[c], Q[c], 1e-9);
+        }
+    cf_surfrow_free(&e);
+    s.w = w;
+    cf_surf_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_far_knots),
         cmocka_unit_test(test_linear_precision),
         cmocka_unit_test(test_same_as_nf_surf_eval),
         cmocka_unit_test(test_row_walk_edges),
