@@ -1,15 +1,11 @@
 /* SPDX-License-Identifier: MIT */
 /* nf_affine.c: closed-form projection onto an affine surface (nf_affine.h). */
 #include "nf_affine.h"
+#include "nf_vec3.h"
 
 #include "nf_basis.h"
 #include "nf_err.h"
 #include <math.h>
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 int nf_affine_init(nf_affine_t *a, const nf_surf_t *s)
 {
@@ -53,9 +49,9 @@ int nf_affine_init(nf_affine_t *a, const nf_surf_t *s)
                     return 0;
         }
     }
-    a->gaa = dot3(a->A, a->A);
-    a->gab = dot3(a->A, a->B);
-    a->gbb = dot3(a->B, a->B);
+    a->gaa = nf_dot3(a->A, a->A);
+    a->gab = nf_dot3(a->A, a->B);
+    a->gbb = nf_dot3(a->B, a->B);
     a->det = a->gaa * a->gbb - a->gab * a->gab;
     /* A and B nearly parallel: the 2 x 2 solve loses the digits. */
     if (!(a->det > 1e-12 * a->gaa * a->gbb))
@@ -63,7 +59,7 @@ int nf_affine_init(nf_affine_t *a, const nf_surf_t *s)
     const double nx[3] = {a->A[1] * a->B[2] - a->A[2] * a->B[1],
                           a->A[2] * a->B[0] - a->A[0] * a->B[2],
                           a->A[0] * a->B[1] - a->A[1] * a->B[0]};
-    const double nl = sqrt(dot3(nx, nx));
+    const double nl = sqrt(nf_dot3(nx, nx));
     for (int c = 0; c < 3; c++)
         a->n[c] = nx[c] / nl;
     nf_surf_domain(s, &a->dom[0], &a->dom[1], &a->dom[2], &a->dom[3]);
@@ -79,7 +75,7 @@ static double at(const nf_affine_t *a, const double Q[3], double u, double v, do
         S[c] = a->O[c] + u * a->A[c] + v * a->B[c];
         d[c] = Q[c] - S[c];
     }
-    return dot3(d, d);
+    return nf_dot3(d, d);
 }
 
 static double clampd(double x, double lo, double hi)
@@ -94,7 +90,7 @@ int nf_affine_project(const nf_affine_t *a, const double Q[3], nf_proj_t *out)
     if (!(Q[0] - Q[0] == 0.0 && Q[1] - Q[1] == 0.0 && Q[2] - Q[2] == 0.0))
         return NF_ENONFINITE;
     const double r[3] = {Q[0] - a->O[0], Q[1] - a->O[1], Q[2] - a->O[2]};
-    const double ra = dot3(a->A, r), rb = dot3(a->B, r);
+    const double ra = nf_dot3(a->A, r), rb = nf_dot3(a->B, r);
     double u = (a->gbb * ra - a->gab * rb) / a->det, v = (a->gaa * rb - a->gab * ra) / a->det;
     double S[3], d[3];
     out->iters = 0;
@@ -140,8 +136,8 @@ int nf_affine_project(const nf_affine_t *a, const double Q[3], nf_proj_t *out)
     double len = 0.0;
     if (m > 0.0) {
         const double w[3] = {d[0] / m, d[1] / m, d[2] / m};
-        len = m * sqrt(dot3(w, w));
+        len = m * sqrt(nf_dot3(w, w));
     }
-    out->dist = dot3(d, a->n) < 0.0 ? -len : len;
+    out->dist = nf_dot3(d, a->n) < 0.0 ? -len : len;
     return NF_OK;
 }

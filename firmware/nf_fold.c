@@ -1,20 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /* nf_fold.c: hodograph bounds against folds (nf_fold.h). */
 #include "nf_fold.h"
+#include "nf_vec3.h"
 
 #include <math.h>
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double *a, const double *b, double *c)
-{
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 /* Interval of a coordinate: lo, hi. */
 typedef struct iv {
@@ -51,27 +40,27 @@ int nf_fold_free(const nf_surf_t *s)
     for (long i = 0; i < nu; i++)
         for (int c = 0; c < 3; c++)
             B[c] += P[3 * (i + (nv - 1) * nu) + c] - P[3 * i + c];
-    cross3(A, B, N);
-    const double nn = sqrt(dot3(N, N));
+    nf_cross3(A, B, N);
+    const double nn = sqrt(nf_dot3(N, N));
     if (!(nn > 0.0 && nn < INFINITY))
         return 0;
     for (int c = 0; c < 3; c++)
         N[c] /= nn;
-    const double an = dot3(A, N);
+    const double an = nf_dot3(A, N);
     for (int c = 0; c < 3; c++)
         e1[c] = A[c] - an * N[c];
-    const double el = sqrt(dot3(e1, e1));
+    const double el = sqrt(nf_dot3(e1, e1));
     if (!(el > 0.0))
         return 0;
     for (int c = 0; c < 3; c++)
         e1[c] /= el;
-    cross3(N, e1, e2);
+    nf_cross3(N, e1, e2);
     /* The scales, one pair for the whole domain (the proof integrates
      * across spans): F's Jacobian about the identity for a net near its
      * mean edges, the mean extent per unit of each parameter. */
     const double *U = s->U, *V = s->V;
-    const double su = dot3(A, e1) / ((double)nv * (U[nu] - U[p]));
-    const double sv = dot3(B, e2) / ((double)nu * (V[nv] - V[q]));
+    const double su = nf_dot3(A, e1) / ((double)nv * (U[nu] - U[p]));
+    const double sv = nf_dot3(B, e2) / ((double)nu * (V[nv] - V[q]));
     if (!(su > 0.0 && sv > 0.0 && su < INFINITY && sv < INFINITY))
         return 0;
     const double ks = 1.0 / su, kt = 1.0 / sv;
@@ -95,8 +84,8 @@ int nf_fold_free(const nf_surf_t *s)
                             return 0;
                         for (int m = 0; m < 3; m++)
                             h3[m] = p * (Pij[3 + m] - Pij[m]) / h * ks;
-                        iv_take(&a, dot3(h3, e1));
-                        iv_take(&b, dot3(h3, e2));
+                        iv_take(&a, nf_dot3(h3, e1));
+                        iv_take(&b, nf_dot3(h3, e2));
                     }
                     if (j < k) {
                         const double h = V[j + q + 1] - V[j + 1];
@@ -104,8 +93,8 @@ int nf_fold_free(const nf_surf_t *s)
                             return 0;
                         for (int m = 0; m < 3; m++)
                             h3[m] = q * (Pij[3 * nu + m] - Pij[m]) / h * kt;
-                        iv_take(&c, dot3(h3, e1));
-                        iv_take(&d, dot3(h3, e2));
+                        iv_take(&c, nf_dot3(h3, e1));
+                        iv_take(&d, nf_dot3(h3, e2));
                     }
                 }
             /* J = [a c; b d]: x^T J x = a x1^2 + (b + c) x1 x2 + d x2^2 > 0

@@ -5,6 +5,7 @@
 #include "nf_project.h"
 #include "nf_basis.h"
 #include "nf_err.h"
+#include "nf_vec3.h"
 #include <float.h>
 #include <math.h>
 
@@ -20,11 +21,6 @@ typedef struct pt {
     double D, gu, gv;
 } pt_t;
 
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 static double clampd(double x, double lo, double hi)
 {
     return x < lo ? lo : (x > hi ? hi : x);
@@ -37,9 +33,9 @@ static void pt_eval(const nf_surf_t *s, const double Q[3], double u, double v, p
     nf_surf_derivs(s, u, v, 2, t->d);
     for (int c = 0; c < 3; c++)
         t->r[c] = t->d[D_S + c] - Q[c];
-    t->D = dot3(t->r, t->r);
-    t->gu = dot3(t->r, t->d + D_SU);
-    t->gv = dot3(t->r, t->d + D_SV);
+    t->D = nf_dot3(t->r, t->r);
+    t->gu = nf_dot3(t->r, t->d + D_SU);
+    t->gv = nf_dot3(t->r, t->d + D_SV);
 }
 
 /* Level below which r . Su is rounding: r carries an absolute error of a few
@@ -52,7 +48,7 @@ static double grad_noise(const pt_t *t, const double Q[3], const double *Sx)
         scale = fmax(scale, fabs(Q[c]));
         scale = fmax(scale, fabs(t->d[D_S + c]));
     }
-    return 8.0 * DBL_EPSILON * (scale + sqrt(t->D)) * sqrt(dot3(Sx, Sx));
+    return 8.0 * DBL_EPSILON * (scale + sqrt(t->D)) * sqrt(nf_dot3(Sx, Sx));
 }
 
 /* Bound constraints u in [u0, u1] (likewise v): a parameter on its bound is
@@ -74,10 +70,10 @@ static int held(double x, double lo, double hi, double g)
 static int newton_step(const pt_t *t, int fu, int fv, double *du, double *dv)
 {
     const double *Su = t->d + D_SU, *Sv = t->d + D_SV;
-    const double euu = dot3(Su, Su), euv = dot3(Su, Sv), evv = dot3(Sv, Sv);
-    const double a = euu + dot3(t->r, t->d + D_SUU);
-    const double b = euv + dot3(t->r, t->d + D_SUV);
-    const double c = evv + dot3(t->r, t->d + D_SVV);
+    const double euu = nf_dot3(Su, Su), euv = nf_dot3(Su, Sv), evv = nf_dot3(Sv, Sv);
+    const double a = euu + nf_dot3(t->r, t->d + D_SUU);
+    const double b = euv + nf_dot3(t->r, t->d + D_SUV);
+    const double c = evv + nf_dot3(t->r, t->d + D_SVV);
     *du = *dv = 0.0;
     /* A parameter whose tangent vanishes (a collapsed edge, a pole) gets no
      * step: its Newton equation is 0 = 0 to rounding. */
@@ -125,7 +121,7 @@ static int pole_escape(const nf_surf_t *s, const double Q[3], const double dom[4
                        pt_t *out)
 {
     const double *Su = cur->d + D_SU, *Sv = cur->d + D_SV;
-    const double euu = dot3(Su, Su), evv = dot3(Sv, Sv);
+    const double euu = nf_dot3(Su, Su), evv = nf_dot3(Sv, Sv);
     int along; /* 0: the edge runs in u (v on a bound), 1: in v */
     double side;
     if (evv > 0.0 && euu <= 1e-20 * evv && (cur->v == dom[2] || cur->v == dom[3])) {
@@ -140,14 +136,15 @@ static int pole_escape(const nf_surf_t *s, const double Q[3], const double dom[4
     const int cross = along == 0 ? D_SV : D_SU; /* derivative leaving the edge */
     const double lo = dom[2 * along], hi = dom[2 * along + 1];
     const double *T = cur->d + cross;
-    double best = side * dot3(cur->r, T) / sqrt(dot3(T, T)), bx = along == 0 ? cur->u : cur->v;
+    double best = side * nf_dot3(cur->r, T) / sqrt(nf_dot3(T, T)),
+           bx = along == 0 ? cur->u : cur->v;
     const double now = best;
     for (int i = 0; i <= 32; i++) {
         const double x = lo + (hi - lo) * i / 32;
         double d[27];
         nf_surf_derivs(s, along == 0 ? x : cur->u, along == 0 ? cur->v : x, 1, d);
-        const double l = sqrt(dot3(d + cross, d + cross));
-        const double g = l > 0.0 ? side * dot3(cur->r, d + cross) / l : 0.0;
+        const double l = sqrt(nf_dot3(d + cross, d + cross));
+        const double g = l > 0.0 ? side * nf_dot3(cur->r, d + cross) / l : 0.0;
         if (g < best) {
             best = g;
             bx = x;
@@ -155,7 +152,7 @@ static int pole_escape(const nf_surf_t *s, const double Q[3], const double dom[4
     }
     /* Worth it when the best way out descends, and beats the current one
      * beyond rounding. */
-    const double noise = grad_noise(cur, Q, T) / sqrt(dot3(T, T));
+    const double noise = grad_noise(cur, Q, T) / sqrt(nf_dot3(T, T));
     if (!(best < -noise && best < now - noise))
         return 0;
     pt_eval(s, Q, along == 0 ? bx : cur->u, along == 0 ? cur->v : bx, out);
@@ -179,7 +176,7 @@ static void finish(const nf_surf_t *s, const double Q[3], const pt_t *t, int ite
                    (held(t->v, v0, v1, t->gv) && fabs(t->gv) > grad_noise(t, Q, Sv));
     double n[3] = {Su[1] * Sv[2] - Su[2] * Sv[1], Su[2] * Sv[0] - Su[0] * Sv[2],
                    Su[0] * Sv[1] - Su[1] * Sv[0]};
-    double nn = sqrt(dot3(n, n)), lu = sqrt(dot3(Su, Su)), lv = sqrt(dot3(Sv, Sv));
+    double nn = sqrt(nf_dot3(n, n)), lu = sqrt(nf_dot3(Su, Su)), lv = sqrt(nf_dot3(Sv, Sv));
     /* |r| scaled, so that a point absurdly far (|Q| ~ 1e200) still gets a
      * finite distance where |r|^2 overflows. */
     const double m = fmax(fabs(t->r[0]), fmax(fabs(t->r[1]), fabs(t->r[2])));
@@ -190,7 +187,7 @@ static void finish(const nf_surf_t *s, const double Q[3], const pt_t *t, int ite
     /* The sign needs a normal: Su x Sv vanishes at a degenerate point (a
      * collapsed edge, a cusp), where it is rounding; measured against both
      * tangents, since on a pole one of them is itself rounding. */
-    if (nn > 1e-12 * (lu * lu + lv * lv) && -dot3(t->r, n) < 0.0)
+    if (nn > 1e-12 * (lu * lu + lv * lv) && -nf_dot3(t->r, n) < 0.0)
         dist = -dist;
     out->dist = dist;
 }
@@ -249,7 +246,7 @@ static double d_noise(const pt_t *t, const double Q[3])
  * where D is second order and lost in rounding (thin or flat directions). */
 static double tangential(const pt_t *t, int fu, int fv)
 {
-    const double uu = dot3(t->d + D_SU, t->d + D_SU), vv = dot3(t->d + D_SV, t->d + D_SV);
+    const double uu = nf_dot3(t->d + D_SU, t->d + D_SU), vv = nf_dot3(t->d + D_SV, t->d + D_SV);
     return (fu && uu > 0.0 ? t->gu * t->gu / uu : 0.0) +
            (fv && vv > 0.0 ? t->gv * t->gv / vv : 0.0);
 }

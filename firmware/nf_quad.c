@@ -9,6 +9,7 @@
 #include "nf_basis.h"
 #include "nf_err.h"
 #include "nf_quad.h"
+#include "nf_vec3.h"
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -22,18 +23,6 @@ enum { QD_C = 0, QD_E1 = 3, QD_E2 = 6, QD_B = 9, QD_BOX = 17 };
  * cannot resolve). 24 halvings per direction bound the stack depth. */
 #define MIN_WIDTH (1.0 / 16777216.0)
 #define STACK 64
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double *a, const double *b, double *c)
-{
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 static double clampd(double x, double lo, double hi)
 {
@@ -219,7 +208,7 @@ static int split_dir(const nf_surf_t *s, const rect_t *r, const double *C)
             eu[c] = C[3 + c] - C[c] + C[9 + c] - C[6 + c];
             ev[c] = C[6 + c] - C[c] + C[9 + c] - C[3 + c];
         }
-        return dot3(ev, ev) > dot3(eu, eu);
+        return nf_dot3(ev, ev) > nf_dot3(eu, eu);
     }
 }
 
@@ -272,7 +261,7 @@ static double flat_dev(const dec_t *d, const rect_t *r, const double *C, int *di
                     bilin(C, (dir_param(&du, a) - r->ua) / (r->ub - r->ua),
                           (dir_param(&dv, t) - r->va) / (r->vb - r->va), B);
                     const double e[3] = {P[0] - B[0], P[1] - B[1], P[2] - B[2]};
-                    dev = fmax(dev, sqrt(dot3(e, e)));
+                    dev = fmax(dev, sqrt(nf_dot3(e, e)));
                     if (dev > d->tol) /* not flat: the other pieces cannot change that */
                         goto direction;
                 }
@@ -442,7 +431,7 @@ static void max_area_plane(nf_quad_t *q)
                 d1[c] = P11[c] - P00[c];
                 d2[c] = P01[c] - P10[c];
             }
-            cross3(d1, d2, A);
+            nf_cross3(d1, d2, A);
             for (int a = 0; a < 3; a++)
                 for (int b = 0; b < 3; b++)
                     M[3 * a + b] += 0.25 * A[a] * A[b];
@@ -452,13 +441,13 @@ static void max_area_plane(nf_quad_t *q)
         if (M[4 * c] > M[4 * col])
             col = c;
     double n[3] = {M[col], M[3 + col], M[6 + col]};
-    if (!(dot3(n, n) > 0.0))
+    if (!(nf_dot3(n, n) > 0.0))
         n[0] = n[1] = n[2] = 1.0; /* no area at all: any plane */
     for (int it = 0; it < 200; it++) {
         double m[3];
         for (int a = 0; a < 3; a++)
             m[a] = M[3 * a] * n[0] + M[3 * a + 1] * n[1] + M[3 * a + 2] * n[2];
-        const double l = sqrt(dot3(m, m)), l0 = sqrt(dot3(n, n));
+        const double l = sqrt(nf_dot3(m, m)), l0 = sqrt(nf_dot3(n, n));
         if (!(l > 0.0))
             break;
         double ch = 0.0;
@@ -469,7 +458,7 @@ static void max_area_plane(nf_quad_t *q)
         if (ch < 1e-13)
             break;
     }
-    const double l = sqrt(dot3(n, n));
+    const double l = sqrt(nf_dot3(n, n));
     for (int c = 0; c < 3; c++)
         q->N[c] = n[c] / l;
     /* Orientation: the summed area vector points along N; any quadrilateral
@@ -484,10 +473,10 @@ static void max_area_plane(nf_quad_t *q)
                 d1[c] = P11[c] - P00[c];
                 d2[c] = P01[c] - P10[c];
             }
-            cross3(d1, d2, A);
-            const double a = dot3(A, q->N);
+            nf_cross3(d1, d2, A);
+            const double a = nf_dot3(A, q->N);
             sum += a;
-            tot += sqrt(dot3(A, A));
+            tot += sqrt(nf_dot3(A, A));
         }
     if (sum < 0.0)
         for (int c = 0; c < 3; c++)
@@ -502,8 +491,8 @@ static void max_area_plane(nf_quad_t *q)
                 d1[c] = P11[c] - P00[c];
                 d2[c] = P01[c] - P10[c];
             }
-            cross3(d1, d2, A);
-            if (dot3(A, q->N) < -1e-9 * tot) {
+            nf_cross3(d1, d2, A);
+            if (nf_dot3(A, q->N) < -1e-9 * tot) {
                 q->folded = 1;
                 break;
             }
@@ -515,11 +504,11 @@ static void max_area_plane(nf_quad_t *q)
         if (fabs(q->N[c]) < fabs(q->N[ax]))
             ax = c;
     t[ax] = 1.0;
-    cross3(q->N, t, q->e1);
-    const double l1 = sqrt(dot3(q->e1, q->e1));
+    nf_cross3(q->N, t, q->e1);
+    const double l1 = sqrt(nf_dot3(q->e1, q->e1));
     for (int c = 0; c < 3; c++)
         q->e1[c] /= l1;
-    cross3(q->N, q->e1, q->e2);
+    nf_cross3(q->N, q->e1, q->e2);
 }
 
 /* Per quadrilateral: the mid-plane (through the centroid, spanned by the
@@ -543,8 +532,8 @@ static void quad_data(nf_quad_t *q)
                 m1[c] = 0.5 * (P[1][c] + P[3][c] - P[0][c] - P[2][c]);
                 m2[c] = 0.5 * (P[2][c] + P[3][c] - P[0][c] - P[1][c]);
             }
-            cross3(m1, m2, n);
-            double ln = sqrt(dot3(n, n)), l1 = sqrt(dot3(m1, m1));
+            nf_cross3(m1, m2, n);
+            double ln = sqrt(nf_dot3(n, n)), l1 = sqrt(nf_dot3(m1, m1));
             if (!(ln > 1e-300) || !(l1 > 1e-300)) { /* degenerate: use the big plane */
                 for (int c = 0; c < 3; c++) {
                     D[QD_E1 + c] = q->e1[c];
@@ -556,15 +545,15 @@ static void quad_data(nf_quad_t *q)
                     n[c] /= ln;
                     D[QD_E1 + c] = m1[c] / l1;
                 }
-                cross3(n, D + QD_E1, e2);
+                nf_cross3(n, D + QD_E1, e2);
                 for (int c = 0; c < 3; c++)
                     D[QD_E2 + c] = e2[c];
             }
             double x[4], y[4];
             for (int k = 0; k < 4; k++) {
                 double r[3] = {P[k][0] - D[QD_C], P[k][1] - D[QD_C + 1], P[k][2] - D[QD_C + 2]};
-                x[k] = dot3(r, D + QD_E1);
-                y[k] = dot3(r, D + QD_E2);
+                x[k] = nf_dot3(r, D + QD_E1);
+                y[k] = nf_dot3(r, D + QD_E2);
             }
             D[QD_B + 0] = x[0];
             D[QD_B + 1] = y[0];
@@ -576,7 +565,7 @@ static void quad_data(nf_quad_t *q)
             D[QD_B + 7] = y[3] - y[2] - y[1] + y[0];
             double bx0 = INFINITY, bx1 = -INFINITY, by0 = INFINITY, by1 = -INFINITY;
             for (int k = 0; k < 4; k++) {
-                const double a = dot3(P[k], q->e1), b = dot3(P[k], q->e2);
+                const double a = nf_dot3(P[k], q->e1), b = nf_dot3(P[k], q->e2);
                 bx0 = fmin(bx0, a);
                 bx1 = fmax(bx1, a);
                 by0 = fmin(by0, b);
@@ -746,7 +735,7 @@ int nf_quad_init(nf_quad_t *q, const nf_surf_t *s, const nf_quad_params_t *prm, 
             hi[c] = fmax(hi[c], s->cp[3 * k + c]);
         }
     double diag[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-    const double size = sqrt(dot3(diag, diag));
+    const double size = sqrt(nf_dot3(diag, diag));
     q->tol = prm->rel_tol * size;
     q->limit = prm->limit > 0.0 ? prm->limit : 0.05 * size;
     q->drop_far = prm->drop_far;
@@ -781,7 +770,7 @@ static double quad_try(const nf_quad_t *q, long k, const double Q[3], double *ps
 {
     const double *D = q->qd + NF_QUAD_QD * k;
     const double r[3] = {Q[0] - D[QD_C], Q[1] - D[QD_C + 1], Q[2] - D[QD_C + 2]};
-    const double hx = dot3(r, D + QD_E1) - D[QD_B], hy = dot3(r, D + QD_E2) - D[QD_B + 1];
+    const double hx = nf_dot3(r, D + QD_E1) - D[QD_B], hy = nf_dot3(r, D + QD_E2) - D[QD_B + 1];
     const double ex = D[QD_B + 2], ey = D[QD_B + 3], fx = D[QD_B + 4], fy = D[QD_B + 5];
     const double gx = D[QD_B + 6], gy = D[QD_B + 7];
     /* h = s e + t f + s t g: k2 t^2 + k1 t + k0 = 0. */
@@ -832,7 +821,7 @@ static double quad_try(const nf_quad_t *q, long k, const double Q[3], double *ps
     *ps = bs;
     *pt = bt;
     const double e[3] = {Q[0] - B[0], Q[1] - B[1], Q[2] - B[2]};
-    return dot3(e, e);
+    return nf_dot3(e, e);
 }
 
 /* The nearest quadrilateral among the references of cells [i0, i1] x
@@ -862,7 +851,7 @@ static void search_cells(const nf_quad_t *q, const double Q[3], double x, double
 
 void nf_quad_start(const nf_quad_t *q, const double Q[3], double *u0, double *v0)
 {
-    const double x = dot3(Q, q->e1), y = dot3(Q, q->e2);
+    const double x = nf_dot3(Q, q->e1), y = nf_dot3(Q, q->e2);
     const int ci = cell_of(x, q->x0, q->cell, q->gx), cj = cell_of(y, q->y0, q->cell, q->gy);
     double best = INFINITY, bs = 0.5, bt = 0.5;
     long bk = 0;
@@ -1212,7 +1201,7 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
         double d[6][3];
         derivs(q, cu, cv, &hl, &hk, d);
         const double r[3] = {d[0][0] - Q[0], d[0][1] - Q[1], d[0][2] - Q[2]};
-        const double D = dot3(r, r);
+        const double D = nf_dot3(r, r);
         const double a0 = fabs(Q[0]), a1 = fabs(Q[1]), a2 = fabs(Q[2]);
         const double scale = (a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2)) + sqrt(D);
         if (D > best + 64.0 * DBL_EPSILON * scale * scale)
@@ -1222,10 +1211,10 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
             *u = cu;
             *v = cv;
         }
-        const double gu = dot3(r, d[1]), gv = dot3(r, d[2]);
-        const double a = dot3(d[1], d[1]) + dot3(r, d[3]);
-        const double b = dot3(d[1], d[2]) + dot3(r, d[4]);
-        const double c = dot3(d[2], d[2]) + dot3(r, d[5]);
+        const double gu = nf_dot3(r, d[1]), gv = nf_dot3(r, d[2]);
+        const double a = nf_dot3(d[1], d[1]) + nf_dot3(r, d[3]);
+        const double b = nf_dot3(d[1], d[2]) + nf_dot3(r, d[4]);
+        const double c = nf_dot3(d[2], d[2]) + nf_dot3(r, d[5]);
         const double det = a * c - b * b;
         if (!(a > 0.0 && c > 0.0 && det > 1e-12 * a * c))
             return 0;
@@ -1245,9 +1234,9 @@ static int newton_fast(const nf_quad_t *q, const double Q[3], double tol, double
                                0.5 * (d[3][m] * du * du + d[5][m] * dv * dv) + d[4][m] * du * dv;
             const double e[3] = {Q[0] - out->foot[0], Q[1] - out->foot[1], Q[2] - out->foot[2]};
             double n[3];
-            cross3(d[1], d[2], n);
-            const double dist = sqrt(dot3(e, e));
-            out->dist = dot3(e, n) < 0.0 ? -dist : dist;
+            nf_cross3(d[1], d[2], n);
+            const double dist = sqrt(nf_dot3(e, e));
+            out->dist = nf_dot3(e, n) < 0.0 ? -dist : dist;
             out->clamped = 0;
             out->iters = it + 1;
             return 1;
@@ -1325,7 +1314,7 @@ int nf_thin_add(nf_thin_t *t, const double P[3], long k)
     if (!(P[0] - P[0] == 0.0 && P[1] - P[1] == 0.0 && P[2] - P[2] == 0.0))
         return NF_ENONFINITE;
     const nf_quad_t *q = t->q;
-    const double x = dot3(P, q->e1), y = dot3(P, q->e2), r = t->r, r2 = r * r;
+    const double x = nf_dot3(P, q->e1), y = nf_dot3(P, q->e2), r = t->r, r2 = r * r;
     if (x + r < q->x0 || y + r < q->y0 || x - r > q->x0 + q->gx * q->cell ||
         y - r > q->y0 + q->gy * q->cell)
         return NF_OK;
@@ -1348,7 +1337,7 @@ int nf_thin_add(nf_thin_t *t, const double P[3], long k)
                 for (int m2 = 0; m2 < 4; m2++) {
                     const double *V = q->xyz + 3 * vk[m2];
                     const double e[3] = {P[0] - V[0], P[1] - V[1], P[2] - V[2]};
-                    const double d = dot3(e, e);
+                    const double d = nf_dot3(e, e);
                     double *b = t->best + 4 * vk[m2];
                     if (d <= r2 && (d < b[0] || (d == b[0] && k < t->idx[vk[m2]]))) {
                         b[0] = d;
