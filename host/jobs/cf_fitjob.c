@@ -1173,7 +1173,8 @@ static void *check_half(void *arg)
         if (c->feet)
             foot_set(c->j, c->fp.n0 + k, &pr, f[4] != 0.0);
         const double d = resid_dist(c->res, fabs(f[2]), f[2] * f[2], c->tol, 0.0, 0);
-        nf_knotsel_add(c->ks, f[0], f[1], d);
+        if (c->ks)
+            nf_knotsel_add(c->ks, f[0], f[1], d);
         if (!pr.clamped)
             nf_footprint_add(c->foot, f[0], f[1]); /* outside the domain: not counted */
     }
@@ -1189,14 +1190,16 @@ typedef struct check_two {
     void *fmem;
 } check_two_t;
 
-static int check_two_init(check_two_t *t, const nf_surf_t *s, double tol)
+static int check_two_init(check_two_t *t, const nf_surf_t *s, double tol, int chooser)
 {
     memset(t, 0, sizeof *t);
     nf_rhist_init(&t->res.hist);
     const long fb = nf_footprint_bytes(s->nu, s->nv, s->p, s->q);
-    t->ksmem = malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(s->nu, s->nv, s->p, s->q));
+    t->ksmem = chooser
+                   ? malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(s->nu, s->nv, s->p, s->q))
+                   : NULL;
     t->fmem = fb > 0 ? malloc((size_t)fb) : NULL;
-    if (!t->ksmem || !t->fmem || nf_knotsel_init(&t->ks, s, tol, t->ksmem) ||
+    if ((chooser && (!t->ksmem || nf_knotsel_init(&t->ks, s, tol, t->ksmem))) || !t->fmem ||
         nf_footprint_init(&t->foot, s, t->fmem, (size_t)fb)) {
         free(t->ksmem);
         free(t->fmem);
@@ -1235,7 +1238,7 @@ static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *c
                           feet,
                           j->o.tol,
                           &t->res,
-                          &t->ks,
+                          ck->ks ? &t->ks : NULL,
                           &t->foot}};
     cf_pair_t th;
     const int on = j->o.cores > 1 && !cf_pair_start(&th, check_half, &c[1]);
@@ -1319,8 +1322,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
     /* The loop's plain check in two parts (check_batch); without the
      * second part's memory, one. */
     check_two_t two;
-    const int parts = !uv && !st && ck && ck->ks && ck->fp && !ck->sr && !ck->kr && !(cut > 0) &&
-                      !want_hist && check_two_init(&two, s, tol);
+    const int parts = !uv && !st && ck && ck->fp && !ck->sr && !ck->kr && !(cut > 0) &&
+                      !want_hist && check_two_init(&two, s, tol, ck->ks != NULL);
     int rc = rewind_src(r);
     long got = 0, seen = 0;
     while (!rc && (got = src->read(src->ctx, j->buf, j->cap, r->msg, r->ml)) > 0) {
@@ -1387,7 +1390,8 @@ static int measure(run_t *r, const nf_surf_t *s, const check_t *ck, double cut, 
         rc = (int)got;
     if (parts) { /* the second part after the first: the same sums on one core or two */
         resid_merge(out, &two.res);
-        if (!rc && (nf_knotsel_merge(ck->ks, &two.ks) || nf_footprint_merge(ck->fp, &two.foot)))
+        if (!rc && ((ck->ks && nf_knotsel_merge(ck->ks, &two.ks)) ||
+                    nf_footprint_merge(ck->fp, &two.foot)))
             rc = cf_fail(r->msg, r->ml, CF_EARG, "check pass: parts of other surfaces");
         check_two_free(&two);
     }
@@ -1577,16 +1581,20 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         nf_spanres_init(sr, &S->fit, o->tol, S->srmem);
         ck->sr = sr;
     } else if (o->loop && o->refine == CF_REFINE_AUTO) {
+        /* A pruning trial (proj0) inserts no knots: the chooser's sums
+         * only where a robust trial's rejected clusters fold into them. */
+        const int chooser = !S->proj0 || o->robust;
         long fb = nf_footprint_bytes(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q);
-        S->srmem = malloc(sizeof(double) *
-                          (size_t)NF_KNOTSEL_DOUBLES(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q));
+        S->srmem = chooser ? malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(
+                                                         S->fit.nu, S->fit.nv, S->fit.p, S->fit.q))
+                           : NULL;
         S->fpmem = fb > 0 ? malloc((size_t)fb) : NULL;
-        if (!S->srmem || !S->fpmem)
+        if ((chooser && !S->srmem) || !S->fpmem)
             return cf_fail(r->msg, r->ml, CF_ENOMEM, "out of memory");
-        if ((rc = nf_knotsel_init(&S->ks, &S->fit, o->tol, S->srmem)) ||
+        if ((chooser && (rc = nf_knotsel_init(&S->ks, &S->fit, o->tol, S->srmem))) ||
             (rc = nf_footprint_init(&S->fp, &S->fit, S->fpmem, (size_t)fb)))
             return cf_fail(r->msg, r->ml, rc, "check pass: %s", nf_strerror(rc));
-        ck->ks = &S->ks;
+        ck->ks = chooser ? &S->ks : NULL;
         ck->fp = &S->fp;
         if (o->robust) { /* rejected clusters: a feature still draws knots */
             S->krmem = malloc(sizeof(double) *
