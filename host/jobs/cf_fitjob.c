@@ -1146,7 +1146,7 @@ static void resid_merge(resid_t *out, const resid_t *b)
 /* The loop's check pass in two parts (auto refinement, neither robust
  * nor with statistics): each batch of FEET_SPLIT points or more in
  * halves, each half's feet and then its sums (distances, the knot
- * chooser's spans, the footprint) into its own part, the second part
+ * chooser's spans unless a pruning trial's, the footprint) into its own part, the second part
  * merged into the first after the pass. On two cores the halves run at
  * once, on one in turn: the sums are grouped alike, so the fit is the
  * same. feet: the half's feet are kept (Newton's starts next round). */
@@ -1181,7 +1181,7 @@ static void *check_half(void *arg)
     return NULL;
 }
 
-/* The second part's counts (check_half), or none (mem NULL). */
+/* The second part's counts (check_half); ksmem NULL: no chooser's. */
 typedef struct check_two {
     resid_t res;
     nf_knotsel_t ks;
@@ -1217,7 +1217,7 @@ static void check_two_free(check_two_t *t)
 }
 
 /* One batch of got points (the first is point n0 of the pass) in two
- * parts: a into out, ck's chooser and footprint; b into t. */
+ * parts: a into out, ck's chooser (if any) and footprint; b into t. */
 static int check_batch(cf_fitjob_t *j, proj_t *pj, proj_t *pj2, const check_t *ck, check_two_t *t,
                        resid_t *out, int cols, long got, long n0, long nin, int how, int keep)
 {
@@ -1581,9 +1581,9 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
         nf_spanres_init(sr, &S->fit, o->tol, S->srmem);
         ck->sr = sr;
     } else if (o->loop && o->refine == CF_REFINE_AUTO) {
-        /* A pruning trial (proj0) inserts no knots: the chooser's sums
-         * only where a robust trial's rejected clusters fold into them. */
-        const int chooser = !S->proj0 || o->robust;
+        /* A pruning trial (proj0) inserts no knots: no chooser, nor
+         * (robust) its rejected clusters; the footprint is the result's. */
+        const int chooser = !S->proj0;
         long fb = nf_footprint_bytes(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q);
         S->srmem = chooser ? malloc(sizeof(double) * (size_t)NF_KNOTSEL_DOUBLES(
                                                          S->fit.nu, S->fit.nv, S->fit.p, S->fit.q))
@@ -1596,7 +1596,7 @@ static int one_round(run_t *r, int k, surfs_t *S, resid_t *res, pass_t *po, doub
             return cf_fail(r->msg, r->ml, rc, "check pass: %s", nf_strerror(rc));
         ck->ks = chooser ? &S->ks : NULL;
         ck->fp = &S->fp;
-        if (o->robust) { /* rejected clusters: a feature still draws knots */
+        if (o->robust && chooser) { /* rejected clusters: a feature still draws knots */
             S->krmem = malloc(sizeof(double) *
                               (size_t)NF_KNOTSEL_DOUBLES(S->fit.nu, S->fit.nv, S->fit.p, S->fit.q));
             S->crmem = malloc(sizeof(double) *
