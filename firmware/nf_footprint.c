@@ -4,6 +4,7 @@
 #include "nf_footprint.h"
 #include "nf_basis.h"
 #include "nf_err.h"
+#include <math.h>
 #include <string.h>
 
 int nf_footprint_init(nf_footprint_t *fp, const nf_surf_t *s, void *mem, size_t bytes)
@@ -90,7 +91,7 @@ long nf_footprint_add_rows(nf_footprint_t *fp, const double *rows, long n, int s
     const nf_surf_t *s = fp->s;
     const double u0 = s->U[s->p], u1 = s->U[s->nu], v0 = s->V[s->q], v1 = s->V[s->nv];
     long m = 0, row = 0;
-    double last = v0 - 1.0; /* no v yet */
+    double last = NAN; /* no v yet (v0 - 1 would equal v0 at |v0| >= 2^53) */
     for (long k = 0; k < n; k++, rows += stride) {
         const double u = rows[0], v = rows[1];
         if (!(u >= u0 && u <= u1 && v >= v0 && v <= v1)) /* true for NaN as well */
