@@ -1147,9 +1147,10 @@ static void resid_merge(resid_t *out, const resid_t *b)
  * nor with statistics): each batch of FEET_SPLIT points or more in
  * halves, each half's feet and then its sums (distances, the knot
  * chooser's spans unless a pruning trial's, the footprint) into its own
- * part, the second part merged into the first after the pass. On two cores the halves run at
- * once, on one in turn: the sums are grouped alike, so the fit is the
- * same. feet: the half's feet are kept (Newton's starts next round). */
+ * part, the second part merged into the first after the pass. On two
+ * cores the halves run at once, on one in turn: the sums are grouped
+ * alike, so the fit is the same. feet: the half's feet are kept
+ * (Newton's starts next round). */
 typedef struct check_part {
     feet_part_t fp;
     cf_fitjob_t *j;
